@@ -1,0 +1,216 @@
+// calib.txt reading and writing, and the well-known calibrations that ship in calib/.
+
+#include "voxfuse/io/CalibIO.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <initializer_list>
+
+#include "TextParsing.h"
+#include "voxfuse/core/Error.h"
+
+namespace voxfuse {
+
+namespace {
+
+// Hands out the content lines of a file (blank and '#' lines skipped) with their 1-based numbers,
+// so that every error can say where it happened.
+class CalibLineReader {
+public:
+    CalibLineReader(std::istream& in, const std::string& path) : in_(in), path_(path) {}
+
+    // The next content line split into tokens (views into line(): valid until the next call); at the
+    // end of the file, a ParseError on the last line saying what was expected.
+    std::vector<std::string_view> next(const std::string& expected) {
+        while (std::getline(in_, line_)) {
+            ++line_number_;
+            if (!text::isBlankOrComment(line_)) return text::splitWhitespace(line_);
+        }
+        throw ParseError(path_, line_number_ > 0 ? line_number_ : 1, "unexpected end of file: expected " + expected);
+    }
+    // The first content line after the last block, if any (line_number() then names it).
+    bool findTrailingContent() {
+        while (std::getline(in_, line_)) {
+            ++line_number_;
+            if (!text::isBlankOrComment(line_)) return true;
+        }
+        return false;
+    }
+    int lineNumber() const { return line_number_; }
+    const std::string& line() const { return line_; }
+    [[noreturn]] void fail(const std::string& reason) const { failAt(line_number_, reason); }
+    [[noreturn]] void failAt(int line_number, const std::string& reason) const {
+        throw ParseError(path_, line_number, reason);
+    }
+
+private:
+    std::istream& in_;
+    const std::string& path_;
+    std::string line_;
+    int line_number_ = 0;
+};
+
+// One line of exactly `count` finite numbers.
+std::vector<double> readNumbers(CalibLineReader& reader, std::size_t count, const std::string& what) {
+    const auto tokens = reader.next(what);
+    if (tokens.size() != count)
+        reader.fail("expected " + std::to_string(count) + " numbers (" + what + "), got " +
+                    std::to_string(tokens.size()) + ": '" + reader.line() + "'");
+    std::vector<double> values;
+    std::string bad;
+    if (!text::parseDoubles(tokens, values, bad)) reader.fail("not a number: '" + bad + "' (" + what + ")");
+    for (double v : values)
+        if (!std::isfinite(v)) reader.fail("non-finite value in " + what);
+    return values;
+}
+
+Intrinsics readCamera(CalibLineReader& reader, const std::string& camera) {
+    Intrinsics k;
+    {
+        const std::string what = camera + " image size: width height";
+        const auto tokens = reader.next(what);
+        if (tokens.size() != 2)
+            reader.fail("expected 2 integers (" + what + "), got " + std::to_string(tokens.size()) + ": '" +
+                        reader.line() + "'");
+        for (int i = 0; i < 2; ++i) {
+            int& v = i == 0 ? k.width : k.height;
+            if (!text::parseInt(tokens[std::size_t(i)], v))
+                reader.fail("not an integer: '" + std::string(tokens[std::size_t(i)]) + "' (" + what + ")");
+        }
+        if (k.width <= 0 || k.height <= 0)
+            reader.fail(camera + " image size must be positive, got " + std::to_string(k.width) + "x" +
+                        std::to_string(k.height));
+    }
+    {
+        const auto f = readNumbers(reader, 2, camera + " focal lengths: fx fy");
+        if (f[0] <= 0.0 || f[1] <= 0.0) reader.fail(camera + " focal lengths must be positive");
+        k.fx = float(f[0]);
+        k.fy = float(f[1]);
+    }
+    {
+        const auto c = readNumbers(reader, 2, camera + " principal point: cx cy");
+        k.cx = float(c[0]);
+        k.cy = float(c[1]);
+    }
+    return k;
+}
+
+Mat4f readExtrinsics(CalibLineReader& reader) {
+    Mat4f T = Mat4f::identity();
+    int first_line = 0;
+    for (int r = 0; r < 3; ++r) {
+        const auto row = readNumbers(reader, 4, "row " + std::to_string(r + 1) + " of the 3x4 rgb-to-depth extrinsics");
+        if (r == 0) first_line = reader.lineNumber();
+        for (int c = 0; c < 4; ++c) T(r, c) = float(row[std::size_t(c)]);
+    }
+    // A rotation that is far from orthonormal means rows were mistyped or a different matrix was
+    // pasted; catching it here beats a silently skewed colour mapping.
+    double worst = 0.0;
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) {
+            double dot = 0.0;
+            for (int k = 0; k < 3; ++k) dot += double(T(i, k)) * double(T(j, k));
+            worst = std::max(worst, std::abs(dot - (i == j ? 1.0 : 0.0)));
+        }
+    if (worst > 1e-2) {
+        reader.failAt(first_line, "the rotation part of the rgb-to-depth extrinsics is not a rotation (R R^T differs "
+                                  "from identity by " + std::to_string(worst) + ")");
+    }
+    return T;
+}
+
+DisparityCalib readDisparity(CalibLineReader& reader) {
+    const std::string what = "disparity calibration: 'kinect k1 k2', 'affine a b' or 'k1 k2'";
+    auto tokens = reader.next(what);
+    std::string keyword = "kinect";  // the bare two-number form is InfiniTAM's Kinect disparity
+    double first = 0.0;
+    const bool explicit_keyword = !tokens.empty() && !text::parseDouble(tokens[0], first);
+    if (explicit_keyword) {
+        keyword = std::string(tokens[0]);
+        if (keyword != "kinect" && keyword != "affine")
+            reader.fail("unknown disparity calibration type '" + keyword + "' (expected 'kinect' or 'affine')");
+        tokens.erase(tokens.begin());
+    }
+    if (tokens.size() != 2)
+        reader.fail((explicit_keyword ? "expected 2 numbers after the disparity type '" + keyword + "'"
+                                      : "expected 2 numbers (" + what + ")") +
+                    ", got " + std::to_string(tokens.size()) + ": '" + reader.line() + "'");
+    std::vector<double> v;
+    std::string bad;
+    if (!text::parseDoubles(tokens, v, bad)) reader.fail("not a number: '" + bad + "' (" + what + ")");
+    if (!std::isfinite(v[0]) || !std::isfinite(v[1])) reader.fail("non-finite value in the disparity calibration");
+    if (keyword == "affine") {
+        if (v[0] <= 0.0) reader.fail("affine depth scale must be positive, got " + std::string(tokens[0]));
+        return DisparityCalib::affine(float(v[0]), float(v[1]));
+    }
+    if (v[1] <= 0.0) reader.fail("kinect disparity k2 must be positive, got " + std::string(tokens[1]));
+    return DisparityCalib::kinect(float(v[0]), float(v[1]));
+}
+
+std::string numbers(std::initializer_list<float> values) {
+    std::string line;
+    for (float v : values) line += (line.empty() ? "" : " ") + text::formatFloat(v);
+    return line + "\n";
+}
+
+std::string cameraBlock(const Intrinsics& k) {
+    return std::to_string(k.width) + " " + std::to_string(k.height) + "\n" + numbers({k.fx, k.fy}) + numbers({k.cx, k.cy});
+}
+
+}  // namespace
+
+RGBDCalib readCalib(const std::string& path) {
+    std::ifstream in(path);
+    if (!in) throw IoError(path, "cannot open calibration file");
+    CalibLineReader reader(in, path);
+    RGBDCalib calib;
+    calib.rgb = readCamera(reader, "RGB camera");
+    calib.depth = readCamera(reader, "depth camera");
+    calib.T_depth_rgb = readExtrinsics(reader);
+    calib.disparity = readDisparity(reader);
+    if (reader.findTrailingContent())
+        reader.fail("unexpected content after the disparity calibration: '" + reader.line() + "'");
+    return calib;
+}
+
+void writeCalib(const std::string& path, const RGBDCalib& calib) {
+    std::ofstream out(path);
+    if (!out) throw IoError(path, "cannot open for writing");
+    const Mat4f& T = calib.T_depth_rgb;
+    out << cameraBlock(calib.rgb) << '\n' << cameraBlock(calib.depth) << '\n';
+    for (int r = 0; r < 3; ++r) out << numbers({T(r, 0), T(r, 1), T(r, 2), T(r, 3)});
+    out << '\n' << (calib.disparity.type == DisparityCalib::Type::Kinect ? "kinect " : "affine ")
+        << numbers({calib.disparity.a, calib.disparity.b});
+    out.flush();
+    if (!out) throw IoError(path, "write failed");
+}
+
+RGBDCalib kinectV1DefaultCalib() {
+    RGBDCalib calib;
+    calib.rgb = Intrinsics{640, 480, 525.f, 525.f, 319.5f, 239.5f};
+    calib.depth = calib.rgb;
+    calib.T_depth_rgb = Mat4f::identity();
+    calib.disparity = DisparityCalib::affine(0.001f, 0.f);
+    return calib;
+}
+
+RGBDCalib tumCalib(int freiburg) {
+    // Colour-camera intrinsics published with the TUM RGB-D benchmark; the depth images are registered
+    // to the colour camera, so both share them.
+    Intrinsics k;
+    switch (freiburg) {
+        case 1: k = Intrinsics{640, 480, 517.3f, 516.5f, 318.6f, 255.3f}; break;
+        case 2: k = Intrinsics{640, 480, 520.9f, 521.0f, 325.1f, 249.7f}; break;
+        case 3: k = Intrinsics{640, 480, 535.4f, 539.2f, 320.1f, 247.6f}; break;
+        default: throw ConfigError("tumCalib: the TUM sequences come from freiburg 1, 2 or 3, got " + std::to_string(freiburg));
+    }
+    RGBDCalib calib;
+    calib.rgb = k;
+    calib.depth = k;
+    calib.T_depth_rgb = Mat4f::identity();
+    calib.disparity = DisparityCalib::affine(0.0002f, 0.f);  // PNG value / 5000
+    return calib;
+}
+
+}  // namespace voxfuse

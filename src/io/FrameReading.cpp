@@ -1,0 +1,62 @@
+#include "FrameReading.h"
+
+#include <cctype>
+#include <filesystem>
+
+#include "voxfuse/core/Error.h"
+#include "voxfuse/io/ImageIO.h"
+
+namespace voxfuse {
+namespace frame_reading {
+
+namespace {
+
+bool endsWith(const std::string& s, const std::string& suffix) {
+    if (s.size() < suffix.size()) return false;
+    for (std::size_t i = 0; i < suffix.size(); ++i)
+        if (std::tolower(static_cast<unsigned char>(s[s.size() - suffix.size() + i])) != suffix[i]) return false;
+    return true;
+}
+
+std::string sizeText(Vec2i size) { return std::to_string(size.x) + "x" + std::to_string(size.y); }
+
+// A wrong-sized image would be silently misread by every later stage, so it is a frame error here.
+void requireSize(const std::string& path, int frame, Vec2i actual, const Intrinsics& camera, const char* what) {
+    if (actual != camera.size())
+        throw IoError(path, std::string(what) + " image is " + sizeText(actual) + " but the calibration's " + what +
+                                " camera is " + sizeText(camera.size()),
+                      frame);
+}
+
+// Runs `read` and re-throws its IoError with the frame number attached.
+template <typename Read>
+auto withFrame(int frame, Read read) -> decltype(read()) {
+    try {
+        return read();
+    } catch (const IoError& e) {
+        throw IoError(e.file(), e.reason(), frame);
+    }
+}
+
+}  // namespace
+
+bool fileExists(const std::string& path) {
+    std::error_code ec;
+    return std::filesystem::is_regular_file(path, ec);
+}
+
+Image<std::uint16_t> readDepth(const std::string& path, int frame, const Intrinsics& depth_camera) {
+    Image<std::uint16_t> depth =
+        withFrame(frame, [&] { return endsWith(path, ".pgm") ? readPGM16(path) : readDepthPNG(path); });
+    requireSize(path, frame, depth.size(), depth_camera, "depth");
+    return depth;
+}
+
+Image<Vec4u8> readColour(const std::string& path, int frame, const Intrinsics& rgb_camera) {
+    Image<Vec4u8> rgb = withFrame(frame, [&] { return readColorImage(path); });
+    requireSize(path, frame, rgb.size(), rgb_camera, "rgb");
+    return rgb;
+}
+
+}  // namespace frame_reading
+}  // namespace voxfuse

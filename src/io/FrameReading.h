@@ -1,0 +1,25 @@
+#pragma once
+// Internal helpers shared by the image sources: read one frame's depth or colour file, whatever its
+// format, and turn every failure into an IoError that names the file and the frame.
+
+#include <cstdint>
+#include <string>
+
+#include "voxfuse/core/Image.h"
+#include "voxfuse/objects/Intrinsics.h"
+
+namespace voxfuse {
+namespace frame_reading {
+
+bool fileExists(const std::string& path);
+
+// .pgm -> 16-bit big-endian PGM, anything else -> 16-bit single-channel PNG (or any format OpenCV
+// reads as such). The image must have the calibrated depth camera's size.
+Image<std::uint16_t> readDepth(const std::string& path, int frame, const Intrinsics& depth_camera);
+
+// Any colour image (PPM by hand, the rest through OpenCV), converted to RGBA. The image must have
+// the calibrated RGB camera's size.
+Image<Vec4u8> readColour(const std::string& path, int frame, const Intrinsics& rgb_camera);
+
+}  // namespace frame_reading
+}  // namespace voxfuse

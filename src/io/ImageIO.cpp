@@ -1,0 +1,298 @@
+// Image files. PPM/PGM are read and written by hand because InfiniTAM's depth PGMs are 16-bit
+// big-endian and we want exact, explained errors for them; everything else goes through OpenCV,
+// which stays hidden in this file.
+
+#include "voxfuse/io/ImageIO.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <vector>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "voxfuse/core/Error.h"
+
+namespace voxfuse {
+
+namespace {
+
+// ---------------------------------------------------------------------------------------------
+// Netpbm (P5/P6)
+
+std::vector<unsigned char> readWholeFile(const std::string& path) {
+    std::error_code ec;
+    if (!std::filesystem::exists(path, ec)) throw IoError(path, "no such file");
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw IoError(path, "cannot open for reading");
+    std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (in.bad()) throw IoError(path, "read error");
+    return bytes;
+}
+
+struct NetpbmHeader {
+    int width = 0, height = 0, maxval = 0;
+    std::size_t data_offset = 0;  // first byte of the pixel data
+};
+
+// Parses "P5"/"P6", width, height and maxval, with '#' comments and any whitespace between them,
+// and exactly one whitespace byte before the pixel data (as the Netpbm spec requires).
+class NetpbmHeaderParser {
+public:
+    NetpbmHeaderParser(const std::string& path, const std::vector<unsigned char>& bytes) : path_(path), bytes_(bytes) {}
+
+    NetpbmHeader parse(char expected_kind, const char* format_name) {
+        checkMagic(expected_kind, format_name);
+        pos_ = 2;
+        NetpbmHeader h;
+        h.width = readNumber("width");
+        h.height = readNumber("height");
+        h.maxval = readNumber("maxval");
+        if (h.width <= 0 || h.height <= 0)
+            fail("bad header: width and height must be positive, got " + std::to_string(h.width) + "x" +
+                 std::to_string(h.height));
+        if (pos_ >= bytes_.size()) fail("truncated: the file ends right after the header, no pixel data");
+        if (!std::isspace(bytes_[pos_])) fail("bad header: expected one whitespace byte after maxval");
+        h.data_offset = pos_ + 1;
+        return h;
+    }
+
+private:
+    [[noreturn]] void fail(const std::string& reason) const { throw IoError(path_, reason); }
+
+    void checkMagic(char expected_kind, const char* format_name) const {
+        const std::string expected = std::string("P") + expected_kind;
+        if (bytes_.size() < 2) fail("wrong magic: the file is too short to hold '" + expected + "' (" + format_name + ")");
+        std::string got;
+        for (int i = 0; i < 2; ++i) {
+            const unsigned char c = bytes_[std::size_t(i)];
+            got += std::isprint(c) ? std::string(1, char(c)) : "\\x" + std::to_string(int(c));
+        }
+        if (got != expected) fail("wrong magic '" + got + "': expected '" + expected + "' (" + format_name + ")");
+        if (bytes_.size() > 2 && !std::isspace(bytes_[2]) && bytes_[2] != '#')
+            fail("bad header: expected whitespace after '" + expected + "'");
+    }
+
+    void skipWhitespaceAndComments() {
+        while (pos_ < bytes_.size()) {
+            if (std::isspace(bytes_[pos_])) {
+                ++pos_;
+            } else if (bytes_[pos_] == '#') {
+                while (pos_ < bytes_.size() && bytes_[pos_] != '\n' && bytes_[pos_] != '\r') ++pos_;
+            } else {
+                break;
+            }
+        }
+    }
+
+    int readNumber(const char* what) {
+        skipWhitespaceAndComments();
+        if (pos_ >= bytes_.size()) fail(std::string("bad header: file ends before the ") + what);
+        if (!std::isdigit(bytes_[pos_]))
+            fail(std::string("bad header: expected the ") + what + " (a decimal number), got '" + char(bytes_[pos_]) + "'");
+        long long value = 0;
+        while (pos_ < bytes_.size() && std::isdigit(bytes_[pos_])) {
+            value = value * 10 + (bytes_[pos_] - '0');
+            if (value > 1000000000LL) fail(std::string("bad header: ") + what + " is absurdly large");
+            ++pos_;
+        }
+        if (pos_ < bytes_.size() && !std::isspace(bytes_[pos_]) && bytes_[pos_] != '#')
+            fail(std::string("bad header: unexpected character '") + char(bytes_[pos_]) + "' after the " + what);
+        return int(value);
+    }
+
+    const std::string& path_;
+    const std::vector<unsigned char>& bytes_;
+    std::size_t pos_ = 0;
+};
+
+void requirePixelBytes(const std::string& path, const std::vector<unsigned char>& bytes, const NetpbmHeader& h,
+                       std::size_t bytes_per_pixel) {
+    const std::size_t needed = std::size_t(h.width) * std::size_t(h.height) * bytes_per_pixel;
+    const std::size_t available = bytes.size() - h.data_offset;
+    if (available < needed)
+        throw IoError(path, "truncated: " + std::to_string(h.width) + "x" + std::to_string(h.height) + " needs " +
+                                std::to_string(needed) + " bytes of pixel data, the file has " + std::to_string(available));
+}
+
+void writeWholeFile(const std::string& path, const std::string& header, const std::vector<unsigned char>& data) {
+    std::ofstream out(path, std::ios::binary);
+    if (!out) throw IoError(path, "cannot open for writing");
+    out.write(header.data(), std::streamsize(header.size()));
+    out.write(reinterpret_cast<const char*>(data.data()), std::streamsize(data.size()));
+    out.flush();
+    if (!out) throw IoError(path, "write failed");
+}
+
+std::string netpbmHeader(const char* magic, Vec2i size, int maxval) {
+    return std::string(magic) + "\n" + std::to_string(size.x) + " " + std::to_string(size.y) + "\n" +
+           std::to_string(maxval) + "\n";
+}
+
+// ---------------------------------------------------------------------------------------------
+// OpenCV
+
+std::string describeMat(const cv::Mat& m) {
+    std::string depth;
+    switch (m.depth()) {
+        case CV_8U: depth = "8-bit"; break;
+        case CV_8S: depth = "8-bit signed"; break;
+        case CV_16U: depth = "16-bit"; break;
+        case CV_16S: depth = "16-bit signed"; break;
+        case CV_32S: depth = "32-bit integer"; break;
+        case CV_32F: depth = "32-bit float"; break;
+        case CV_64F: depth = "64-bit float"; break;
+        default: depth = "unknown-depth"; break;
+    }
+    return depth + " " + std::to_string(m.channels()) + "-channel";
+}
+
+cv::Mat readWithOpenCV(const std::string& path) {
+    std::error_code ec;
+    if (!std::filesystem::exists(path, ec)) throw IoError(path, "no such file");
+    cv::Mat m;
+    try {
+        m = cv::imread(path, cv::IMREAD_UNCHANGED);
+    } catch (const cv::Exception& e) {
+        throw IoError(path, "cannot decode image: " + e.msg);
+    }
+    if (m.empty()) throw IoError(path, "cannot decode image (corrupt file or unsupported format)");
+    return m;
+}
+
+void writeWithOpenCV(const std::string& path, const cv::Mat& m) {
+    bool ok = false;
+    std::string detail;
+    try {
+        ok = cv::imwrite(path, m);
+    } catch (const cv::Exception& e) {
+        detail = ": " + e.msg;
+    }
+    if (!ok) throw IoError(path, "cannot write image (folder missing or not writable, or unknown extension)" + detail);
+}
+
+template <typename T>
+Image<T> imageFromMat(const cv::Mat& m) {
+    Image<T> image(Vec2i{m.cols, m.rows});
+    const std::size_t row_bytes = std::size_t(m.cols) * sizeof(T);
+    for (int y = 0; y < m.rows; ++y) std::memcpy(&image.at(0, y), m.ptr(y), row_bytes);
+    return image;
+}
+
+bool hasExtension(const std::string& path, const char* extension) {
+    std::string ext = std::filesystem::path(path).extension().string();
+    for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+    return ext == extension;
+}
+
+}  // namespace
+
+Image<Vec4u8> readPPM(const std::string& path) {
+    const auto bytes = readWholeFile(path);
+    const NetpbmHeader h = NetpbmHeaderParser(path, bytes).parse('6', "binary PPM colour image");
+    if (h.maxval < 1 || h.maxval > 255)
+        throw IoError(path, "maxval " + std::to_string(h.maxval) +
+                                " out of range: an 8-bit PPM needs 1..255 (16-bit PPM is not supported)");
+    requirePixelBytes(path, bytes, h, 3);
+    // Rescale so that maxval means full intensity, as the format defines (samples above maxval are
+    // invalid; they are clamped rather than wrapped).
+    std::uint8_t to8bit[256];
+    for (unsigned v = 0; v < 256; ++v)
+        to8bit[v] = std::uint8_t(std::min(255u, (v * 255u + unsigned(h.maxval) / 2) / unsigned(h.maxval)));
+    Image<Vec4u8> image(Vec2i{h.width, h.height});
+    const unsigned char* src = bytes.data() + h.data_offset;
+    Vec4u8* dst = image.host();
+    for (std::size_t i = 0; i < image.pixelCount(); ++i, src += 3)
+        dst[i] = Vec4u8{to8bit[src[0]], to8bit[src[1]], to8bit[src[2]], 255};
+    return image;
+}
+
+Image<std::uint16_t> readPGM16(const std::string& path) {
+    const auto bytes = readWholeFile(path);
+    const NetpbmHeader h = NetpbmHeaderParser(path, bytes).parse('5', "binary PGM depth image");
+    if (h.maxval < 1 || h.maxval > 65535)
+        throw IoError(path, "maxval " + std::to_string(h.maxval) + " out of range (1..65535)");
+    if (h.maxval <= 255)
+        throw IoError(path, "8-bit PGM (maxval " + std::to_string(h.maxval) +
+                                "): expected a 16-bit depth PGM (maxval 256..65535)");
+    requirePixelBytes(path, bytes, h, 2);
+    Image<std::uint16_t> image(Vec2i{h.width, h.height});
+    const unsigned char* src = bytes.data() + h.data_offset;
+    std::uint16_t* dst = image.host();
+    // Raw samples are kept as they are (not rescaled by maxval): they are depth units, not intensities.
+    for (std::size_t i = 0; i < image.pixelCount(); ++i, src += 2) dst[i] = std::uint16_t((src[0] << 8) | src[1]);
+    return image;
+}
+
+void writePPM(const std::string& path, const Image<Vec4u8>& rgb) {
+    if (rgb.empty()) throw IoError(path, "cannot write an empty image");
+    std::vector<unsigned char> data(rgb.pixelCount() * 3);
+    const Vec4u8* src = rgb.host();
+    for (std::size_t i = 0; i < rgb.pixelCount(); ++i) {
+        data[3 * i] = src[i].x;
+        data[3 * i + 1] = src[i].y;
+        data[3 * i + 2] = src[i].z;
+    }
+    writeWholeFile(path, netpbmHeader("P6", rgb.size(), 255), data);
+}
+
+void writePGM16(const std::string& path, const Image<std::uint16_t>& depth) {
+    if (depth.empty()) throw IoError(path, "cannot write an empty image");
+    std::vector<unsigned char> data(depth.pixelCount() * 2);
+    const std::uint16_t* src = depth.host();
+    for (std::size_t i = 0; i < depth.pixelCount(); ++i) {
+        data[2 * i] = static_cast<unsigned char>(src[i] >> 8);  // big-endian, as Netpbm defines
+        data[2 * i + 1] = static_cast<unsigned char>(src[i] & 0xff);
+    }
+    writeWholeFile(path, netpbmHeader("P5", depth.size(), 65535), data);
+}
+
+Image<Vec4u8> readColorImage(const std::string& path) {
+    if (hasExtension(path, ".ppm")) return readPPM(path);
+    cv::Mat m = readWithOpenCV(path);
+    if (m.depth() == CV_16U) {
+        m.convertTo(m, CV_8U, 1.0 / 257.0);  // 65535 -> 255
+    } else if (m.depth() != CV_8U) {
+        throw IoError(path, "unsupported colour image: " + describeMat(m) + " (expected 8- or 16-bit)");
+    }
+    cv::Mat rgba;
+    switch (m.channels()) {
+        case 1: cv::cvtColor(m, rgba, cv::COLOR_GRAY2RGBA); break;
+        case 3: cv::cvtColor(m, rgba, cv::COLOR_BGR2RGBA); break;
+        case 4: cv::cvtColor(m, rgba, cv::COLOR_BGRA2RGBA); break;
+        default: throw IoError(path, "unsupported colour image: " + describeMat(m) + " (expected 1, 3 or 4 channels)");
+    }
+    return imageFromMat<Vec4u8>(rgba);
+}
+
+Image<std::uint16_t> readDepthPNG(const std::string& path) {
+    const cv::Mat m = readWithOpenCV(path);
+    if (m.type() != CV_16UC1) throw IoError(path, "expected a 16-bit single-channel depth PNG, got " + describeMat(m));
+    return imageFromMat<std::uint16_t>(m);
+}
+
+void writePNG(const std::string& path, const Image<Vec4u8>& rgba) {
+    if (rgba.empty()) throw IoError(path, "cannot write an empty image");
+    const cv::Mat wrapped(rgba.height(), rgba.width(), CV_8UC4, const_cast<Vec4u8*>(rgba.host()));
+    // Keep alpha only when it carries something, so ordinary colour frames stay plain RGB files.
+    bool opaque = true;
+    for (std::size_t i = 0; i < rgba.pixelCount() && opaque; ++i) opaque = rgba.host()[i].w == 255;
+    cv::Mat bgr;
+    cv::cvtColor(wrapped, bgr, opaque ? cv::COLOR_RGBA2BGR : cv::COLOR_RGBA2BGRA);
+    writeWithOpenCV(path, bgr);
+}
+
+void writeDepthPNG(const std::string& path, const Image<std::uint16_t>& depth) {
+    if (depth.empty()) throw IoError(path, "cannot write an empty image");
+    if (!hasExtension(path, ".png"))
+        throw IoError(path, "depth images are written as 16-bit PNG: the file name must end in .png");
+    const cv::Mat wrapped(depth.height(), depth.width(), CV_16UC1, const_cast<std::uint16_t*>(depth.host()));
+    writeWithOpenCV(path, wrapped);
+}
+
+}  // namespace voxfuse

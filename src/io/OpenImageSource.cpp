@@ -1,0 +1,71 @@
+// openImageSource: decides what kind of input a path is and opens the matching source.
+
+#include <algorithm>
+#include <cctype>
+#include <filesystem>
+
+#include "FrameReading.h"
+#include "voxfuse/core/Error.h"
+#include "voxfuse/io/FrameFolderSource.h"
+#include "voxfuse/io/ImageSource.h"
+#include "voxfuse/io/PpmPgmSource.h"
+#include "voxfuse/io/TumSource.h"
+
+namespace voxfuse {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+const char* const kAccepted =
+    "expected one of: a TUM RGB-D folder (rgb.txt + depth.txt); a per-frame folder (frame-XXXXXX.depth.png); "
+    "a PPM/PGM sequence (SourceOptions rgb/depth patterns + calib_path); an .oni recording (not in this build)";
+
+bool hasOniExtension(const std::string& path) {
+    std::string ext = fs::path(path).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    return ext == ".oni";
+}
+
+bool holdsFrameFiles(const fs::path& folder) {
+    std::error_code ec;
+    for (fs::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
+        int number = 0;
+        if (FrameFolderSource::parseDepthFileName(it->path().filename().string(), number)) return true;
+    }
+    return false;
+}
+
+// Relative patterns are taken relative to `path` (the sequence folder) when one is given.
+std::string resolvePattern(const std::string& path, const std::string& pattern) {
+    if (pattern.empty() || path.empty() || fs::path(pattern).is_absolute()) return pattern;
+    return (fs::path(path) / pattern).string();
+}
+
+}  // namespace
+
+std::unique_ptr<ImageSource> openImageSource(const std::string& path, const SourceOptions& options) {
+    if (!options.rgb_pattern.empty() || !options.depth_pattern.empty()) {
+        if (options.depth_pattern.empty())
+            throw IoError(path, "a PPM/PGM sequence needs a depth pattern (SourceOptions::depth_pattern), not only an rgb one");
+        if (options.calib_path.empty())
+            throw IoError(path, "a PPM/PGM sequence needs a calibration file (SourceOptions::calib_path)");
+        return std::make_unique<PpmPgmSource>(resolvePattern(path, options.rgb_pattern),
+                                              resolvePattern(path, options.depth_pattern), options.calib_path,
+                                              options.first_index);
+    }
+    if (hasOniExtension(path)) throw IoError(path, "OpenNI2 input is not available in this build");
+
+    std::error_code ec;
+    if (!fs::exists(path, ec)) throw IoError(path, std::string("no such file or folder; ") + kAccepted);
+    if (fs::is_directory(path, ec)) {
+        const fs::path folder(path);
+        if (frame_reading::fileExists((folder / "rgb.txt").string()) &&
+            frame_reading::fileExists((folder / "depth.txt").string()))
+            return std::make_unique<TumSource>(path, options.calib_path);
+        if (holdsFrameFiles(folder)) return std::make_unique<FrameFolderSource>(path, options.calib_path);
+    }
+    throw IoError(path, std::string("not a known image source; ") + kAccepted);
+}
+
+}  // namespace voxfuse

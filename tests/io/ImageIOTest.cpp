@@ -1,0 +1,218 @@
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "IoTestUtil.h"
+#include "voxfuse/core/Error.h"
+#include "voxfuse/io/ImageIO.h"
+
+namespace voxfuse {
+namespace {
+
+using test::makeDepth;
+using test::makeRgb;
+using test::readBytes;
+using test::samePixels;
+using test::ScratchDir;
+using test::writeBytes;
+
+std::string bytesOf(std::initializer_list<int> values) {
+    std::string s;
+    for (int v : values) s += char(v);
+    return s;
+}
+
+// Expects `read` to throw IoError for `path` whose reason contains `reason_part`.
+template <typename Read>
+void expectIoError(Read read, const std::string& path, const std::string& reason_part) {
+    try {
+        read(path);
+        ADD_FAILURE() << "no IoError for " << path << " (expected '" << reason_part << "')";
+    } catch (const IoError& e) {
+        EXPECT_EQ(e.file(), path);
+        EXPECT_NE(e.reason().find(reason_part), std::string::npos) << "reason: " << e.reason();
+    }
+}
+
+TEST(ImageIO, PpmWriteReadRoundTripIsByteExact) {
+    ScratchDir dir;
+    const Image<Vec4u8> rgb = makeRgb({5, 3}, 2);
+    const std::string path = dir.file("a.ppm");
+    writePPM(path, rgb);
+
+    std::string expected = "P6\n5 3\n255\n";
+    for (std::size_t i = 0; i < rgb.pixelCount(); ++i)
+        expected += bytesOf({rgb.host()[i].x, rgb.host()[i].y, rgb.host()[i].z});
+    EXPECT_EQ(readBytes(path), expected);
+
+    const Image<Vec4u8> back = readPPM(path);
+    EXPECT_TRUE(samePixels(rgb, back));
+    const std::string again = dir.file("b.ppm");
+    writePPM(again, back);
+    EXPECT_EQ(readBytes(path), readBytes(again));
+}
+
+TEST(ImageIO, Pgm16IsBigEndian) {
+    ScratchDir dir;
+    const std::string header = "P5\n2 2\n65535\n";
+    const std::string pixels = bytesOf({0x12, 0x34, 0xAB, 0xCD, 0x00, 0x01, 0xFF, 0x00});
+    const std::string by_hand = dir.file("hand.pgm");
+    writeBytes(by_hand, header + pixels);
+
+    const Image<std::uint16_t> depth = readPGM16(by_hand);
+    ASSERT_EQ(depth.size(), (Vec2i{2, 2}));
+    EXPECT_EQ(depth.at(0, 0), 0x1234);
+    EXPECT_EQ(depth.at(1, 0), 0xABCD);
+    EXPECT_EQ(depth.at(0, 1), 0x0001);
+    EXPECT_EQ(depth.at(1, 1), 0xFF00);
+
+    const std::string written = dir.file("written.pgm");
+    writePGM16(written, depth);
+    EXPECT_EQ(readBytes(written), header + pixels);
+}
+
+TEST(ImageIO, Pgm16RoundTrip) {
+    ScratchDir dir;
+    const Image<std::uint16_t> depth = makeDepth({7, 4}, 40);  // values above 255 exercise both bytes
+    const std::string path = dir.file("d.pgm");
+    writePGM16(path, depth);
+    EXPECT_TRUE(samePixels(depth, readPGM16(path)));
+}
+
+TEST(ImageIO, NetpbmHeaderCommentsAndWhitespace) {
+    ScratchDir dir;
+    const std::string path = dir.file("comments.ppm");
+    writeBytes(path, "P6 # a comment right after the magic\n# another\n  2\t1 # size\n255\n" + bytesOf({1, 2, 3, 4, 5, 6}));
+    const Image<Vec4u8> rgb = readPPM(path);
+    ASSERT_EQ(rgb.size(), (Vec2i{2, 1}));
+    EXPECT_EQ(rgb.at(1, 0).x, 4);
+    EXPECT_EQ(rgb.at(1, 0).z, 6);
+    EXPECT_EQ(rgb.at(1, 0).w, 255);
+}
+
+TEST(ImageIO, PpmWithSmallMaxvalIsRescaled) {
+    ScratchDir dir;
+    const std::string path = dir.file("maxval15.ppm");
+    writeBytes(path, "P6\n1 1\n15\n" + bytesOf({0, 15, 8}));
+    const Image<Vec4u8> rgb = readPPM(path);
+    EXPECT_EQ(rgb.at(0, 0).x, 0);
+    EXPECT_EQ(rgb.at(0, 0).y, 255);
+    EXPECT_EQ(rgb.at(0, 0).z, 136);
+}
+
+TEST(ImageIO, BadNetpbmFilesGiveReasons) {
+    ScratchDir dir;
+    struct Case {
+        const char* name;
+        std::string bytes;
+        bool depth;  // readPGM16 rather than readPPM
+        const char* reason_part;
+    };
+    const std::vector<Case> cases = {
+        {"truncated.ppm", "P6\n2 2\n255\n" + std::string(11, 'x'), false, "truncated: 2x2 needs 12 bytes of pixel data, the file has 11"},
+        {"truncated.pgm", "P5\n2 2\n65535\n" + std::string(7, 'x'), true, "truncated: 2x2 needs 8 bytes"},
+        {"no_data.ppm", "P6\n2 2\n255", false, "truncated"},
+        {"huge.ppm", "P6\n100000 100000\n255\n" + std::string(10, 'x'), false, "truncated"},
+        {"ascii.ppm", "P3\n1 1\n255\n1 2 3\n", false, "wrong magic 'P3': expected 'P6'"},
+        {"colour_as_depth.pgm", "P6\n1 1\n255\n" + std::string(3, 'x'), true, "wrong magic 'P6': expected 'P5'"},
+        {"png_as_ppm.ppm", "\x89PNG\r\n\x1a\n", false, "wrong magic"},
+        {"empty.ppm", "", false, "wrong magic: the file is too short"},
+        {"bad_width.ppm", "P6\nx 2\n255\n", false, "bad header: expected the width"},
+        {"bad_height.ppm", "P6\n2 2y\n255\n", false, "bad header: unexpected character 'y' after the height"},
+        {"header_ends.pgm", "P5\n2 2\n", true, "bad header: file ends before the maxval"},
+        {"zero_width.ppm", "P6\n0 2\n255\n", false, "width and height must be positive"},
+        {"maxval_zero.ppm", "P6\n1 1\n0\n" + std::string(3, 'x'), false, "maxval 0 out of range"},
+        {"maxval_16bit.ppm", "P6\n1 1\n65535\n" + std::string(6, 'x'), false, "maxval 65535 out of range"},
+        {"maxval_zero.pgm", "P5\n1 1\n0\n" + std::string(2, 'x'), true, "maxval 0 out of range"},
+        {"maxval_big.pgm", "P5\n1 1\n70000\n" + std::string(2, 'x'), true, "maxval 70000 out of range"},
+        {"8bit.pgm", "P5\n1 1\n255\n" + std::string(1, 'x'), true, "8-bit PGM (maxval 255): expected a 16-bit depth PGM"},
+    };
+    for (const Case& c : cases) {
+        SCOPED_TRACE(c.name);
+        const std::string path = dir.file(c.name);
+        writeBytes(path, c.bytes);
+        if (c.depth)
+            expectIoError([](const std::string& p) { readPGM16(p); }, path, c.reason_part);
+        else
+            expectIoError([](const std::string& p) { readPPM(p); }, path, c.reason_part);
+    }
+}
+
+TEST(ImageIO, MissingFilesSayNoSuchFile) {
+    const std::string path = "/nonexistent/voxfuse/image";
+    expectIoError([](const std::string& p) { readPPM(p); }, path + ".ppm", "no such file");
+    expectIoError([](const std::string& p) { readPGM16(p); }, path + ".pgm", "no such file");
+    expectIoError([](const std::string& p) { readColorImage(p); }, path + ".png", "no such file");
+    expectIoError([](const std::string& p) { readDepthPNG(p); }, path + ".png", "no such file");
+}
+
+TEST(ImageIO, PngColourRoundTrip) {
+    ScratchDir dir;
+    const Image<Vec4u8> rgb = makeRgb({6, 4}, 1);
+    const std::string path = dir.file("c.png");
+    writePNG(path, rgb);
+    EXPECT_TRUE(samePixels(rgb, readColorImage(path)));
+
+    Image<Vec4u8> translucent = makeRgb({3, 2}, 3);
+    translucent.at(1, 1).w = 17;
+    const std::string alpha_path = dir.file("alpha.png");
+    writePNG(alpha_path, translucent);
+    EXPECT_TRUE(samePixels(translucent, readColorImage(alpha_path)));
+}
+
+TEST(ImageIO, PngDepthRoundTrip) {
+    ScratchDir dir;
+    const Image<std::uint16_t> depth = makeDepth({9, 5}, 50);
+    const std::string path = dir.file("d.png");
+    writeDepthPNG(path, depth);
+    EXPECT_TRUE(samePixels(depth, readDepthPNG(path)));
+}
+
+TEST(ImageIO, GreyImageBecomesRgba) {
+    ScratchDir dir;
+    const std::string path = dir.file("grey.pgm");  // 8-bit PGM, decoded by OpenCV
+    writeBytes(path, "P5\n2 1\n255\n" + bytesOf({10, 200}));
+    const Image<Vec4u8> rgba = readColorImage(path);
+    ASSERT_EQ(rgba.size(), (Vec2i{2, 1}));
+    EXPECT_EQ(rgba.at(1, 0).x, 200);
+    EXPECT_EQ(rgba.at(1, 0).y, 200);
+    EXPECT_EQ(rgba.at(1, 0).z, 200);
+    EXPECT_EQ(rgba.at(1, 0).w, 255);
+}
+
+TEST(ImageIO, CorruptPngIsAnIoError) {
+    ScratchDir dir;
+    const std::string garbage = dir.file("garbage.png");
+    writeBytes(garbage, "this is not a png at all");
+    expectIoError([](const std::string& p) { readColorImage(p); }, garbage, "cannot decode image");
+    expectIoError([](const std::string& p) { readDepthPNG(p); }, garbage, "cannot decode image");
+
+    // A real PNG cut in half: the header is valid, the data is not.
+    const std::string whole = dir.file("whole.png");
+    writeDepthPNG(whole, makeDepth({64, 64}, 3));
+    const std::string bytes = readBytes(whole);
+    const std::string truncated = dir.file("truncated.png");
+    writeBytes(truncated, bytes.substr(0, bytes.size() / 2));
+    expectIoError([](const std::string& p) { readDepthPNG(p); }, truncated, "cannot decode image");
+}
+
+TEST(ImageIO, EightBitPngAsDepthIsRejected) {
+    ScratchDir dir;
+    const std::string path = dir.file("colour.png");
+    writePNG(path, makeRgb({4, 4}, 0));
+    expectIoError([](const std::string& p) { readDepthPNG(p); }, path,
+                  "expected a 16-bit single-channel depth PNG, got 8-bit 3-channel");
+}
+
+TEST(ImageIO, WriteErrors) {
+    ScratchDir dir;
+    EXPECT_THROW(writeDepthPNG(dir.file("depth.jpg"), makeDepth({2, 2}, 0)), IoError);
+    EXPECT_THROW(writePNG("/nonexistent/voxfuse/c.png", makeRgb({2, 2}, 0)), IoError);
+    EXPECT_THROW(writePPM("/nonexistent/voxfuse/c.ppm", makeRgb({2, 2}, 0)), IoError);
+    EXPECT_THROW(writePGM16(dir.file("empty.pgm"), Image<std::uint16_t>()), IoError);
+    EXPECT_THROW(writePNG(dir.file("empty.png"), Image<Vec4u8>()), IoError);
+}
+
+}  // namespace
+}  // namespace voxfuse
