@@ -1,0 +1,30 @@
+#pragma once
+// The few CUDA runtime calls that host-side containers need, behind plain C++ declarations so that
+// code using MemoryBlock never includes CUDA headers. A build without CUDA links stubs that throw
+// DeviceError; a CUDA build on a machine without a GPU reports cudaAvailable() == false.
+
+#include <cstddef>
+#include <string>
+
+namespace voxfuse {
+
+// Where an engine runs and where its buffers live.
+enum class Device { CPU, CUDA };
+
+const char* deviceName(Device d);
+
+namespace device_memory {
+bool builtWithCuda();
+// True when this build has CUDA and a usable GPU is present. Never throws.
+bool cudaAvailable();
+// A one-line description of the GPU (or why there is none), for logs and test skips.
+std::string cudaDescription();
+void* allocate(std::size_t bytes);
+void release(void* ptr) noexcept;
+void copyHostToDevice(void* dst_device, const void* src_host, std::size_t bytes);
+void copyDeviceToHost(void* dst_host, const void* src_device, std::size_t bytes);
+void copyDeviceToDevice(void* dst_device, const void* src_device, std::size_t bytes);
+void fill(void* dst_device, int byte_value, std::size_t bytes);
+}  // namespace device_memory
+
+}  // namespace voxfuse

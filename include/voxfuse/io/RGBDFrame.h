@@ -1,0 +1,22 @@
+#pragma once
+// One frame as read from a source, before any processing: raw 16-bit depth (converted to metres by
+// the low-level engine using the calibration's DisparityCalib) and colour.
+
+#include <cstdint>
+#include <string>
+
+#include "voxfuse/core/Image.h"
+
+namespace voxfuse {
+
+struct RGBDFrame {
+    int index = -1;                   // 0-based position in the source
+    double timestamp_s = 0.0;         // source timestamp (frame index / 30 when the source has none)
+    Image<std::uint16_t> depth_raw;   // raw depth samples; 0 = no measurement
+    Image<Vec4u8> rgb;                // RGBA; empty when the source has no colour
+    bool has_ground_truth = false;
+    Mat4f T_world_camera_gt = Mat4f::identity();  // ground-truth pose when has_ground_truth
+    std::string depth_path;           // where the depth came from, for error messages
+};
+
+}  // namespace voxfuse

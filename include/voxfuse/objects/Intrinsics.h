@@ -1,0 +1,36 @@
+#pragma once
+// Pinhole camera intrinsics in pixels (Matlab/OpenCV convention: pixel centres at integers).
+
+#include "voxfuse/core/Math.h"
+
+namespace voxfuse {
+
+struct Intrinsics {
+    int width = 0, height = 0;  // pixels
+    float fx = 0.f, fy = 0.f;   // focal lengths, pixels
+    float cx = 0.f, cy = 0.f;   // principal point, pixels
+
+    VF_HOST_DEVICE Vec2i size() const { return {width, height}; }
+    // Camera-frame point (metres, z forward) to pixel coordinates.
+    VF_HOST_DEVICE Vec2f project(Vec3f p_camera) const {
+        return {fx * p_camera.x / p_camera.z + cx, fy * p_camera.y / p_camera.z + cy};
+    }
+    // Pixel (u, v) at depth z (metres along the optical axis) to a camera-frame point.
+    VF_HOST_DEVICE Vec3f unproject(float u, float v, float depth_m) const {
+        return {(u - cx) * depth_m / fx, (v - cy) * depth_m / fy, depth_m};
+    }
+    // The intrinsics of an image downsampled by `factor` (2 for one pyramid level), keeping pixel centres consistent.
+    Intrinsics downsampled(int factor) const {
+        Intrinsics r = *this;
+        r.width = width / factor;
+        r.height = height / factor;
+        r.fx = fx / factor;
+        r.fy = fy / factor;
+        r.cx = (cx + 0.5f) / factor - 0.5f;
+        r.cy = (cy + 0.5f) / factor - 0.5f;
+        return r;
+    }
+    bool valid() const { return width > 0 && height > 0 && fx > 0.f && fy > 0.f; }
+};
+
+}  // namespace voxfuse

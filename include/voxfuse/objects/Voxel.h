@@ -1,0 +1,63 @@
+#pragma once
+// The four voxel types. Each stores a truncated signed distance (normalised to [-1, 1] by the
+// truncation band mu) and its weight; the *Rgb types add a colour and its weight. The short types
+// quantise the SDF to int16 (half the memory of float; step 1/32767 of mu).
+
+#include <cstdint>
+
+#include "voxfuse/core/Math.h"
+
+namespace voxfuse {
+
+// The run-time names used on the command line and in settings files.
+enum class VoxelType { S, F, SRgb, FRgb };
+
+struct VoxelS {
+    static constexpr bool hasColor = false;
+    static constexpr const char* name = "s";
+    std::int16_t sdf;
+    std::uint8_t w_depth;
+
+    VF_HOST_DEVICE static float sdfToFloat(std::int16_t v) { return float(v) * (1.f / 32767.f); }
+    VF_HOST_DEVICE static std::int16_t sdfFromFloat(float f) { return std::int16_t(f * 32767.f); }
+    VF_HOST_DEVICE static VoxelS initial() { return {32767, 0}; }
+};
+
+struct VoxelF {
+    static constexpr bool hasColor = false;
+    static constexpr const char* name = "f";
+    float sdf;
+    std::uint8_t w_depth;
+
+    VF_HOST_DEVICE static float sdfToFloat(float v) { return v; }
+    VF_HOST_DEVICE static float sdfFromFloat(float f) { return f; }
+    VF_HOST_DEVICE static VoxelF initial() { return {1.f, 0}; }
+};
+
+struct VoxelSRgb {
+    static constexpr bool hasColor = true;
+    static constexpr const char* name = "s_rgb";
+    std::int16_t sdf;
+    std::uint8_t w_depth;
+    std::uint8_t w_color;
+    Vec3u8 clr;
+
+    VF_HOST_DEVICE static float sdfToFloat(std::int16_t v) { return float(v) * (1.f / 32767.f); }
+    VF_HOST_DEVICE static std::int16_t sdfFromFloat(float f) { return std::int16_t(f * 32767.f); }
+    VF_HOST_DEVICE static VoxelSRgb initial() { return {32767, 0, 0, {0, 0, 0}}; }
+};
+
+struct VoxelFRgb {
+    static constexpr bool hasColor = true;
+    static constexpr const char* name = "f_rgb";
+    float sdf;
+    std::uint8_t w_depth;
+    std::uint8_t w_color;
+    Vec3u8 clr;
+
+    VF_HOST_DEVICE static float sdfToFloat(float v) { return v; }
+    VF_HOST_DEVICE static float sdfFromFloat(float f) { return f; }
+    VF_HOST_DEVICE static VoxelFRgb initial() { return {1.f, 0, 0, {0, 0, 0}}; }
+};
+
+}  // namespace voxfuse

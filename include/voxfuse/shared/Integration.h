@@ -1,0 +1,107 @@
+#pragma once
+// Fusing one depth (and colour) frame into one voxel: the projective TSDF update of KinectFusion,
+// as in section 4.3 of the InfiniTAM report, shared by the CPU loop and the CUDA kernel.
+
+#include "voxfuse/core/Math.h"
+#include "voxfuse/objects/Intrinsics.h"
+
+namespace voxfuse {
+
+// Everything a voxel update needs from the current frame (trivially copyable: passed to kernels by value).
+struct IntegrationFrame {
+    Mat4f T_depth_world;      // world -> depth camera
+    Intrinsics depth_intrinsics;
+    const float* depth;       // metres, 0 = invalid
+    Mat4f T_rgb_world;        // world -> colour camera
+    Intrinsics rgb_intrinsics;
+    const Vec4u8* rgb;        // nullptr when there is no colour
+    float mu_m;
+    int max_weight;
+    float min_depth_m, max_depth_m;  // depth samples outside are ignored
+    float near_m;                    // voxels closer to the camera are not updated
+    bool stop_at_max_weight;
+};
+
+// Bilinear colour lookup; false when the point falls outside the image.
+VF_HOST_DEVICE inline bool sampleColorBilinear(const Vec4u8* rgb, Vec2i size, Vec2f px, Vec3f& out) {
+    if (!(px.x >= 0.f && px.y >= 0.f && px.x <= float(size.x - 1) && px.y <= float(size.y - 1))) return false;
+    const int x0 = int(px.x), y0 = int(px.y);
+    const int x1 = x0 + 1 < size.x ? x0 + 1 : x0, y1 = y0 + 1 < size.y ? y0 + 1 : y0;
+    const float fx = px.x - float(x0), fy = px.y - float(y0);
+    const Vec4u8 a = rgb[x0 + y0 * size.x], b = rgb[x1 + y0 * size.x], c = rgb[x0 + y1 * size.x], d = rgb[x1 + y1 * size.x];
+    for (int ch = 0; ch < 3; ++ch)
+        out[ch] = (1.f - fy) * ((1.f - fx) * a[ch] + fx * b[ch]) + fy * ((1.f - fx) * c[ch] + fx * d[ch]);
+    return true;
+}
+
+// Restricts x to where a row of voxels p(x) = row_origin + x * step (world metres) lies inside the
+// depth camera's frustum between near_m and far_m. Each image border is a linear inequality in x
+// once multiplied by the (positive) depth, so the row's range is an interval; widened by one voxel.
+VF_HOST_DEVICE inline bool frustumRowRange(const IntegrationFrame& f, Vec3f row_origin_world, Vec3f step_world,
+                                           float near_m, float far_m, int& x_begin, int& x_end) {
+    const Vec3f a = transformPoint(f.T_depth_world, row_origin_world);
+    const Vec3f b = transformDirection(f.T_depth_world, step_world);
+    const Intrinsics& in = f.depth_intrinsics;
+    // Constraints c0 + c1 * x >= 0.
+    const float c0[6] = {a.z - near_m, far_m - a.z,
+                         in.fx * a.x + (in.cx + 0.5f) * a.z, -(in.fx * a.x + (in.cx - float(in.width) + 0.5f) * a.z),
+                         in.fy * a.y + (in.cy + 0.5f) * a.z, -(in.fy * a.y + (in.cy - float(in.height) + 0.5f) * a.z)};
+    const float c1[6] = {b.z, -b.z,
+                         in.fx * b.x + (in.cx + 0.5f) * b.z, -(in.fx * b.x + (in.cx - float(in.width) + 0.5f) * b.z),
+                         in.fy * b.y + (in.cy + 0.5f) * b.z, -(in.fy * b.y + (in.cy - float(in.height) + 0.5f) * b.z)};
+    float lo = float(x_begin), hi = float(x_end);
+    for (int k = 0; k < 6; ++k) {
+        if (c1[k] > 0.f) lo = fmaxf(lo, -c0[k] / c1[k] - 1.f);
+        else if (c1[k] < 0.f) hi = fminf(hi, -c0[k] / c1[k] + 2.f);
+        else if (c0[k] < 0.f) return false;
+    }
+    if (!(lo < hi)) return false;
+    x_begin = int(floorf(lo));
+    x_end = int(ceilf(hi));
+    return x_begin < x_end;
+}
+
+// Updates `voxel` (centre at p_world) with the frame. Returns eta, the measured depth minus the voxel's
+// depth along the optical axis, or a large negative number when the voxel gets no update.
+template <class TVoxel>
+VF_HOST_DEVICE inline float integrateVoxel(TVoxel& voxel, Vec3f p_world, const IntegrationFrame& f) {
+    const float kNoUpdate = -1e30f;
+    const Vec3f p_cam = transformPoint(f.T_depth_world, p_world);
+    if (p_cam.z < f.near_m) return kNoUpdate;
+    const Vec2f px = f.depth_intrinsics.project(p_cam);
+    const int u = int(px.x + 0.5f), v = int(px.y + 0.5f);
+    if (px.x < -0.5f || px.y < -0.5f || u >= f.depth_intrinsics.width || v >= f.depth_intrinsics.height) return kNoUpdate;
+
+    const float depth_m = f.depth[u + v * f.depth_intrinsics.width];
+    if (!(depth_m >= f.min_depth_m && depth_m <= f.max_depth_m)) return kNoUpdate;  // also rejects 0 and NaN
+
+    // Behind the observed surface by more than mu: the frame says nothing about this voxel.
+    const float eta = depth_m - p_cam.z;
+    if (eta < -f.mu_m) return kNoUpdate;
+
+    const int old_w = voxel.w_depth;
+    if (f.stop_at_max_weight && old_w >= f.max_weight) return eta;
+    const float new_sdf = eta / f.mu_m < 1.f ? eta / f.mu_m : 1.f;
+    const float fused = (TVoxel::sdfToFloat(voxel.sdf) * float(old_w) + new_sdf) / float(old_w + 1);
+    voxel.sdf = TVoxel::sdfFromFloat(fused);
+    voxel.w_depth = (unsigned char)(old_w + 1 < f.max_weight ? old_w + 1 : f.max_weight);
+
+    if constexpr (TVoxel::hasColor) {
+        // Colour belongs to the surface: only voxels close to the zero crossing take it.
+        if (f.rgb != nullptr && eta < 0.5f * f.mu_m && eta > -0.5f * f.mu_m) {
+            const Vec3f p_rgb = transformPoint(f.T_rgb_world, p_world);
+            Vec3f c;
+            if (p_rgb.z > 0.f && sampleColorBilinear(f.rgb, f.rgb_intrinsics.size(), f.rgb_intrinsics.project(p_rgb), c)) {
+                const int old_wc = voxel.w_color;
+                for (int ch = 0; ch < 3; ++ch) {
+                    const float fusedc = (float(voxel.clr[ch]) * float(old_wc) + c[ch]) / float(old_wc + 1);
+                    voxel.clr[ch] = (unsigned char)(fusedc + 0.5f);
+                }
+                voxel.w_color = (unsigned char)(old_wc + 1 < f.max_weight ? old_wc + 1 : f.max_weight);
+            }
+        }
+    }
+    return eta;
+}
+
+}  // namespace voxfuse

@@ -1,0 +1,81 @@
+#pragma once
+// Per-pixel image operations before tracking and integration: depth conversion, bilateral filter,
+// pyramid downsampling, vertex and normal maps.
+
+#include <cstdint>
+
+#include "voxfuse/core/Math.h"
+#include "voxfuse/objects/Intrinsics.h"
+#include "voxfuse/objects/RGBDCalib.h"
+
+namespace voxfuse {
+
+// Edge-preserving smoothing of one depth pixel (KinectFusion's bilateral filter). Invalid (0) pixels
+// stay invalid and never contribute.
+VF_HOST_DEVICE inline float bilateralFilterDepthPixel(const float* depth, Vec2i size, int x, int y, int radius,
+                                                      float sigma_space_px, float sigma_depth_m) {
+    const float centre = depth[x + y * size.x];
+    if (!(centre > 0.f)) return 0.f;
+    const float inv_2ss = 1.f / (2.f * sigma_space_px * sigma_space_px);
+    const float inv_2sd = 1.f / (2.f * sigma_depth_m * sigma_depth_m);
+    float sum = 0.f, weight_sum = 0.f;
+    for (int dy = -radius; dy <= radius; ++dy) {
+        const int yy = y + dy;
+        if (yy < 0 || yy >= size.y) continue;
+        for (int dx = -radius; dx <= radius; ++dx) {
+            const int xx = x + dx;
+            if (xx < 0 || xx >= size.x) continue;
+            const float d = depth[xx + yy * size.x];
+            if (!(d > 0.f)) continue;
+            const float diff = d - centre;
+            const float w = expf(-float(dx * dx + dy * dy) * inv_2ss - diff * diff * inv_2sd);
+            sum += w * d;
+            weight_sum += w;
+        }
+    }
+    return sum / weight_sum;  // weight_sum >= 1 (the centre itself)
+}
+
+// One pixel of the next pyramid level: the mean of the valid samples of the 2x2 block that lie within
+// `max_diff_m` of the block's first valid sample (averaging across depth edges would invent surfaces).
+VF_HOST_DEVICE inline float downsampleDepthPixel(const float* depth, Vec2i size, int x, int y, float max_diff_m) {
+    float ref = 0.f, sum = 0.f;
+    int n = 0;
+    for (int k = 0; k < 4; ++k) {
+        const int xx = 2 * x + (k & 1), yy = 2 * y + (k >> 1);
+        if (xx >= size.x || yy >= size.y) continue;
+        const float d = depth[xx + yy * size.x];
+        if (!(d > 0.f)) continue;
+        if (n == 0) ref = d;
+        if (fabsf(d - ref) > max_diff_m) continue;
+        sum += d;
+        ++n;
+    }
+    return n > 0 ? sum / float(n) : 0.f;
+}
+
+// Camera-frame point of a depth pixel; w = 1 when valid, 0 otherwise.
+VF_HOST_DEVICE inline Vec4f vertexFromDepthPixel(const float* depth, const Intrinsics& intr, int x, int y) {
+    const float d = depth[x + y * intr.width];
+    if (!(d > 0.f)) return {0.f, 0.f, 0.f, 0.f};
+    const Vec3f p = intr.unproject(float(x), float(y), d);
+    return {p.x, p.y, p.z, 1.f};
+}
+
+// Normal from central differences of the vertex map, oriented towards the camera; w = 0 when a
+// neighbour is missing or the neighbours straddle a depth edge.
+VF_HOST_DEVICE inline Vec4f normalFromVertexPixel(const Vec4f* vertices, Vec2i size, int x, int y, float max_edge_m) {
+    const Vec4f invalid{0.f, 0.f, 0.f, 0.f};
+    if (x < 1 || y < 1 || x >= size.x - 1 || y >= size.y - 1) return invalid;
+    const Vec4f l = vertices[x - 1 + y * size.x], r = vertices[x + 1 + y * size.x];
+    const Vec4f u = vertices[x + (y - 1) * size.x], d = vertices[x + (y + 1) * size.x];
+    if (l.w <= 0.f || r.w <= 0.f || u.w <= 0.f || d.w <= 0.f) return invalid;
+    const Vec3f dx = r.xyz() - l.xyz(), dy = d.xyz() - u.xyz();
+    if (length(dx) > max_edge_m || length(dy) > max_edge_m) return invalid;
+    Vec3f n = normalize(cross(dy, dx));
+    const Vec3f c = vertices[x + y * size.x].xyz();
+    if (dot(n, c) > 0.f) n = -n;  // face the camera (which sits at the origin)
+    return {n.x, n.y, n.z, 1.f};
+}
+
+}  // namespace voxfuse

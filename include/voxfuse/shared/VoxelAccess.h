@@ -1,0 +1,86 @@
+#pragma once
+// Reading voxels through an index, for one element at a time. Each index type provides
+// readVoxel(voxels, index_data, grid_position, found); the interpolating readers below work for any
+// index that does.
+
+#include "voxfuse/core/Math.h"
+#include "voxfuse/objects/PlainVoxelArray.h"
+
+namespace voxfuse {
+
+// Linear offset of a grid position in a dense array, or -1 when outside it.
+VF_HOST_DEVICE inline long long denseVoxelOffset(const PlainVoxelArray::Data& index, Vec3i p) {
+    p -= index.offset;
+    if (p.x < 0 || p.y < 0 || p.z < 0 || p.x >= index.size.x || p.y >= index.size.y || p.z >= index.size.z) return -1;
+    return p.x + (long long)index.size.x * (p.y + (long long)index.size.y * p.z);
+}
+
+// `found` is false outside the array (the returned voxel is then TVoxel::initial()).
+template <class TVoxel>
+VF_HOST_DEVICE inline TVoxel readVoxel(const TVoxel* voxels, const PlainVoxelArray::Data& index, Vec3i p, bool& found) {
+    const long long i = denseVoxelOffset(index, p);
+    found = i >= 0;
+    return found ? voxels[i] : TVoxel::initial();
+}
+
+// SDF of the voxel nearest to `p` (grid units). `observed` is false where no depth was ever fused.
+template <class TVoxel, class TIndexData>
+VF_HOST_DEVICE inline float readSdfNearest(const TVoxel* voxels, const TIndexData& index, Vec3f p, bool& observed) {
+    bool found;
+    const TVoxel v = readVoxel(voxels, index, Vec3i{int(floorf(p.x + 0.5f)), int(floorf(p.y + 0.5f)), int(floorf(p.z + 0.5f))}, found);
+    observed = found && v.w_depth > 0;
+    return TVoxel::sdfToFloat(v.sdf);
+}
+
+// Trilinear interpolation of the SDF at `p` (grid units). Unobserved corners contribute their initial
+// value (+1, free space), which never creates a front-to-back zero crossing. `observed` is false when
+// none of the eight corners was observed.
+template <class TVoxel, class TIndexData>
+VF_HOST_DEVICE inline float readSdfInterpolated(const TVoxel* voxels, const TIndexData& index, Vec3f p, bool& observed) {
+    const Vec3i base = floorToInt(p);
+    const Vec3f c = p - toFloat(base);
+    float result = 0.f;
+    observed = false;
+    for (int k = 0; k < 8; ++k) {
+        const Vec3i o{k & 1, (k >> 1) & 1, (k >> 2) & 1};
+        bool found;
+        const TVoxel v = readVoxel(voxels, index, base + o, found);
+        const float w = (o.x ? c.x : 1.f - c.x) * (o.y ? c.y : 1.f - c.y) * (o.z ? c.z : 1.f - c.z);
+        const bool has_data = found && v.w_depth > 0;
+        observed = observed || has_data;
+        result += w * (has_data ? TVoxel::sdfToFloat(v.sdf) : 1.f);
+    }
+    return result;
+}
+
+// Trilinear interpolation of colour (0..255 per channel) over the corners that have colour.
+template <class TVoxel, class TIndexData>
+VF_HOST_DEVICE inline Vec3f readColorInterpolated(const TVoxel* voxels, const TIndexData& index, Vec3f p) {
+    const Vec3i base = floorToInt(p);
+    const Vec3f c = p - toFloat(base);
+    Vec3f sum{0.f, 0.f, 0.f};
+    float weight_sum = 0.f;
+    for (int k = 0; k < 8; ++k) {
+        const Vec3i o{k & 1, (k >> 1) & 1, (k >> 2) & 1};
+        bool found;
+        const TVoxel v = readVoxel(voxels, index, base + o, found);
+        if (!found || v.w_color == 0) continue;
+        const float w = (o.x ? c.x : 1.f - c.x) * (o.y ? c.y : 1.f - c.y) * (o.z ? c.z : 1.f - c.z);
+        sum += Vec3f{float(v.clr.x), float(v.clr.y), float(v.clr.z)} * w;
+        weight_sum += w;
+    }
+    return weight_sum > 0.f ? sum / weight_sum : Vec3f{0.f, 0.f, 0.f};
+}
+
+// Outward surface normal (direction of increasing SDF) from central differences, one voxel apart.
+template <class TVoxel, class TIndexData>
+VF_HOST_DEVICE inline Vec3f sdfGradientNormal(const TVoxel* voxels, const TIndexData& index, Vec3f p) {
+    bool o;
+    Vec3f g;
+    g.x = readSdfInterpolated(voxels, index, Vec3f{p.x + 1.f, p.y, p.z}, o) - readSdfInterpolated(voxels, index, Vec3f{p.x - 1.f, p.y, p.z}, o);
+    g.y = readSdfInterpolated(voxels, index, Vec3f{p.x, p.y + 1.f, p.z}, o) - readSdfInterpolated(voxels, index, Vec3f{p.x, p.y - 1.f, p.z}, o);
+    g.z = readSdfInterpolated(voxels, index, Vec3f{p.x, p.y, p.z + 1.f}, o) - readSdfInterpolated(voxels, index, Vec3f{p.x, p.y, p.z - 1.f}, o);
+    return normalize(g);
+}
+
+}  // namespace voxfuse
