@@ -1,0 +1,25 @@
+#pragma once
+// Every CUDA runtime call goes through VF_CUDA_CHECK: a failure throws DeviceError naming the call,
+// the file and line, and CUDA's own message.
+
+#include <cuda_runtime.h>
+
+#include <string>
+
+#include "voxfuse/core/Error.h"
+
+namespace voxfuse::cuda {
+
+inline void check(cudaError_t status, const char* call, const char* file, int line) {
+    if (status != cudaSuccess)
+        throw DeviceError(std::string(call) + " failed at " + file + ":" + std::to_string(line) + ": " + cudaGetErrorString(status));
+}
+
+// Ceiling division for grid sizes.
+inline unsigned int blocksFor(int n, int block) { return unsigned((n + block - 1) / block); }
+
+}  // namespace voxfuse::cuda
+
+#define VF_CUDA_CHECK(call) ::voxfuse::cuda::check((call), #call, __FILE__, __LINE__)
+// After a kernel launch: catches bad launch configurations at once, and faults at the next sync.
+#define VF_CUDA_CHECK_LAUNCH() VF_CUDA_CHECK(cudaGetLastError())

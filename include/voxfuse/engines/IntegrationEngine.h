@@ -1,0 +1,54 @@
+#pragma once
+// Fusing a depth (and colour) frame into the scene. The device layers (src/cpu/IntegrationEngine_CPU.cpp,
+// cuda/IntegrationEngine_CUDA.cu) loop over voxels and call integrateVoxel() from shared/Integration.h.
+
+#include <memory>
+
+#include "voxfuse/core/DeviceMemory.h"
+#include "voxfuse/objects/PlainVoxelArray.h"
+#include "voxfuse/objects/Scene.h"
+#include "voxfuse/objects/View.h"
+#include "voxfuse/shared/Integration.h"
+
+namespace voxfuse {
+
+template <class TVoxel, class TIndex>
+class IntegrationEngine {
+public:
+    virtual ~IntegrationEngine() = default;
+    // Fuses `view` seen from the depth camera pose T_world_camera.
+    virtual void integrate(Scene<TVoxel, TIndex>& scene, const View& view, const Mat4f& T_world_camera) = 0;
+    // Forgets everything: every voxel back to TVoxel::initial().
+    virtual void resetScene(Scene<TVoxel, TIndex>& scene) = 0;
+};
+
+// ---- Host-side logic shared by the device layers ----
+
+// The per-frame constants of integrateVoxel(); `depth` and `rgb` point to where the loop reads them.
+IntegrationFrame makeIntegrationFrame(const SceneParams& params, const View& view, const Mat4f& T_world_camera,
+                                      const float* depth, const Vec4u8* rgb);
+
+// Voxels closer to the camera than this are never updated (their projection is ill-conditioned).
+constexpr float kIntegrationNearM = 0.01f;
+
+// The box of dense-grid voxels (array coordinates, inclusive lo, exclusive hi) that can receive an
+// update: the view frustum from the camera to mu behind the farthest valid depth (returned as far_m),
+// clipped to the array. False when the box is empty.
+bool denseIntegrationBox(const PlainVoxelArray::Data& index, const SceneParams& params, const View& view,
+                         const Mat4f& T_world_camera, Vec3i& lo, Vec3i& hi, float& far_m);
+
+namespace cpu {
+template <class TVoxel, class TIndex>
+std::unique_ptr<IntegrationEngine<TVoxel, TIndex>> makeIntegrationEngine();
+}
+namespace cuda {
+template <class TVoxel, class TIndex>
+std::unique_ptr<IntegrationEngine<TVoxel, TIndex>> makeIntegrationEngine();
+}
+
+template <class TVoxel, class TIndex>
+std::unique_ptr<IntegrationEngine<TVoxel, TIndex>> makeIntegrationEngine(Device device) {
+    return device == Device::CPU ? cpu::makeIntegrationEngine<TVoxel, TIndex>() : cuda::makeIntegrationEngine<TVoxel, TIndex>();
+}
+
+}  // namespace voxfuse

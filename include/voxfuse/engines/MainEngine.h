@@ -1,0 +1,76 @@
+#pragma once
+// Owns every object and engine of the pipeline and runs it one frame at a time: depth conversion,
+// pose (given or tracked), integration, raycast from the new pose. Voxel and index types are picked at
+// run time (create() dispatches to the instantiated pairs).
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "voxfuse/core/DeviceMemory.h"
+#include "voxfuse/engines/RaycastEngine.h"
+#include "voxfuse/io/RGBDFrame.h"
+#include "voxfuse/objects/PlainVoxelArray.h"
+#include "voxfuse/objects/RGBDCalib.h"
+#include "voxfuse/objects/RenderState.h"
+#include "voxfuse/objects/SceneParams.h"
+#include "voxfuse/objects/TrackingState.h"
+#include "voxfuse/objects/View.h"
+#include "voxfuse/objects/Voxel.h"
+
+namespace voxfuse {
+
+struct MainEngineSettings {
+    SceneParams scene;
+    VoxelType voxel_type = VoxelType::S;
+    IndexType index_type = IndexType::Dense;
+    Device device = Device::CPU;
+    // Dense index: the box of voxels (grid units; the first camera looks along +z from the origin).
+    Vec3i dense_offset{-256, -256, 0};
+    Vec3i dense_size{512, 512, 512};
+};
+
+VoxelType parseVoxelType(const std::string& name);  // "s", "f", "s_rgb", "f_rgb"; ConfigError otherwise
+const char* toString(VoxelType type);
+IndexType parseIndexType(const std::string& name);  // "dense" (and "hash" once it exists)
+const char* toString(IndexType type);
+
+struct StageTime {
+    const char* stage;  // "depth", "track", "integrate", "raycast"
+    double ms;
+};
+
+struct FrameResult {
+    bool fused = false;  // the frame was integrated into the map
+    TrackingQuality quality = TrackingQuality::Good;
+    Mat4f T_world_camera = Mat4f::identity();
+    double total_ms = 0.0;  // the engine's processing of this frame (no file decoding)
+    std::vector<StageTime> stages;
+};
+
+class MainEngine {
+public:
+    static std::unique_ptr<MainEngine> create(const MainEngineSettings& settings, const RGBDCalib& calib);
+    virtual ~MainEngine() = default;
+
+    // Processes one frame. With `T_world_camera_given` (e.g. ground truth) that pose is used; without
+    // it a tracker must estimate the pose. The world frame is whatever the given poses use.
+    virtual FrameResult processFrame(const RGBDFrame& frame, const Mat4f* T_world_camera_given) = 0;
+
+    virtual const MainEngineSettings& settings() const = 0;
+    virtual const View& view() const = 0;
+    virtual const TrackingState& trackingState() const = 0;
+    // The raycast from the last processed pose (points and normals in world coordinates).
+    virtual const RenderState& renderState() const = 0;
+    // Renders the last raycast.
+    virtual void renderLast(RenderMode mode, Image<Vec4u8>& image) = 0;
+    // Raycasts and renders the model from any viewpoint (does not disturb the tracking raycast).
+    virtual void renderFromPose(const Mat4f& T_world_camera, const Intrinsics& intrinsics, RenderMode mode,
+                                Image<Vec4u8>& image) = 0;
+    // Clears the map and the pose.
+    virtual void reset() = 0;
+    // Bytes held by the voxel storage.
+    virtual std::size_t sceneBytes() const = 0;
+};
+
+}  // namespace voxfuse

@@ -1,0 +1,47 @@
+#pragma once
+// Raycasting the model from a viewpoint (for the tracker and for display) and rendering images from
+// the result. Device layers call castRay() and friends from shared/Raycast.h.
+
+#include <memory>
+
+#include "voxfuse/core/DeviceMemory.h"
+#include "voxfuse/objects/RenderState.h"
+#include "voxfuse/objects/Scene.h"
+
+namespace voxfuse {
+
+enum class RenderMode {
+    Shaded,   // Lambertian, light at the camera
+    Color,    // fused voxel colours (grey shading for voxel types without colour)
+    Normals,  // world normal mapped to RGB
+    Depth     // distance along the optical axis, colour-mapped
+};
+
+template <class TVoxel, class TIndex>
+class RaycastEngine {
+public:
+    virtual ~RaycastEngine() = default;
+    // Fills render_state's points and normals for every pixel of `intrinsics` seen from T_world_camera.
+    virtual void raycast(const Scene<TVoxel, TIndex>& scene, const Intrinsics& intrinsics, const Mat4f& T_world_camera,
+                         RenderState& render_state) = 0;
+    // An RGBA image of the last raycast.
+    virtual void render(const Scene<TVoxel, TIndex>& scene, const RenderState& render_state, RenderMode mode,
+                        Image<Vec4u8>& image) = 0;
+};
+
+// Depth (metres along the optical axis of the raycast camera) of each raycast pixel; 0 where nothing was hit.
+void raycastDepth(const RenderState& render_state, Image<float>& depth_m);
+
+namespace cpu {
+template <class TVoxel, class TIndex>
+std::unique_ptr<RaycastEngine<TVoxel, TIndex>> makeRaycastEngine();
+}
+
+template <class TVoxel, class TIndex>
+std::unique_ptr<RaycastEngine<TVoxel, TIndex>> makeRaycastEngine(Device device) {
+    // Raycasting runs on the CPU for every device until its CUDA kernel lands.
+    (void)device;
+    return cpu::makeRaycastEngine<TVoxel, TIndex>();
+}
+
+}  // namespace voxfuse

@@ -1,0 +1,26 @@
+// device_memory for builds without CUDA: every device request fails with a clear message.
+
+#include "voxfuse/core/DeviceMemory.h"
+#include "voxfuse/core/Error.h"
+
+namespace voxfuse {
+
+const char* deviceName(Device d) { return d == Device::CPU ? "cpu" : "cuda"; }
+
+namespace device_memory {
+namespace {
+[[noreturn]] void noCuda() { throw DeviceError("this VoxFuse build has no CUDA support (rebuild with -DVOXFUSE_CUDA=ON)"); }
+}  // namespace
+
+bool builtWithCuda() { return false; }
+bool cudaAvailable() { return false; }
+std::string cudaDescription() { return "built without CUDA"; }
+void* allocate(std::size_t) { noCuda(); }
+void release(void*) noexcept {}
+void copyHostToDevice(void*, const void*, std::size_t) { noCuda(); }
+void copyDeviceToHost(void*, const void*, std::size_t) { noCuda(); }
+void copyDeviceToDevice(void*, const void*, std::size_t) { noCuda(); }
+void fill(void*, int, std::size_t) { noCuda(); }
+}  // namespace device_memory
+
+}  // namespace voxfuse

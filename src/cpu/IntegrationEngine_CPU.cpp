@@ -1,0 +1,58 @@
+// CPU/OpenMP loops of the integration engine; the per-voxel update is integrateVoxel() in shared/Integration.h.
+
+#include "voxfuse/engines/IntegrationEngine.h"
+#include "voxfuse/objects/Voxel.h"
+
+namespace voxfuse::cpu {
+namespace {
+
+template <class TVoxel, class TIndex>
+class IntegrationEngine_CPU;
+
+template <class TVoxel>
+class IntegrationEngine_CPU<TVoxel, PlainVoxelArray> final : public IntegrationEngine<TVoxel, PlainVoxelArray> {
+public:
+    void integrate(Scene<TVoxel, PlainVoxelArray>& scene, const View& view, const Mat4f& T_world_camera) override {
+        const PlainVoxelArray::Data index = scene.index().data();
+        Vec3i lo, hi;  // array coordinates (not offset)
+        float far_m;
+        if (!denseIntegrationBox(index, scene.params(), view, T_world_camera, lo, hi, far_m)) return;
+        const IntegrationFrame frame = makeIntegrationFrame(scene.params(), view, T_world_camera, view.depth.host(), view.rgb.host());
+        TVoxel* voxels = scene.voxels().host();
+        const float voxel_size = scene.params().voxel_size_m;
+        const int rows = (hi.y - lo.y) * (hi.z - lo.z);
+        const float near_m = kIntegrationNearM;
+        const Vec3f step{voxel_size, 0.f, 0.f};
+#pragma omp parallel for schedule(dynamic, 16)
+        for (int row = 0; row < rows; ++row) {
+            const int y = lo.y + row % (hi.y - lo.y);
+            const int z = lo.z + row / (hi.y - lo.y);
+            TVoxel* line = voxels + (long long)index.size.x * (y + (long long)index.size.y * z);
+            int x_begin = lo.x, x_end = hi.x;
+            const Vec3f row_origin = toFloat(Vec3i{0, y, z} + index.offset) * voxel_size;
+            if (!frustumRowRange(frame, row_origin, step, near_m, far_m, x_begin, x_end)) continue;
+            x_begin = x_begin > lo.x ? x_begin : lo.x;
+            x_end = x_end < hi.x ? x_end : hi.x;
+            for (int x = x_begin; x < x_end; ++x) {
+                const Vec3f p_world = toFloat(Vec3i{x, y, z} + index.offset) * voxel_size;
+                integrateVoxel(line[x], p_world, frame);
+            }
+        }
+    }
+
+    void resetScene(Scene<TVoxel, PlainVoxelArray>& scene) override { scene.voxels().fillHost(TVoxel::initial()); }
+};
+
+}  // namespace
+
+template <class TVoxel, class TIndex>
+std::unique_ptr<IntegrationEngine<TVoxel, TIndex>> makeIntegrationEngine() {
+    return std::make_unique<IntegrationEngine_CPU<TVoxel, TIndex>>();
+}
+
+template std::unique_ptr<IntegrationEngine<VoxelS, PlainVoxelArray>> makeIntegrationEngine<VoxelS, PlainVoxelArray>();
+template std::unique_ptr<IntegrationEngine<VoxelF, PlainVoxelArray>> makeIntegrationEngine<VoxelF, PlainVoxelArray>();
+template std::unique_ptr<IntegrationEngine<VoxelSRgb, PlainVoxelArray>> makeIntegrationEngine<VoxelSRgb, PlainVoxelArray>();
+template std::unique_ptr<IntegrationEngine<VoxelFRgb, PlainVoxelArray>> makeIntegrationEngine<VoxelFRgb, PlainVoxelArray>();
+
+}  // namespace voxfuse::cpu

@@ -1,0 +1,75 @@
+// Host-side logic of the integration engine shared by its CPU and CUDA layers.
+
+#include <algorithm>
+#include <cmath>
+
+#include "voxfuse/engines/IntegrationEngine.h"
+
+namespace voxfuse {
+
+IntegrationFrame makeIntegrationFrame(const SceneParams& params, const View& view, const Mat4f& T_world_camera,
+                                      const float* depth, const Vec4u8* rgb) {
+    IntegrationFrame f{};
+    f.T_depth_world = rigidInverse(T_world_camera);
+    f.depth_intrinsics = view.calib.depth;
+    f.depth = depth;
+    // The colour camera sees world points through depth-from-world followed by rgb-from-depth.
+    f.T_rgb_world = rigidInverse(view.calib.T_depth_rgb) * f.T_depth_world;
+    f.rgb_intrinsics = view.calib.rgb;
+    f.rgb = view.rgb.empty() ? nullptr : rgb;
+    if (f.rgb && view.rgb.size() != view.calib.rgb.size()) {
+        // Colour images whose size disagrees with the calibration are scaled into it.
+        const float sx = float(view.rgb.width()) / float(view.calib.rgb.width);
+        const float sy = float(view.rgb.height()) / float(view.calib.rgb.height);
+        f.rgb_intrinsics.fx *= sx;
+        f.rgb_intrinsics.cx = (f.rgb_intrinsics.cx + 0.5f) * sx - 0.5f;
+        f.rgb_intrinsics.fy *= sy;
+        f.rgb_intrinsics.cy = (f.rgb_intrinsics.cy + 0.5f) * sy - 0.5f;
+        f.rgb_intrinsics.width = view.rgb.width();
+        f.rgb_intrinsics.height = view.rgb.height();
+    }
+    f.mu_m = params.mu_m;
+    f.max_weight = params.max_weight;
+    f.min_depth_m = params.view_frustum_min_m;
+    f.max_depth_m = params.view_frustum_max_m;
+    f.near_m = kIntegrationNearM;
+    f.stop_at_max_weight = params.stop_integrating_at_max_weight;
+    return f;
+}
+
+bool denseIntegrationBox(const PlainVoxelArray::Data& index, const SceneParams& params, const View& view,
+                         const Mat4f& T_world_camera, Vec3i& lo, Vec3i& hi, float& far_m) {
+    // Voxels in front of the nearest surface are carved too (they are free space), so the slab starts
+    // at the camera; it ends mu behind the farthest usable depth.
+    far_m = 0.f;
+    const float* d = view.depth.host();
+    for (std::size_t i = 0; i < view.depth.pixelCount(); ++i)
+        if (d[i] >= params.view_frustum_min_m && d[i] <= params.view_frustum_max_m) far_m = std::max(far_m, d[i]);
+    if (far_m <= 0.f) return false;
+    far_m += params.mu_m;
+    const float near_m = kIntegrationNearM;
+
+    // The eight corners of the frustum slab, in world coordinates, bound every voxel that can change.
+    const Intrinsics& in = view.calib.depth;
+    Vec3f box_lo{INFINITY, INFINITY, INFINITY}, box_hi{-INFINITY, -INFINITY, -INFINITY};
+    for (int k = 0; k < 8; ++k) {
+        const float u = (k & 1) ? float(in.width) - 0.5f : -0.5f;
+        const float v = (k & 2) ? float(in.height) - 0.5f : -0.5f;
+        const float z = (k & 4) ? far_m : near_m;
+        const Vec3f p = transformPoint(T_world_camera, in.unproject(u, v, z));
+        for (int a = 0; a < 3; ++a) {
+            box_lo[a] = std::min(box_lo[a], p[a]);
+            box_hi[a] = std::max(box_hi[a], p[a]);
+        }
+    }
+    for (int a = 0; a < 3; ++a) {
+        const int first = int(std::floor(box_lo[a] / params.voxel_size_m)) - 1;
+        const int last = int(std::ceil(box_hi[a] / params.voxel_size_m)) + 2;
+        lo[a] = std::max(first, index.offset[a]) - index.offset[a];
+        hi[a] = std::min(last, index.offset[a] + index.size[a]) - index.offset[a];
+        if (lo[a] >= hi[a]) return false;
+    }
+    return true;
+}
+
+}  // namespace voxfuse

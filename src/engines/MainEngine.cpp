@@ -1,0 +1,167 @@
+// The per-frame pipeline and the run-time dispatch over voxel and index types.
+
+#include "voxfuse/engines/MainEngine.h"
+
+#include <cstring>
+
+#include "voxfuse/core/Error.h"
+#include "voxfuse/core/Timer.h"
+#include "voxfuse/engines/IntegrationEngine.h"
+#include "voxfuse/engines/LowLevelEngine.h"
+#include "voxfuse/engines/RaycastEngine.h"
+#include "voxfuse/objects/Scene.h"
+
+namespace voxfuse {
+namespace {
+
+template <class TVoxel, class TIndex>
+class MainEngineT final : public MainEngine {
+public:
+    MainEngineT(const MainEngineSettings& settings, const RGBDCalib& calib, const TIndex& index)
+        : settings_(settings),
+          scene_(settings.scene, index, settings.device),
+          low_level_(makeLowLevelEngine(settings.device)),
+          integration_(makeIntegrationEngine<TVoxel, TIndex>(settings.device)),
+          raycast_(makeRaycastEngine<TVoxel, TIndex>(settings.device)) {
+        view_.calib = calib;
+    }
+
+    FrameResult processFrame(const RGBDFrame& frame, const Mat4f* T_world_camera_given) override {
+        FrameResult result;
+        const Timer total;
+
+        Timer t;
+        low_level_->convertDepthToMetres(frame.depth_raw, view_.calib.disparity, view_.calib.depth.fx,
+                                         settings_.scene.view_frustum_min_m, settings_.scene.view_frustum_max_m, view_.depth);
+        copyColor(frame);
+        view_.frame_index = frame.index;
+        view_.timestamp_s = frame.timestamp_s;
+        if (view_.depth.size() != view_.calib.depth.size())
+            throw IoError(frame.depth_path, "depth image is " + std::to_string(view_.depth.width()) + "x" +
+                                                std::to_string(view_.depth.height()) + " but the calibration says " +
+                                                std::to_string(view_.calib.depth.width) + "x" + std::to_string(view_.calib.depth.height),
+                          frame.index);
+        result.stages.push_back({"depth", t.elapsedMs()});
+
+        t = Timer();
+        if (!T_world_camera_given) throw ConfigError("no pose given and no tracker configured");
+        tracking_.T_world_camera = *T_world_camera_given;
+        tracking_.quality = TrackingQuality::Good;
+        result.stages.push_back({"track", t.elapsedMs()});
+
+        t = Timer();
+        integration_->integrate(scene_, view_, tracking_.T_world_camera);
+        result.fused = true;
+        result.stages.push_back({"integrate", t.elapsedMs()});
+
+        t = Timer();
+        raycast_->raycast(scene_, view_.calib.depth, tracking_.T_world_camera, render_state_);
+        result.stages.push_back({"raycast", t.elapsedMs()});
+
+        result.quality = tracking_.quality;
+        result.T_world_camera = tracking_.T_world_camera;
+        result.total_ms = total.elapsedMs();
+        return result;
+    }
+
+    const MainEngineSettings& settings() const override { return settings_; }
+    const View& view() const override { return view_; }
+    const TrackingState& trackingState() const override { return tracking_; }
+    const RenderState& renderState() const override { return render_state_; }
+
+    void renderLast(RenderMode mode, Image<Vec4u8>& image) override { raycast_->render(scene_, render_state_, mode, image); }
+
+    void renderFromPose(const Mat4f& T_world_camera, const Intrinsics& intrinsics, RenderMode mode, Image<Vec4u8>& image) override {
+        raycast_->raycast(scene_, intrinsics, T_world_camera, free_view_);
+        raycast_->render(scene_, free_view_, mode, image);
+    }
+
+    void reset() override {
+        integration_->resetScene(scene_);
+        tracking_ = TrackingState();
+        render_state_ = RenderState();
+    }
+
+    std::size_t sceneBytes() const override { return scene_.voxels().bytes(); }
+
+private:
+    void copyColor(const RGBDFrame& frame) {
+        if (frame.rgb.empty()) {
+            view_.rgb = Image<Vec4u8>();
+            return;
+        }
+        view_.rgb.resize(frame.rgb.size());
+        std::memcpy(static_cast<void*>(view_.rgb.host()), frame.rgb.host(), frame.rgb.pixelCount() * sizeof(Vec4u8));
+    }
+
+    MainEngineSettings settings_;
+    Scene<TVoxel, TIndex> scene_;
+    std::unique_ptr<LowLevelEngine> low_level_;
+    std::unique_ptr<IntegrationEngine<TVoxel, TIndex>> integration_;
+    std::unique_ptr<RaycastEngine<TVoxel, TIndex>> raycast_;
+    View view_;
+    TrackingState tracking_;
+    RenderState render_state_;
+    RenderState free_view_;
+};
+
+template <class TVoxel>
+std::unique_ptr<MainEngine> createForVoxel(const MainEngineSettings& s, const RGBDCalib& calib) {
+    switch (s.index_type) {
+        case IndexType::Dense:
+            return std::make_unique<MainEngineT<TVoxel, PlainVoxelArray>>(s, calib, PlainVoxelArray(s.dense_offset, s.dense_size));
+        case IndexType::Hash: break;
+    }
+    throw ConfigError("index type 'hash' is not available yet: use --index dense");
+}
+
+}  // namespace
+
+std::unique_ptr<MainEngine> MainEngine::create(const MainEngineSettings& s, const RGBDCalib& calib) {
+    if (!calib.depth.valid()) throw ConfigError("the depth camera calibration is missing or invalid");
+    if (!(s.scene.voxel_size_m > 0.f) || !(s.scene.mu_m > s.scene.voxel_size_m))
+        throw ConfigError("need voxel size > 0 and mu > voxel size (got voxel " + std::to_string(s.scene.voxel_size_m) +
+                          " m, mu " + std::to_string(s.scene.mu_m) + " m)");
+    if (s.scene.max_weight < 1 || s.scene.max_weight > 255) throw ConfigError("max weight must be in 1..255");
+    if (s.dense_size.x <= 0 || s.dense_size.y <= 0 || s.dense_size.z <= 0) throw ConfigError("dense volume size must be positive");
+    if (s.device == Device::CUDA) {
+        if (!device_memory::cudaAvailable())
+            throw DeviceError("CUDA was requested but is not usable: " + device_memory::cudaDescription());
+        throw ConfigError("the full CUDA pipeline is not available yet (CUDA integration is): use --device cpu");
+    }
+    switch (s.voxel_type) {
+        case VoxelType::S: return createForVoxel<VoxelS>(s, calib);
+        case VoxelType::F: return createForVoxel<VoxelF>(s, calib);
+        case VoxelType::SRgb: return createForVoxel<VoxelSRgb>(s, calib);
+        case VoxelType::FRgb: return createForVoxel<VoxelFRgb>(s, calib);
+    }
+    throw ConfigError("unknown voxel type");
+}
+
+VoxelType parseVoxelType(const std::string& name) {
+    if (name == "s") return VoxelType::S;
+    if (name == "f") return VoxelType::F;
+    if (name == "s_rgb") return VoxelType::SRgb;
+    if (name == "f_rgb") return VoxelType::FRgb;
+    throw ConfigError("unknown voxel type '" + name + "' (expected s, f, s_rgb or f_rgb)");
+}
+
+const char* toString(VoxelType type) {
+    switch (type) {
+        case VoxelType::S: return VoxelS::name;
+        case VoxelType::F: return VoxelF::name;
+        case VoxelType::SRgb: return VoxelSRgb::name;
+        case VoxelType::FRgb: return VoxelFRgb::name;
+    }
+    return "?";
+}
+
+IndexType parseIndexType(const std::string& name) {
+    if (name == "dense") return IndexType::Dense;
+    if (name == "hash") return IndexType::Hash;
+    throw ConfigError("unknown index type '" + name + "' (expected dense or hash)");
+}
+
+const char* toString(IndexType type) { return type == IndexType::Dense ? "dense" : "hash"; }
+
+}  // namespace voxfuse
