@@ -1,0 +1,146 @@
+// Analytic indoor scene with exact geometry, used to render synthetic RGB-D
+// sequences whose ground truth (surfaces, poses) is known exactly.
+//
+// World frame: metres, z up, floor at z = 0. Camera frame: OpenCV/TUM
+// convention (x right, y down, z forward).
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace voxfuse::synth {
+
+struct Hit {
+    float t = 0.0f;  // ray parameter: hit point = origin + t * dir (dir need not be unit)
+    Eigen::Vector3f normal = Eigen::Vector3f::Zero();      // unit, facing the ray origin
+    Eigen::Vector3f albedo_rgb = Eigen::Vector3f::Zero();  // linear RGB in [0, 1]
+    int primitive = -1;  // index into SyntheticScene::primitives()
+};
+
+enum class TextureKind { Solid, Checker, Stripes, Noise, Wood, Poster };
+
+// Procedural solid texture evaluated in the primitive's local frame, so the
+// pattern is glued to the surface and stays consistent across views.
+struct Texture {
+    TextureKind kind = TextureKind::Solid;
+    Eigen::Vector3f colorA{0.7f, 0.7f, 0.7f};
+    Eigen::Vector3f colorB{0.3f, 0.3f, 0.3f};
+    float scale = 0.1f;  // feature size in metres (tile, stripe, noise cell, ring, poster cell)
+    std::uint32_t seed = 0;  // selects the noise / poster pattern
+
+    Eigen::Vector3f albedo(const Eigen::Vector3f& p_local) const;
+};
+
+enum class PrimitiveKind { Rectangle, Box, Sphere, Cylinder };
+
+// One surface, defined in its local frame and placed by world_from_local.
+//   Rectangle: lies in local z = 0, half extents (size.x, size.y), may be
+//              infinite (a plane); its normal is local +z.
+//   Box:       half extents size.
+//   Sphere:    radius size.x, centred at the local origin.
+//   Cylinder:  capped, axis local z, radius size.x, half height size.y.
+struct Primitive {
+    PrimitiveKind kind = PrimitiveKind::Sphere;
+    Eigen::Vector3f size = Eigen::Vector3f::Ones();
+    Eigen::Vector3f translation = Eigen::Vector3f::Zero();
+    Eigen::Quaternionf rotation = Eigen::Quaternionf::Identity();
+    Texture texture;
+};
+
+struct PointLight {
+    Eigen::Vector3f position = Eigen::Vector3f::Zero();
+    float intensity = 1.0f;  // irradiance scale at 1 m
+};
+
+// Pinhole intrinsics; pixel (u, v) has its centre at integer coordinates.
+struct PinholeCamera {
+    int width = 640;
+    int height = 480;
+    float fx = 525.0f, fy = 525.0f, cx = 319.5f, cy = 239.5f;
+
+    // Kinect v1 defaults (640x480, f = 525), scaled to another resolution.
+    static PinholeCamera kinectV1(int width = 640, int height = 480);
+    // Camera-frame ray through pixel (u, v), scaled so that its z is 1.
+    Eigen::Vector3f ray(float u, float v) const {
+        return {(u - cx) / fx, (v - cy) / fy, 1.0f};
+    }
+};
+
+// Exact per-pixel rendering of one view.
+struct RenderedFrame {
+    int width = 0, height = 0;
+    std::vector<float> depth;         // z along the optical axis (m), 0 = no surface
+    std::vector<float> cosIncidence;  // |cos| of the angle between viewing ray and normal
+    std::vector<Eigen::Vector3f> rgb; // display RGB in [0, 1] (gamma applied), noise-free
+};
+
+class SyntheticScene {
+public:
+    int add(const Primitive& primitive);
+    int addPlane(const Eigen::Vector3f& point, const Eigen::Vector3f& normal,
+                 const Texture& texture = {});
+    int addRectangle(const Eigen::Vector3f& center, const Eigen::Vector3f& normal,
+                     float halfWidth, float halfHeight, const Texture& texture = {});
+    int addBox(const Eigen::Vector3f& center, const Eigen::Quaternionf& rotation,
+               const Eigen::Vector3f& halfExtents, const Texture& texture = {});
+    int addSphere(const Eigen::Vector3f& center, float radius, const Texture& texture = {});
+    int addCylinder(const Eigen::Vector3f& center, const Eigen::Quaternionf& rotation,
+                    float radius, float halfHeight, const Texture& texture = {});
+    void addLight(const PointLight& light) { lights_.push_back(light); }
+    void setAmbient(float ambient) { ambient_ = ambient; }
+
+    // Nearest hit with t > 1e-5 (in units of |dir|). Returns false on a miss.
+    bool intersect(const Eigen::Vector3f& origin, const Eigen::Vector3f& dir, Hit& hit) const;
+    bool intersect(const Eigen::Vector3f& origin, const Eigen::Vector3f& dir, Hit& hit,
+                   float tMin, float tMax) const;
+    // True if any surface lies on the ray for t in (tMin, tMax).
+    bool occluded(const Eigen::Vector3f& origin, const Eigen::Vector3f& dir,
+                  float tMin, float tMax) const;
+    // Unsigned distance (m) from p_world to the nearest surface.
+    float distanceToSurface(const Eigen::Vector3f& p_world) const;
+
+    // Lambertian shading (ambient + point lights with shadows) of a hit point,
+    // in linear RGB.
+    Eigen::Vector3f shade(const Eigen::Vector3f& point, const Hit& hit) const;
+    // Renders exact depth, incidence and colour; colour uses
+    // colourSamples x colourSamples samples per pixel against aliasing.
+    RenderedFrame render(const PinholeCamera& camera, const Eigen::Isometry3f& T_world_camera,
+                         int colourSamples = 2) const;
+
+    const std::vector<Primitive>& primitives() const { return primitives_; }
+    const std::vector<PointLight>& lights() const { return lights_; }
+    float ambient() const { return ambient_; }
+
+    // The project's default data set: a 5 x 4 x 2.7 m room with a table,
+    // boxes, spheres, a cylinder and posters.
+    static SyntheticScene defaultRoom();
+    static SyntheticScene singlePlane(const Eigen::Vector3f& point, const Eigen::Vector3f& normal);
+    static SyntheticScene singleSphere(const Eigen::Vector3f& center, float radius);
+    // A box (half extents 0.2, centred at (0, 0, 0.2)) on an infinite floor
+    // z = 0, and a sphere of radius 0.15 at (0.6, 0, 0.15).
+    static SyntheticScene boxAndSphere();
+
+    // scene.txt: one primitive / light per line, world coordinates in metres.
+    void write(const std::string& path) const;
+    static SyntheticScene read(const std::string& path);  // throws std::runtime_error
+
+private:
+    struct Placement {  // cached transforms of one primitive
+        Eigen::Matrix3f R_world_local;
+        Eigen::Vector3f t_world_local;
+    };
+    std::vector<Primitive> primitives_;
+    std::vector<Placement> placements_;
+    std::vector<PointLight> lights_;
+    float ambient_ = 0.25f;
+};
+
+// Rotation whose local +z is `normal` and whose local x is horizontal
+// (world z up) when possible; used to place rectangles and posters.
+Eigen::Quaternionf rotationFromNormal(const Eigen::Vector3f& normal);
+
+}  // namespace voxfuse::synth

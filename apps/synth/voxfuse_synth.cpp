@@ -1,0 +1,247 @@
+// voxfuse_synth: renders the synthetic room as an RGB-D sequence with exact
+// ground truth, in the TUM RGB-D layout or as InfiniTAM-style PPM/PGM files.
+#include "CameraPath.h"
+#include "KinectDepthModel.h"
+#include "SyntheticScene.h"
+
+#include <CLI/CLI.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <random>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace fs = std::filesystem;
+using namespace voxfuse::synth;
+
+namespace {
+
+struct Options {
+    std::string outDir;
+    int frames = 100;
+    int width = 640;
+    int height = 480;
+    std::string format = "tum";
+    std::string rgbFormat = "jpg";
+    int jpegQuality = 90;
+    std::uint32_t seed = 1;
+    bool noNoise = false;
+    int colourSamples = 2;
+};
+
+constexpr double kFirstTimestamp = 1000.0;
+constexpr float kTumDepthScale = 5000.0f;  // TUM PNG depth: metres * 5000
+constexpr float kColourNoiseSigma = 1.5f;  // sensor noise, 8-bit levels
+
+// Pose line "timestamp tx ty tz qx qy qz qw" plus the pose exactly as a reader
+// of that line gets it, so the images match the written ground truth.
+struct PoseRecord {
+    std::string line;
+    Eigen::Isometry3f pose;
+};
+
+PoseRecord makePoseRecord(double timestamp, const Eigen::Isometry3f& pose) {
+    const Eigen::Vector3f t = pose.translation();
+    Eigen::Quaternionf q(pose.linear());
+    q.normalize();
+    if (q.w() < 0.0f) q.coeffs() *= -1.0f;  // one canonical sign
+    char buffer[256];
+    std::snprintf(buffer, sizeof(buffer), "%.6f %.7f %.7f %.7f %.7f %.7f %.7f %.7f", timestamp,
+                  t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w());
+    std::istringstream in(buffer);
+    double ts, v[7];
+    in >> ts >> v[0] >> v[1] >> v[2] >> v[3] >> v[4] >> v[5] >> v[6];
+    const Eigen::Quaterniond qd = Eigen::Quaterniond(v[6], v[3], v[4], v[5]).normalized();
+    Eigen::Isometry3d parsed = Eigen::Isometry3d::Identity();
+    parsed.linear() = qd.toRotationMatrix();
+    parsed.translation() = Eigen::Vector3d(v[0], v[1], v[2]);
+    return {buffer, parsed.cast<float>()};
+}
+
+std::string timestampName(double timestamp) {
+    char buffer[64];
+    std::snprintf(buffer, sizeof(buffer), "%.6f", timestamp);
+    return buffer;
+}
+
+std::ofstream openText(const fs::path& path) {
+    std::ofstream out(path);
+    if (!out) throw std::runtime_error("cannot write " + path.string());
+    return out;
+}
+
+void writeCalib(const fs::path& path, const PinholeCamera& cam, const std::string& disparityLine) {
+    std::ofstream out = openText(path);
+    for (int camera = 0; camera < 2; ++camera)  // rgb, then depth: the same sensor
+        out << cam.width << " " << cam.height << "\n"
+            << cam.fx << " " << cam.fy << "\n"
+            << cam.cx << " " << cam.cy << "\n\n";
+    out << "1 0 0 0\n0 1 0 0\n0 0 1 0\n\n" << disparityLine << "\n";
+}
+
+// 8-bit interleaved colour with a little Gaussian sensor noise; OpenCV wants BGR.
+std::vector<std::uint8_t> toBytes(const std::vector<Eigen::Vector3f>& rgb, std::mt19937* rng,
+                                  bool bgr) {
+    std::normal_distribution<float> noise(0.0f, kColourNoiseSigma);
+    std::vector<std::uint8_t> bytes(rgb.size() * 3);
+    for (std::size_t i = 0; i < rgb.size(); ++i)
+        for (int c = 0; c < 3; ++c) {
+            float value = rgb[i][c] * 255.0f + (rng ? noise(*rng) : 0.0f);
+            bytes[3 * i + (bgr ? 2 - c : c)] = static_cast<std::uint8_t>(std::clamp(std::round(value), 0.0f, 255.0f));
+        }
+    return bytes;
+}
+
+void writeImage(const fs::path& path, const cv::Mat& image, const std::vector<int>& params) {
+    if (!cv::imwrite(path.string(), image, params))
+        throw std::runtime_error("cannot write " + path.string());
+}
+
+void writePpm(const fs::path& path, int width, int height, const std::vector<std::uint8_t>& rgb) {
+    std::ofstream out(path, std::ios::binary);
+    out << "P6\n" << width << " " << height << "\n255\n";
+    out.write(reinterpret_cast<const char*>(rgb.data()), static_cast<std::streamsize>(rgb.size()));
+    if (!out) throw std::runtime_error("cannot write " + path.string());
+}
+
+// 16-bit binary PGM; the format stores samples big-endian.
+void writePgm16(const fs::path& path, int width, int height, const std::vector<std::uint16_t>& values) {
+    std::ofstream out(path, std::ios::binary);
+    out << "P5\n" << width << " " << height << "\n65535\n";
+    std::vector<char> bytes(values.size() * 2);
+    for (std::size_t i = 0; i < values.size(); ++i) {
+        bytes[2 * i] = static_cast<char>(values[i] >> 8);
+        bytes[2 * i + 1] = static_cast<char>(values[i] & 0xFF);
+    }
+    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    if (!out) throw std::runtime_error("cannot write " + path.string());
+}
+
+void writeTumHeader(std::ofstream& out, const std::string& what, const std::string& columns) {
+    out << "# " << what << "\n# file: 'voxfuse synthetic_room (voxfuse_synth)'\n# " << columns << "\n";
+}
+
+int run(const Options& opt) {
+    const fs::path out(opt.outDir);
+    const bool tum = opt.format == "tum";
+    fs::create_directories(out);
+    if (tum) {
+        fs::create_directories(out / "rgb");
+        fs::create_directories(out / "depth");
+    }
+
+    // Render from the scene as read back from scene.txt, so the file is the
+    // complete and exact description of what was rendered.
+    SyntheticScene::defaultRoom().write((out / "scene.txt").string());
+    const SyntheticScene scene = SyntheticScene::read((out / "scene.txt").string());
+
+    const PinholeCamera camera = PinholeCamera::kinectV1(opt.width, opt.height);
+    const CameraPath path;
+    KinectDepthModel::Params depthParams;
+    depthParams.fx = camera.fx;
+    std::seed_seq depthSeed{opt.seed, 1u}, colourSeed{opt.seed, 2u};
+    std::mt19937 depthRng(depthSeed), colourRng(colourSeed);
+    KinectDepthModel depthModel(depthParams, depthRng());
+
+    std::ostringstream disparityLine;
+    if (tum) disparityLine << "affine " << 1.0f / kTumDepthScale << " 0";
+    else disparityLine << "kinect " << KinectDepthModel::kKinectK1 << " " << depthParams.baseline;
+    writeCalib(out / "calib.txt", camera, disparityLine.str());
+
+    std::ofstream groundTruth = openText(out / "groundtruth.txt");
+    writeTumHeader(groundTruth, "ground truth trajectory (camera-to-world, exact)",
+                   "timestamp tx ty tz qx qy qz qw");
+    std::ofstream rgbList, depthList, associations;
+    if (tum) {
+        rgbList = openText(out / "rgb.txt");
+        depthList = openText(out / "depth.txt");
+        associations = openText(out / "associations.txt");
+        writeTumHeader(rgbList, "color images", "timestamp filename");
+        writeTumHeader(depthList, "depth maps", "timestamp filename");
+    }
+
+    const std::string rgbExt = opt.rgbFormat == "png" ? ".png" : ".jpg";
+    const std::vector<int> rgbParams = opt.rgbFormat == "png"
+        ? std::vector<int>{cv::IMWRITE_PNG_COMPRESSION, 9}
+        : std::vector<int>{cv::IMWRITE_JPEG_QUALITY, opt.jpegQuality};
+    const std::vector<int> depthPngParams{cv::IMWRITE_PNG_COMPRESSION, 9};
+
+    for (int i = 0; i < opt.frames; ++i) {
+        const double timestamp = kFirstTimestamp + i / CameraPath::kFps;
+        const PoseRecord pose = makePoseRecord(timestamp, path.pose(i));
+        groundTruth << pose.line << "\n";
+
+        const RenderedFrame frame = scene.render(camera, pose.pose, opt.colourSamples);
+        const std::vector<float> depth = opt.noNoise
+            ? frame.depth
+            : depthModel.apply(frame.depth, frame.cosIncidence, frame.width, frame.height);
+        std::vector<std::uint8_t> colour =
+            toBytes(frame.rgb, opt.noNoise ? nullptr : &colourRng, /*bgr=*/tum);
+
+        if (tum) {
+            const std::string name = timestampName(timestamp);
+            const cv::Mat bgr(opt.height, opt.width, CV_8UC3, colour.data());
+            cv::Mat depthImage(opt.height, opt.width, CV_16UC1);
+            for (int v = 0; v < opt.height; ++v)
+                for (int u = 0; u < opt.width; ++u) {
+                    const float scaled = std::round(depth[static_cast<std::size_t>(v) * opt.width + u] * kTumDepthScale);
+                    depthImage.at<std::uint16_t>(v, u) =
+                        scaled >= 1.0f && scaled <= 65535.0f ? static_cast<std::uint16_t>(scaled) : 0;
+                }
+            writeImage(out / "rgb" / (name + rgbExt), bgr, rgbParams);
+            writeImage(out / "depth" / (name + ".png"), depthImage, depthPngParams);
+            rgbList << name << " rgb/" << name << rgbExt << "\n";
+            depthList << name << " depth/" << name << ".png\n";
+            associations << name << " rgb/" << name << rgbExt << " " << name << " depth/" << name << ".png\n";
+        } else {
+            char base[32];
+            std::snprintf(base, sizeof(base), "%04i", i);
+            std::vector<std::uint16_t> raw(depth.size());
+            std::transform(depth.begin(), depth.end(), raw.begin(),
+                           [&](float z) { return depthModel.depthToKinectRaw(z); });
+            writePpm(out / (std::string(base) + ".ppm"), opt.width, opt.height, colour);
+            writePgm16(out / (std::string(base) + ".pgm"), opt.width, opt.height, raw);
+        }
+        std::cout << "\rframe " << (i + 1) << "/" << opt.frames << std::flush;
+    }
+    std::cout << "\nwrote " << opt.frames << " frames to " << out.string() << "\n";
+    return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    CLI::App app{"Render the VoxFuse synthetic room as an RGB-D sequence with exact ground truth"};
+    app.option_defaults()->always_capture_default();  // show defaults in --help
+    Options opt;
+    app.add_option("--out", opt.outDir, "Output directory")->required();
+    app.add_option("--frames", opt.frames, "Number of frames (30 fps)")->check(CLI::PositiveNumber);
+    app.add_option("--width", opt.width, "Image width (intrinsics scale with it)")->check(CLI::PositiveNumber);
+    app.add_option("--height", opt.height, "Image height")->check(CLI::PositiveNumber);
+    app.add_option("--format", opt.format, "tum: TUM RGB-D layout; ppm: %04i.ppm + Kinect-raw %04i.pgm")
+        ->check(CLI::IsMember({"tum", "ppm"}));
+    app.add_option("--rgb-format", opt.rgbFormat, "Colour files in the TUM layout")
+        ->check(CLI::IsMember({"jpg", "png"}));
+    app.add_option("--jpeg-quality", opt.jpegQuality, "JPEG quality")->check(CLI::Range(1, 100));
+    app.add_option("--seed", opt.seed, "Seed of the depth and colour noise");
+    app.add_option("--colour-samples", opt.colourSamples, "Colour supersampling per axis")
+        ->check(CLI::Range(1, 4));
+    app.add_flag("--no-noise", opt.noNoise,
+                 "Exact depth (only the file's own quantisation) and noise-free colour");
+    CLI11_PARSE(app, argc, argv);
+    try {
+        return run(opt);
+    } catch (const std::exception& e) {
+        std::cerr << "voxfuse_synth: " << e.what() << "\n";
+        return 1;
+    }
+}

@@ -1,0 +1,389 @@
+// Tests of the synthetic data generator: exact ray casting and distances, the
+// Kinect depth model's noise and holes, the camera path, and the tool's
+// Kinect-raw PGM output against the exact geometry.
+#include "CameraPath.h"
+#include "KinectDepthModel.h"
+#include "SyntheticScene.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+using namespace voxfuse::synth;
+using Eigen::Vector3f;
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr float kDegree = 3.14159265f / 180.0f;
+
+// Largest depth error from rounding the raw value (half a disparity step),
+// which is larger on the far side because depth ~ 1 / disparity.
+float halfStepDepthError(const KinectDepthModel& model, float z) {
+    const float d = model.depthToDisparity(z);
+    return model.disparityToDepth(d - 0.5f * model.params().disparityStep) - z;
+}
+
+float standardDeviation(const std::vector<float>& values) {
+    double mean = 0.0, sq = 0.0;
+    for (float v : values) mean += v;
+    mean /= values.size();
+    for (float v : values) sq += (v - mean) * (v - mean);
+    return static_cast<float>(std::sqrt(sq / (values.size() - 1)));
+}
+
+}  // namespace
+
+TEST(SyntheticScene, PlaneHitHasAnalyticDepthAndNormal) {
+    const SyntheticScene scene = SyntheticScene::singlePlane(Vector3f::Zero(), Vector3f::UnitZ());
+    const Vector3f origin(0.3f, -0.2f, 2.0f);
+    const Vector3f dir = Vector3f(0.1f, 0.2f, -1.0f).normalized();
+    Hit hit;
+    ASSERT_TRUE(scene.intersect(origin, dir, hit));
+    EXPECT_NEAR(hit.t, 2.0f / -dir.z(), 1e-5f);
+    EXPECT_NEAR((hit.normal - Vector3f::UnitZ()).norm(), 0.0f, 1e-6f);
+    EXPECT_EQ(hit.primitive, 0);
+
+    // Seen from below, the normal faces the viewer.
+    ASSERT_TRUE(scene.intersect(Vector3f(0, 0, -1.5f), Vector3f::UnitZ(), hit));
+    EXPECT_NEAR(hit.t, 1.5f, 1e-6f);
+    EXPECT_NEAR((hit.normal + Vector3f::UnitZ()).norm(), 0.0f, 1e-6f);
+
+    // Parallel and receding rays miss.
+    EXPECT_FALSE(scene.intersect(origin, Vector3f::UnitX(), hit));
+    EXPECT_FALSE(scene.intersect(origin, Vector3f::UnitZ(), hit));
+}
+
+TEST(SyntheticScene, TiltedPlaneHitAndDistance) {
+    const Vector3f point(1, 2, 3), normal = Vector3f(1, 1, 1).normalized();
+    const SyntheticScene scene = SyntheticScene::singlePlane(point, normal);
+    Hit hit;
+    ASSERT_TRUE(scene.intersect(Vector3f::Zero(), Vector3f::UnitX(), hit));
+    EXPECT_NEAR(hit.t, 6.0f, 1e-5f);  // x + y + z = 6
+    EXPECT_NEAR(std::abs(hit.normal.dot(normal)), 1.0f, 1e-6f);
+    EXPECT_NEAR(scene.distanceToSurface(Vector3f(6, 0, 0)), 0.0f, 1e-5f);
+    EXPECT_NEAR(scene.distanceToSurface(Vector3f::Zero()), 6.0f / std::sqrt(3.0f), 1e-5f);
+    EXPECT_NEAR(scene.distanceToSurface(point + 0.25f * normal), 0.25f, 1e-5f);
+}
+
+TEST(SyntheticScene, SphereHitHasAnalyticDepthAndNormal) {
+    const Vector3f center(0, 0, 3);
+    const SyntheticScene scene = SyntheticScene::singleSphere(center, 1.0f);
+    Hit hit;
+    ASSERT_TRUE(scene.intersect(Vector3f::Zero(), Vector3f::UnitZ(), hit));
+    EXPECT_NEAR(hit.t, 2.0f, 1e-6f);
+    EXPECT_NEAR((hit.normal - Vector3f(0, 0, -1)).norm(), 0.0f, 1e-6f);
+
+    // Off-axis ray at x = 0.5: enters at z = 3 - sqrt(0.75).
+    ASSERT_TRUE(scene.intersect(Vector3f(0.5f, 0, 0), Vector3f::UnitZ(), hit));
+    EXPECT_NEAR(hit.t, 3.0f - std::sqrt(0.75f), 1e-5f);
+    EXPECT_NEAR((hit.normal - Vector3f(0.5f, 0, -std::sqrt(0.75f))).norm(), 0.0f, 1e-5f);
+
+    // A non-unit direction scales t accordingly.
+    ASSERT_TRUE(scene.intersect(Vector3f::Zero(), Vector3f(0, 0, 2), hit));
+    EXPECT_NEAR(hit.t, 1.0f, 1e-6f);
+
+    EXPECT_FALSE(scene.intersect(Vector3f(1.5f, 0, 0), Vector3f::UnitZ(), hit));
+}
+
+TEST(SyntheticScene, SphereDistanceIsAnalytic) {
+    const Vector3f center(0.2f, -0.1f, 3.0f);
+    const SyntheticScene scene = SyntheticScene::singleSphere(center, 0.5f);
+    Hit hit;
+    ASSERT_TRUE(scene.intersect(Vector3f::Zero(), center.normalized(), hit));
+    EXPECT_NEAR(scene.distanceToSurface(hit.t * center.normalized()), 0.0f, 1e-5f);
+    EXPECT_NEAR(scene.distanceToSurface(Vector3f::Zero()), center.norm() - 0.5f, 1e-5f);
+    EXPECT_NEAR(scene.distanceToSurface(center), 0.5f, 1e-6f);
+    EXPECT_NEAR(scene.distanceToSurface(center + Vector3f(0, 0.3f, 0)), 0.2f, 1e-6f);
+}
+
+TEST(SyntheticScene, BoxAndSphereDistances) {
+    const SyntheticScene scene = SyntheticScene::boxAndSphere();
+    EXPECT_EQ(scene.primitives().size(), 3u);
+    Hit hit;
+    ASSERT_TRUE(scene.intersect(Vector3f(0, 0, 2), -Vector3f::UnitZ(), hit));
+    EXPECT_NEAR(hit.t, 1.6f, 1e-6f);  // box top at z = 0.4
+    EXPECT_EQ(hit.primitive, 1);
+    EXPECT_NEAR(scene.distanceToSurface(Vector3f(0, 0, 0.5f)), 0.1f, 1e-6f);
+    // Inside the box: nearest face 0.05 away (the floor is 0.15 away).
+    EXPECT_NEAR(scene.distanceToSurface(Vector3f(0.15f, 0, 0.15f)), 0.05f, 1e-6f);
+}
+
+TEST(SyntheticScene, DefaultRoomIsClosedAndHitsLieOnSurfaces) {
+    const SyntheticScene room = SyntheticScene::defaultRoom();
+    std::mt19937 rng(3);
+    std::normal_distribution<float> gaussian;
+    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+    for (int i = 0; i < 2000; ++i) {
+        const Vector3f origin(-2.0f + 4.0f * unit(rng), -1.6f + 3.2f * unit(rng), 1.2f + 1.2f * unit(rng));
+        const Vector3f dir = Vector3f(gaussian(rng), gaussian(rng), gaussian(rng)).normalized();
+        if (room.distanceToSurface(origin) < 1e-3f) continue;
+        Hit hit;
+        ASSERT_TRUE(room.intersect(origin, dir, hit)) << "ray escaped the room";
+        EXPECT_LT(hit.t, 7.0f);  // the room's diagonal
+        EXPECT_LT(room.distanceToSurface(origin + hit.t * dir), 2e-5f);
+        EXPECT_LT(hit.normal.dot(dir), 0.0f);
+        EXPECT_TRUE((hit.albedo_rgb.array() >= 0.0f).all() && (hit.albedo_rgb.array() <= 1.0f).all());
+    }
+}
+
+TEST(SyntheticScene, SceneFileRoundTripIsExact) {
+    const SyntheticScene room = SyntheticScene::defaultRoom();
+    const std::string path = ::testing::TempDir() + "voxfuse_synth_scene_roundtrip.txt";
+    room.write(path);
+    const SyntheticScene back = SyntheticScene::read(path);
+    ASSERT_EQ(back.primitives().size(), room.primitives().size());
+    ASSERT_EQ(back.lights().size(), room.lights().size());
+    EXPECT_EQ(back.ambient(), room.ambient());
+    std::mt19937 rng(5);
+    std::normal_distribution<float> gaussian;
+    for (int i = 0; i < 500; ++i) {
+        const Vector3f origin(0.3f, -0.2f, 1.4f);
+        const Vector3f dir(gaussian(rng), gaussian(rng), gaussian(rng));
+        Hit a, b;
+        ASSERT_TRUE(room.intersect(origin, dir, a));
+        ASSERT_TRUE(back.intersect(origin, dir, b));
+        EXPECT_EQ(a.t, b.t);
+        EXPECT_EQ(a.primitive, b.primitive);
+        EXPECT_EQ(a.albedo_rgb, b.albedo_rgb);
+    }
+    const SyntheticScene plane = SyntheticScene::singlePlane(Vector3f::Zero(), Vector3f::UnitZ());
+    plane.write(path);  // infinite extents survive as "inf"
+    Hit hit;
+    EXPECT_TRUE(SyntheticScene::read(path).intersect(Vector3f(1e3f, 0, 1), -Vector3f::UnitZ(), hit));
+    std::remove(path.c_str());
+}
+
+TEST(KinectDepthModel, NoiseGrowsWithSquaredDepth) {
+    KinectDepthModel model(KinectDepthModel::Params(), 7);
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> jitter(-0.02f, 0.02f);  // averages the quantisation phase
+    const auto errorsAt = [&](float z) {
+        std::vector<float> errors;
+        for (int i = 0; i < 20000; ++i) {
+            const float truth = z + jitter(rng);
+            const float measured = model.measure(truth);
+            EXPECT_GT(measured, 0.0f);
+            errors.push_back(measured - truth);
+        }
+        return errors;
+    };
+    const float sigma1 = standardDeviation(errorsAt(1.0f));
+    const float sigma2 = standardDeviation(errorsAt(2.0f));
+    EXPECT_GT(sigma1, 0.0010f);
+    EXPECT_LT(sigma1, 0.0025f);
+    EXPECT_GT(sigma2, 0.0045f);
+    EXPECT_LT(sigma2, 0.0090f);
+    EXPECT_NEAR(sigma2 / sigma1, 4.0f, 0.8f);
+    // One quantisation step: 1/8 px of disparity.
+    EXPECT_NEAR(model.depthStepAt(2.0f), 4.0f * model.depthStepAt(1.0f), 1e-4f);
+}
+
+TEST(KinectDepthModel, ImageNoiseKeepsThePerPixelSigma) {
+    // A fronto-parallel wall near 2 m; the slight ramp averages the quantisation phase.
+    const int w = 200, h = 200;
+    std::vector<float> depth(w * h), cosine(w * h, 1.0f);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) depth[y * w + x] = 1.98f + 0.04f * x / w;
+    KinectDepthModel::Params params;
+    params.dropoutProbability = 0.0f;
+    for (int radius : {0, 2}) {
+        params.noiseCorrelationRadius = radius;
+        KinectDepthModel model(params, 3);
+        const std::vector<float> out = model.apply(depth, cosine, w, h);
+        std::vector<float> errors;
+        for (int i = 0; i < w * h; ++i) {
+            ASSERT_GT(out[i], 0.0f);
+            errors.push_back(out[i] - depth[i]);
+        }
+        const float sigma = standardDeviation(errors);
+        EXPECT_GT(sigma, 0.0045f) << "radius " << radius;
+        EXPECT_LT(sigma, 0.0090f) << "radius " << radius;
+    }
+}
+
+TEST(KinectDepthModel, HolesAtGrazingAnglesEdgesAndOutOfRange) {
+    const int w = 8, h = 1;
+    //                         near   grazing far-edge  far    far    too-far too-near none
+    std::vector<float> depth{1.00f, 1.00f, 2.00f, 2.00f, 2.00f, 4.80f, 0.30f, 0.00f};
+    std::vector<float> cosine{1.0f, std::cos(85.0f * kDegree), 1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 0.0f};
+    KinectDepthModel::Params params;
+    params.dropoutProbability = 0.0f;
+    KinectDepthModel model(params, 1);
+    const std::vector<float> out = model.apply(depth, cosine, w, h);
+    EXPECT_NEAR(out[0], 1.0f, 0.02f);  // near side of the edge stays
+    EXPECT_EQ(out[1], 0.0f);
+    EXPECT_EQ(out[2], 0.0f);           // far side of a 1 m jump
+    EXPECT_NEAR(out[3], 2.0f, 0.05f);
+    EXPECT_NEAR(out[4], 2.0f, 0.05f);
+    EXPECT_EQ(out[5], 0.0f);
+    EXPECT_EQ(out[6], 0.0f);
+    EXPECT_EQ(out[7], 0.0f);
+}
+
+TEST(KinectDepthModel, IsRepeatableForAFixedSeed) {
+    std::vector<float> depth(64 * 48), cosine(64 * 48, 0.9f);
+    for (std::size_t i = 0; i < depth.size(); ++i) depth[i] = 0.8f + 0.001f * i;
+    KinectDepthModel a(KinectDepthModel::Params(), 99), b(KinectDepthModel::Params(), 99);
+    EXPECT_EQ(a.apply(depth, cosine, 64, 48), b.apply(depth, cosine, 64, 48));
+}
+
+TEST(KinectDepthModel, KinectRawRoundTripsWithinOneStep) {
+    const KinectDepthModel model;
+    for (float z = 0.4f; z <= 4.5f; z += 0.01f) {
+        const std::uint16_t raw = model.depthToKinectRaw(z);
+        ASSERT_GT(raw, 0);
+        EXPECT_LE(std::abs(model.kinectRawToDepth(raw) - z), halfStepDepthError(model, z) + 1e-5f);
+    }
+    EXPECT_EQ(model.depthToKinectRaw(0.0f), 0);
+    EXPECT_EQ(model.kinectRawToDepth(0), 0.0f);
+}
+
+TEST(CameraPath, IsSmoothAtThirtyFps) {
+    const CameraPath path;
+    float maxStep = 0.0f, maxTurn = 0.0f;
+    for (int i = 1; i < 900; ++i) {  // 30 s: more than one lap of the room
+        const Eigen::Isometry3f a = path.pose(i - 1), b = path.pose(i);
+        const float step = (b.translation() - a.translation()).norm();
+        const float turn = Eigen::AngleAxisf(a.linear().transpose() * b.linear()).angle();
+        maxStep = std::max(maxStep, step);
+        maxTurn = std::max(maxTurn, turn);
+        ASSERT_LT(step, 0.02f) << "frame " << i;
+        ASSERT_LT(turn, 2.0f * kDegree) << "frame " << i;
+        ASSERT_NEAR(b.linear().determinant(), 1.0f, 1e-5f);
+    }
+    EXPECT_GT(maxStep, 0.005f);  // it does move like a hand-held camera
+    EXPECT_GT(maxTurn, 0.2f * kDegree);
+}
+
+TEST(CameraPath, KeepsTheObjectsInView) {
+    const SyntheticScene room = SyntheticScene::defaultRoom();
+    const CameraPath path;
+    const PinholeCamera camera = PinholeCamera::kinectV1(80, 60);
+    for (int i = 0; i < 900; i += 15) {
+        const Eigen::Isometry3f pose = path.pose(i);
+        const RenderedFrame frame = room.render(camera, pose, 1);
+        int objectPixels = 0, tooClose = 0;
+        for (int v = 0; v < camera.height; ++v)
+            for (int u = 0; u < camera.width; ++u) {
+                const float z = frame.depth[v * camera.width + u];
+                ASSERT_GT(z, 0.0f);
+                tooClose += z < 0.5f;
+                const Vector3f p = pose * (z * camera.ray(u, v));
+                // Inside the room, off the floor and away from the walls: an object.
+                objectPixels += std::abs(p.x()) < 2.3f && std::abs(p.y()) < 1.8f && p.z() > 0.01f && p.z() < 2.0f;
+            }
+        EXPECT_EQ(tooClose, 0) << "frame " << i;
+        EXPECT_GT(objectPixels, camera.width * camera.height / 6) << "frame " << i;
+    }
+}
+
+// The end-to-end tests need the tool's path: compile with
+// VOXFUSE_SYNTH_EXE="$<TARGET_FILE:voxfuse_synth>"; otherwise they skip visibly.
+#ifdef VOXFUSE_SYNTH_EXE
+namespace {
+
+std::vector<std::uint16_t> readPgm16(const fs::path& path, int& width, int& height) {
+    std::ifstream in(path, std::ios::binary);
+    std::string magic;
+    int maxValue = 0;
+    in >> magic >> width >> height >> maxValue;
+    in.get();
+    EXPECT_EQ(magic, "P5");
+    EXPECT_EQ(maxValue, 65535);
+    std::vector<unsigned char> bytes(static_cast<std::size_t>(width) * height * 2);
+    in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+    EXPECT_TRUE(in.good());
+    std::vector<std::uint16_t> values(bytes.size() / 2);
+    for (std::size_t i = 0; i < values.size(); ++i)
+        values[i] = static_cast<std::uint16_t>(bytes[2 * i] << 8 | bytes[2 * i + 1]);
+    return values;
+}
+
+std::vector<Eigen::Isometry3f> readGroundTruth(const fs::path& path) {
+    std::ifstream in(path);
+    std::vector<Eigen::Isometry3f> poses;
+    for (std::string line; std::getline(in, line);) {
+        if (line.empty() || line[0] == '#') continue;
+        std::istringstream s(line);
+        double ts, tx, ty, tz, qx, qy, qz, qw;
+        s >> ts >> tx >> ty >> tz >> qx >> qy >> qz >> qw;
+        Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+        pose.linear() = Eigen::Quaterniond(qw, qx, qy, qz).normalized().toRotationMatrix();
+        pose.translation() = Eigen::Vector3d(tx, ty, tz);
+        poses.push_back(pose.cast<float>());
+    }
+    return poses;
+}
+
+// Runs the tool in PPM mode and compares its Kinect-raw depth with the exact
+// depth of the scene and poses it wrote.
+void checkPpmOutput(bool noise) {
+    const fs::path dir = fs::path(::testing::TempDir()) / (noise ? "voxfuse_synth_ppm_noisy" : "voxfuse_synth_ppm_exact");
+    fs::remove_all(dir);
+    const std::string command = std::string("\"") + VOXFUSE_SYNTH_EXE + "\" --out \"" + dir.string() +
+                                "\" --format ppm --frames 3 --width 160 --height 120" +
+                                (noise ? "" : " --no-noise") + " > /dev/null";
+    ASSERT_EQ(std::system(command.c_str()), 0) << command;
+
+    std::ifstream calib(dir / "calib.txt");
+    std::vector<std::string> lines;
+    for (std::string line; std::getline(calib, line);) lines.push_back(line);
+    ASSERT_EQ(lines.size(), 13u);
+    EXPECT_EQ(lines[0], "160 120");
+    EXPECT_EQ(lines[12], "kinect 1090 0.075");
+
+    const SyntheticScene scene = SyntheticScene::read((dir / "scene.txt").string());
+    const std::vector<Eigen::Isometry3f> poses = readGroundTruth(dir / "groundtruth.txt");
+    ASSERT_EQ(poses.size(), 3u);
+    const PinholeCamera camera = PinholeCamera::kinectV1(160, 120);
+    KinectDepthModel::Params params;
+    params.fx = camera.fx;
+    const KinectDepthModel model(params);
+
+    int width = 0, height = 0;
+    const std::vector<std::uint16_t> raw = readPgm16(dir / "0002.pgm", width, height);
+    ASSERT_EQ(width, 160);
+    ASSERT_EQ(height, 120);
+    const RenderedFrame truth = scene.render(camera, poses[2], 1);
+    int valid = 0, withinOneStep = 0;
+    for (std::size_t i = 0; i < raw.size(); ++i) {
+        if (raw[i] == 0) continue;
+        ++valid;
+        const float z = truth.depth[i];
+        const float error = std::abs(model.kinectRawToDepth(raw[i]) - z);
+        if (!noise) {
+            EXPECT_LE(error, halfStepDepthError(model, z) + 1e-4f) << "pixel " << i << " at " << z << " m";
+        }
+        withinOneStep += error <= model.depthStepAt(z);
+    }
+    if (noise) {
+        EXPECT_GT(valid, static_cast<int>(raw.size() * 6 / 10));   // some holes, mostly valid
+        EXPECT_LT(valid, static_cast<int>(raw.size()));
+        EXPECT_GT(withinOneStep, valid * 9 / 10);
+    } else {
+        EXPECT_GT(valid, static_cast<int>(raw.size() * 99 / 100));
+    }
+    fs::remove_all(dir);
+}
+
+}  // namespace
+
+TEST(VoxfuseSynthTool, ExactPpmDepthConvertsBackWithinHalfAStep) { checkPpmOutput(false); }
+TEST(VoxfuseSynthTool, NoisyPpmDepthStaysNearTheTruth) { checkPpmOutput(true); }
+#else
+TEST(VoxfuseSynthTool, ExactPpmDepthConvertsBackWithinHalfAStep) {
+    GTEST_SKIP() << "VOXFUSE_SYNTH_EXE (path of voxfuse_synth) not defined for this test binary";
+}
+TEST(VoxfuseSynthTool, NoisyPpmDepthStaysNearTheTruth) {
+    GTEST_SKIP() << "VOXFUSE_SYNTH_EXE (path of voxfuse_synth) not defined for this test binary";
+}
+#endif
