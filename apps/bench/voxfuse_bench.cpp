@@ -1,0 +1,135 @@
+// voxfuse_bench: per-stage timings of the pipeline on a recorded sequence, as a table and as JSON.
+// Defaults to TUM fr3/teddy from ../shared/data when present, else the bundled synthetic sequence.
+
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <map>
+
+#include "JsonWriter.h"
+#include "ResourceUsage.h"
+#include "RunRecord.h"
+#include "SequenceRunner.h"
+#include "Statistics.h"
+#include "voxfuse/core/Error.h"
+#include "voxfuse/core/Timer.h"
+
+namespace fs = std::filesystem;
+using namespace voxfuse;
+
+namespace {
+
+struct StageSummary {
+    double median_ms = 0, mean_ms = 0, p90_ms = 0;
+};
+
+StageSummary summarise(std::vector<double> v) {
+    StageSummary s;
+    if (v.empty()) return s;
+    s.median_ms = app::median(v);
+    double sum = 0;
+    for (double x : v) sum += x;
+    s.mean_ms = sum / double(v.size());
+    std::sort(v.begin(), v.end());
+    s.p90_ms = v[std::min(v.size() - 1, std::size_t(0.9 * double(v.size())))];
+    return s;
+}
+
+std::string defaultSource() {
+    const std::string teddy = std::string(VOXFUSE_SHARED_DATA_DIR) + "/tum_fr3_teddy_200";
+    if (fs::exists(teddy + "/rgb.txt")) return teddy;
+    return VOXFUSE_DEFAULT_DATA_DIR;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    CLI::App cli{"Per-stage timings of the VoxFuse pipeline on a sequence."};
+    std::string source_path, json_path = "voxfuse_bench.json", voxel = "s", index = "dense";
+    int max_frames = 0, warmup = 3;
+    MainEngineSettings s;
+    cli.add_option("source", source_path, "sequence (default: ../shared/data/tum_fr3_teddy_200, else the bundled data)");
+    cli.add_option("--frames", max_frames, "at most N frames (0 = all)");
+    cli.add_option("--warmup", warmup, "frames left out of the statistics")->capture_default_str();
+    cli.add_option("--voxel", voxel, "voxel type")->capture_default_str()->check(CLI::IsMember({"s", "f", "s_rgb", "f_rgb"}));
+    cli.add_option("--index", index, "voxel index")->capture_default_str()->check(CLI::IsMember({"dense", "hash"}));
+    cli.add_option("--voxel-size", s.scene.voxel_size_m, "voxel edge (m)")->capture_default_str();
+    cli.add_option("--mu", s.scene.mu_m, "truncation band (m)")->capture_default_str();
+    cli.add_option("--json", json_path, "where to write the JSON report")->capture_default_str();
+    CLI11_PARSE(cli, argc, argv);
+
+    try {
+        if (source_path.empty()) source_path = defaultSource();
+        auto source = openImageSource(source_path);
+        s.voxel_type = parseVoxelType(voxel);
+        s.index_type = parseIndexType(index);
+        auto engine = MainEngine::create(s, source->calib());
+        app::RunRecord record;
+        record.source = source->description();
+        record.settings = s;
+        app::SequenceRunner runner(*source, *engine, app::PoseSource::GroundTruth, record);
+        const Timer wall;
+        while ((max_frames <= 0 || int(record.frames.size()) < max_frames) && runner.step()) {}
+        record.wall_s = wall.elapsedMs() / 1000.0;
+        record.peak_rss_mb = app::peakRssMb();
+        record.scene_mb = double(engine->sceneBytes()) / (1024.0 * 1024.0);
+        if (int(record.frames.size()) <= warmup) throw ConfigError("not enough frames for statistics after the warm-up");
+
+        std::vector<std::string> order;
+        std::map<std::string, std::vector<double>> samples;
+        for (std::size_t i = std::size_t(warmup); i < record.frames.size(); ++i) {
+            for (const StageTime& st : record.frames[i].result.stages) {
+                if (!samples.count(st.stage)) order.push_back(st.stage);
+                samples[st.stage].push_back(st.ms);
+            }
+            samples["total"].push_back(record.frames[i].result.total_ms);
+        }
+        order.push_back("total");
+
+        std::printf("VoxFuse benchmark: %s\n", record.source.c_str());
+        std::printf("  %s voxels, %s index, %.1f mm voxels, device %s; %zu frames (%d warm-up frames left out)\n\n",
+                    toString(s.voxel_type), toString(s.index_type), 1000.0 * s.scene.voxel_size_m, deviceName(s.device),
+                    record.frames.size(), warmup);
+        std::printf("  %-12s %10s %10s %10s\n", "stage", "median ms", "mean ms", "p90 ms");
+        std::map<std::string, StageSummary> summaries;
+        for (const auto& name : order) {
+            summaries[name] = summarise(samples[name]);
+            std::printf("  %-12s %10.2f %10.2f %10.2f\n", name.c_str(), summaries[name].median_ms, summaries[name].mean_ms, summaries[name].p90_ms);
+        }
+        const double engine_fps = 1000.0 / summaries["total"].median_ms;
+        std::printf("\n  engine frames/s (1000 / median total): %.1f\n  wall frames/s (incl. decoding): %.1f\n  peak RSS: %.0f MB, scene: %.0f MB\n",
+                    engine_fps, app::framesPerSecond(record), record.peak_rss_mb, record.scene_mb);
+
+        std::ofstream out(json_path);
+        if (!out) throw IoError(json_path, "cannot open for writing");
+        app::JsonWriter j(out);
+        j.beginObject();
+        j.value("source", record.source);
+        j.value("voxel", toString(s.voxel_type));
+        j.value("index", toString(s.index_type));
+        j.value("voxel_size_m", double(s.scene.voxel_size_m));
+        j.value("frames", int(record.frames.size()));
+        j.value("warmup_frames", warmup);
+        j.beginObject("stages");
+        for (const auto& name : order) {
+            j.beginObject(name.c_str());
+            j.value("median_ms", summaries[name].median_ms);
+            j.value("mean_ms", summaries[name].mean_ms);
+            j.value("p90_ms", summaries[name].p90_ms);
+            j.endObject();
+        }
+        j.endObject();
+        j.value("engine_fps", engine_fps);
+        j.value("wall_fps", app::framesPerSecond(record));
+        j.value("peak_rss_mb", record.peak_rss_mb);
+        j.value("scene_mb", record.scene_mb);
+        j.endObject();
+        std::printf("  JSON: %s\n", json_path.c_str());
+        return 0;
+    } catch (const Error& e) {
+        std::cerr << "voxfuse_bench: error: " << e.what() << "\n";
+        return 2;
+    }
+}

@@ -1,0 +1,134 @@
+#include "RunRecord.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include "JsonWriter.h"
+#include "Statistics.h"
+#include "voxfuse/core/Error.h"
+
+namespace voxfuse::app {
+namespace {
+
+// Stage names in pipeline order, as they first appear.
+std::vector<std::string> stageNames(const RunRecord& run) {
+    std::vector<std::string> names;
+    for (const auto& f : run.frames)
+        for (const auto& s : f.result.stages)
+            if (std::find(names.begin(), names.end(), s.stage) == names.end()) names.push_back(s.stage);
+    return names;
+}
+
+std::map<std::string, double> stageMedians(const RunRecord& run) {
+    std::map<std::string, std::vector<double>> samples;
+    for (const auto& f : run.frames)
+        for (const auto& s : f.result.stages) samples[s.stage].push_back(s.ms);
+    std::map<std::string, double> medians;
+    for (auto& [name, v] : samples) medians[name] = median(v);
+    return medians;
+}
+
+std::ofstream openForWriting(const std::string& path) {
+    std::ofstream out(path);
+    if (!out) throw IoError(path, "cannot open for writing");
+    return out;
+}
+
+}  // namespace
+
+double medianTotalMs(const RunRecord& run) {
+    std::vector<double> totals;
+    for (const auto& f : run.frames) totals.push_back(f.result.total_ms);
+    return median(totals);
+}
+
+double framesPerSecond(const RunRecord& run) { return run.wall_s > 0.0 ? double(run.frames.size()) / run.wall_s : 0.0; }
+
+void writeTimingsJson(const std::string& path, const RunRecord& run) {
+    std::ofstream out = openForWriting(path);
+    JsonWriter j(out);
+    const auto names = stageNames(run);
+    const auto medians = stageMedians(run);
+    j.beginObject();
+    j.beginObject("median_ms");
+    for (const auto& n : names) j.value(n.c_str(), medians.at(n));
+    j.value("total", medianTotalMs(run));
+    j.endObject();
+    j.beginArray("frames");
+    for (const auto& f : run.frames) {
+        j.beginObject();
+        j.value("index", f.index);
+        j.value("timestamp", f.timestamp_s);
+        j.value("fused", f.result.fused);
+        j.value("tracking", toString(f.result.quality));
+        for (const auto& s : f.result.stages) j.value(s.stage, s.ms);
+        j.value("total", f.result.total_ms);
+        j.endObject();
+    }
+    j.endArray();
+    j.endObject();
+}
+
+void writeSummaryJson(const std::string& path, const RunRecord& run) {
+    std::ofstream out = openForWriting(path);
+    JsonWriter j(out);
+    int fused = 0;
+    for (const auto& f : run.frames) fused += f.result.fused ? 1 : 0;
+    j.beginObject();
+    j.value("source", run.source);
+    j.value("frames", int(run.frames.size()));
+    j.value("frames_fused", fused);
+    j.value("frames_without_pose", run.frames_without_pose);
+    j.value("frames_unreadable", run.frames_unreadable);
+    j.value("median_ms", medianTotalMs(run));
+    j.value("fps", framesPerSecond(run));
+    j.value("wall_s", run.wall_s);
+    j.value("peak_rss_mb", run.peak_rss_mb);
+    j.value("scene_mb", run.scene_mb);
+    j.beginObject("settings");
+    j.value("voxel", toString(run.settings.voxel_type));
+    j.value("index", toString(run.settings.index_type));
+    j.value("device", deviceName(run.settings.device));
+    j.value("voxel_size_m", double(run.settings.scene.voxel_size_m));
+    j.value("mu_m", double(run.settings.scene.mu_m));
+    j.value("max_weight", run.settings.scene.max_weight);
+    j.value("min_depth_m", double(run.settings.scene.view_frustum_min_m));
+    j.value("max_depth_m", double(run.settings.scene.view_frustum_max_m));
+    j.endObject();
+    j.endObject();
+}
+
+std::string summaryText(const RunRecord& run, const std::string& out_dir) {
+    std::ostringstream s;
+    int fused = 0;
+    for (const auto& f : run.frames) fused += f.result.fused ? 1 : 0;
+    char line[256];
+    s << "VoxFuse run\n";
+    s << "  source       " << run.source << "\n";
+    std::snprintf(line, sizeof line, "  frames       %zu processed, %d fused, %d without pose, %d unreadable\n", run.frames.size(),
+                  fused, run.frames_without_pose, run.frames_unreadable);
+    s << line;
+    std::snprintf(line, sizeof line, "  volume       %s voxels, %s index, %.1f mm voxels, mu %.1f mm, %.0f MB\n",
+                  toString(run.settings.voxel_type), toString(run.settings.index_type), 1000.0 * run.settings.scene.voxel_size_m,
+                  1000.0 * run.settings.scene.mu_m, run.scene_mb);
+    s << line;
+    std::snprintf(line, sizeof line, "  speed        %.1f ms per frame (median, engine only), %.1f frames/s overall\n",
+                  medianTotalMs(run), framesPerSecond(run));
+    s << line;
+    s << "  stages (median ms):";
+    const auto medians = stageMedians(run);
+    for (const auto& n : stageNames(run)) {
+        std::snprintf(line, sizeof line, " %s %.1f", n.c_str(), medians.at(n));
+        s << line;
+    }
+    s << "\n";
+    std::snprintf(line, sizeof line, "  peak memory  %.0f MB\n", run.peak_rss_mb);
+    s << line;
+    s << "  outputs      " << out_dir << "/{trajectory.txt, timings.json, summary.json, render_*.png}\n";
+    return s.str();
+}
+
+}  // namespace voxfuse::app

@@ -1,0 +1,40 @@
+#pragma once
+// What a run of the CLI measured, frame by frame, and how it is written to the output folder.
+
+#include <string>
+#include <vector>
+
+#include "voxfuse/engines/MainEngine.h"
+#include "voxfuse/io/TrajectoryIO.h"
+
+namespace voxfuse::app {
+
+struct FrameRecord {
+    int index = 0;
+    double timestamp_s = 0.0;
+    FrameResult result;
+};
+
+struct RunRecord {
+    std::string source;
+    MainEngineSettings settings;
+    std::vector<FrameRecord> frames;  // every processed frame
+    std::vector<TimedPose> trajectory;
+    int frames_without_pose = 0;      // skipped: --poses groundtruth but no ground truth for the frame
+    int frames_unreadable = 0;        // skipped: the source could not read them
+    double wall_s = 0.0;
+    double peak_rss_mb = 0.0;
+    double scene_mb = 0.0;
+};
+
+double medianTotalMs(const RunRecord& run);
+double framesPerSecond(const RunRecord& run);
+
+// DIR/timings.json: per-stage ms of every frame and the medians.
+void writeTimingsJson(const std::string& path, const RunRecord& run);
+// DIR/summary.json: frames, median_ms, fps, peak_rss_mb and the settings used.
+void writeSummaryJson(const std::string& path, const RunRecord& run);
+// The one-screen summary printed at the end.
+std::string summaryText(const RunRecord& run, const std::string& out_dir);
+
+}  // namespace voxfuse::app

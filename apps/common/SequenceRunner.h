@@ -1,0 +1,39 @@
+#pragma once
+// Drives a MainEngine over an ImageSource one frame at a time, the way every front-end needs it:
+// unreadable frames are reported and skipped, ground-truth poses are re-expressed relative to the
+// first one (the first camera defines the world, as with tracking), and each frame's result is recorded.
+
+#include <functional>
+#include <string>
+
+#include "RunRecord.h"
+#include "voxfuse/engines/MainEngine.h"
+#include "voxfuse/io/ImageSource.h"
+
+namespace voxfuse::app {
+
+enum class PoseSource { GroundTruth, Tracker };
+
+class SequenceRunner {
+public:
+    SequenceRunner(ImageSource& source, MainEngine& engine, PoseSource poses, RunRecord& record);
+
+    // Reads and processes the next frame. Returns false at the end of the source. Frames that cannot
+    // be read, or that lack a ground-truth pose when poses come from ground truth, are counted in the
+    // record and skipped (the call moves on to the next frame).
+    bool step();
+    // The frame last processed (valid after step() returned true).
+    const RGBDFrame& frame() const { return frame_; }
+    const FrameRecord& lastRecord() const { return record_.frames.back(); }
+
+private:
+    ImageSource& source_;
+    MainEngine& engine_;
+    PoseSource poses_;
+    RunRecord& record_;
+    RGBDFrame frame_;
+    bool have_origin_ = false;
+    Mat4f T_origin_world_ = Mat4f::identity();
+};
+
+}  // namespace voxfuse::app

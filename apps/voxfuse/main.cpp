@@ -1,0 +1,160 @@
+// voxfuse: the headless command-line front-end. Reads a recorded sequence, fuses it into a TSDF
+// volume, and writes the trajectory, per-stage timings, a summary and rendered images.
+
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+
+#include "ResourceUsage.h"
+#include "RunRecord.h"
+#include "SequenceRunner.h"
+#include "voxfuse/core/Error.h"
+#include "voxfuse/core/Timer.h"
+#include "voxfuse/engines/MainEngine.h"
+#include "voxfuse/io/ImageIO.h"
+#include "voxfuse/io/ImageSource.h"
+
+#ifndef VOXFUSE_DEFAULT_DATA_DIR
+#define VOXFUSE_DEFAULT_DATA_DIR "data/synthetic_room"
+#endif
+
+namespace fs = std::filesystem;
+using namespace voxfuse;
+
+namespace {
+
+struct CliOptions {
+    std::string source;
+    SourceOptions source_options;
+    std::string out_dir = "voxfuse_out";
+    int max_frames = 0;  // 0 = all
+    int render_every = 25;
+    std::string voxel = "s_rgb";
+    std::string index = "dense";
+    std::string device = "cpu";
+    std::string poses = "groundtruth";
+    std::vector<int> dense_size{512, 512, 512};
+    std::vector<int> dense_offset{-256, -256, 0};
+    MainEngineSettings engine;
+};
+
+// Default data: next to the sources in a build tree, else where `cmake --install` put it.
+std::string defaultSource() {
+    for (const std::string& candidate : {std::string(VOXFUSE_DEFAULT_DATA_DIR), std::string("data/synthetic_room")})
+        if (fs::exists(fs::path(candidate) / "rgb.txt")) return candidate;
+    throw IoError(VOXFUSE_DEFAULT_DATA_DIR, "the default data set is missing: give a SOURCE (see voxfuse --help)");
+}
+
+class ProgressLine {
+public:
+    explicit ProgressLine(int total) : total_(total), tty_(isatty(STDERR_FILENO)) {}
+    void update(int done, double fps) {
+        if (!tty_) return;
+        if (total_ > 0) std::fprintf(stderr, "\r  frame %d/%d  %.1f fps   ", done, total_, fps);
+        else std::fprintf(stderr, "\r  frame %d  %.1f fps   ", done, fps);
+        std::fflush(stderr);
+    }
+    void finish() {
+        if (tty_) std::fprintf(stderr, "\n");
+    }
+
+private:
+    int total_;
+    bool tty_;
+};
+
+void saveRender(MainEngine& engine, RenderMode mode, const std::string& out_dir, int frame_index) {
+    Image<Vec4u8> image;
+    engine.renderLast(mode, image);
+    char name[64];
+    std::snprintf(name, sizeof name, "render_%06d.png", frame_index);
+    writePNG((fs::path(out_dir) / name).string(), image);
+}
+
+int run(CliOptions& o) {
+    if (o.source.empty() && o.source_options.rgb_pattern.empty()) o.source = defaultSource();
+    std::unique_ptr<ImageSource> source = openImageSource(o.source, o.source_options);
+    std::cerr << "voxfuse: " << source->description() << "\n";
+
+    MainEngineSettings& s = o.engine;
+    s.voxel_type = parseVoxelType(o.voxel);
+    s.index_type = parseIndexType(o.index);
+    s.device = o.device == "cuda" ? Device::CUDA : Device::CPU;
+    s.dense_size = {o.dense_size[0], o.dense_size[1], o.dense_size[2]};
+    s.dense_offset = {o.dense_offset[0], o.dense_offset[1], o.dense_offset[2]};
+    if (o.poses != "groundtruth") throw ConfigError("--poses must be 'groundtruth' (camera tracking is not built yet)");
+
+    std::unique_ptr<MainEngine> engine = MainEngine::create(s, source->calib());
+    fs::create_directories(o.out_dir);
+    const RenderMode render_mode = (s.voxel_type == VoxelType::SRgb || s.voxel_type == VoxelType::FRgb) ? RenderMode::Color : RenderMode::Shaded;
+
+    app::RunRecord record;
+    record.source = source->description();
+    record.settings = s;
+    app::SequenceRunner runner(*source, *engine, app::PoseSource::GroundTruth, record);
+    const int total = o.max_frames > 0 && (source->frameCount() < 0 || o.max_frames < source->frameCount()) ? o.max_frames
+                                                                                                               : source->frameCount();
+    ProgressLine progress(total);
+    const Timer wall;
+    int last_rendered = -1;
+    while ((o.max_frames <= 0 || int(record.frames.size()) < o.max_frames) && runner.step()) {
+        if (o.render_every > 0 && int(record.frames.size() - 1) % o.render_every == 0) {
+            saveRender(*engine, render_mode, o.out_dir, runner.frame().index);
+            last_rendered = runner.frame().index;
+        }
+        progress.update(int(record.frames.size()), double(record.frames.size()) / (wall.elapsedMs() / 1000.0));
+    }
+    record.wall_s = wall.elapsedMs() / 1000.0;
+    progress.finish();
+    if (record.frames.empty()) throw ConfigError("no frame could be processed from " + source->description());
+    if (last_rendered != record.frames.back().index) saveRender(*engine, render_mode, o.out_dir, record.frames.back().index);
+
+    record.peak_rss_mb = app::peakRssMb();
+    record.scene_mb = double(engine->sceneBytes()) / (1024.0 * 1024.0);
+    writeTumTrajectory((fs::path(o.out_dir) / "trajectory.txt").string(), record.trajectory);
+    app::writeTimingsJson((fs::path(o.out_dir) / "timings.json").string(), record);
+    app::writeSummaryJson((fs::path(o.out_dir) / "summary.json").string(), record);
+    std::cout << app::summaryText(record, o.out_dir);
+    return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    CLI::App cli{"VoxFuse: dense 3D reconstruction from RGB-D sequences.\n"
+                 "With no SOURCE, runs on the bundled synthetic sequence."};
+    CliOptions o;
+    cli.add_option("source", o.source, "TUM RGB-D folder or per-frame folder (frame-XXXXXX.depth.png)");
+    cli.add_option("--rgb", o.source_options.rgb_pattern, "PPM colour file pattern, e.g. frames/%04i.ppm");
+    cli.add_option("--depth", o.source_options.depth_pattern, "16-bit PGM depth file pattern, e.g. frames/%04i.pgm");
+    cli.add_option("--calib", o.source_options.calib_path, "InfiniTAM calib.txt (overrides the source's own)");
+    cli.add_option("--out", o.out_dir, "output folder")->capture_default_str();
+    cli.add_option("--frames", o.max_frames, "process at most N frames (0 = all)")->check(CLI::NonNegativeNumber);
+    cli.add_option("--render-every", o.render_every, "write render_XXXXXX.png every N frames (0 = only the last)")
+        ->capture_default_str()->check(CLI::NonNegativeNumber);
+    cli.add_option("--voxel-size", o.engine.scene.voxel_size_m, "voxel edge in metres")->capture_default_str()->check(CLI::PositiveNumber);
+    cli.add_option("--mu", o.engine.scene.mu_m, "truncation band in metres")->capture_default_str()->check(CLI::PositiveNumber);
+    cli.add_option("--max-weight", o.engine.scene.max_weight, "cap on the per-voxel weight")->capture_default_str()->check(CLI::Range(1, 255));
+    cli.add_option("--min-depth", o.engine.scene.view_frustum_min_m, "ignore depth below (m)")->capture_default_str();
+    cli.add_option("--max-depth", o.engine.scene.view_frustum_max_m, "ignore depth beyond (m)")->capture_default_str();
+    cli.add_option("--voxel", o.voxel, "voxel type")->capture_default_str()->check(CLI::IsMember({"s", "f", "s_rgb", "f_rgb"}));
+    cli.add_option("--index", o.index, "voxel index")->capture_default_str()->check(CLI::IsMember({"dense", "hash"}));
+    cli.add_option("--volume-size", o.dense_size, "dense volume size in voxels (x y z)")->expected(3)->capture_default_str();
+    cli.add_option("--volume-offset", o.dense_offset, "dense volume's first voxel, grid units (x y z)")->expected(3)->capture_default_str();
+    cli.add_option("--device", o.device, "where the engines run")->capture_default_str()->check(CLI::IsMember({"cpu", "cuda"}));
+    cli.add_option("--poses", o.poses, "where camera poses come from")->capture_default_str()->check(CLI::IsMember({"groundtruth"}));
+    CLI11_PARSE(cli, argc, argv);
+
+    try {
+        return run(o);
+    } catch (const Error& e) {
+        std::cerr << "\nvoxfuse: error: " << e.what() << "\n";
+        return 2;
+    } catch (const std::exception& e) {
+        std::cerr << "\nvoxfuse: unexpected error: " << e.what() << "\n";
+        return 3;
+    }
+}

@@ -1,0 +1,57 @@
+// CPU and CUDA integration call the same integrateVoxel(): on the same frames they must produce the
+// same voxels. Skips visibly when no GPU is usable.
+
+#include <gtest/gtest.h>
+
+#include "SyntheticViews.h"
+#include "voxfuse/engines/IntegrationEngine.h"
+#include "voxfuse/objects/Voxel.h"
+
+namespace voxfuse {
+namespace {
+
+template <class TVoxel>
+class IntegrationCudaParityTest : public ::testing::Test {};
+using VoxelTypes = ::testing::Types<VoxelS, VoxelF, VoxelSRgb, VoxelFRgb>;
+TYPED_TEST_SUITE(IntegrationCudaParityTest, VoxelTypes);
+
+TYPED_TEST(IntegrationCudaParityTest, CpuAndCudaGiveTheSameVoxels) {
+    using TVoxel = TypeParam;
+    if (!device_memory::cudaAvailable()) GTEST_SKIP() << "no usable GPU: " << device_memory::cudaDescription();
+
+    SceneParams params;
+    params.voxel_size_m = 0.01f;
+    params.mu_m = 0.04f;
+    const PlainVoxelArray index({-60, -60, -20}, {140, 120, 80});
+    Scene<TVoxel, PlainVoxelArray> on_cpu(params, index, Device::CPU);
+    Scene<TVoxel, PlainVoxelArray> on_gpu(params, index, Device::CUDA);
+    auto cpu_engine = makeIntegrationEngine<TVoxel, PlainVoxelArray>(Device::CPU);
+    auto gpu_engine = makeIntegrationEngine<TVoxel, PlainVoxelArray>(Device::CUDA);
+
+    const synth::SyntheticScene world = synth::SyntheticScene::boxAndSphere();
+    const Intrinsics intr = test::kinectIntrinsics(320, 240);
+    for (int k = 0; k < 4; ++k) {
+        const Mat4f pose = test::lookAt({0.9f - 0.2f * k, -0.7f + 0.3f * k, 0.8f}, {0.2f, 0.f, 0.1f});
+        const View view = test::renderView(world, intr, pose);
+        cpu_engine->integrate(on_cpu, view, pose);
+        gpu_engine->integrate(on_gpu, view, pose);
+    }
+    on_gpu.voxels().copyDeviceToHost();
+
+    // Same function, same inputs: only floating-point contraction (FMA) may differ, by a quantum.
+    long long observed = 0, mismatched = 0;
+    for (std::size_t i = 0; i < on_cpu.voxels().size(); ++i) {
+        const TVoxel a = on_cpu.voxels().host()[i], b = on_gpu.voxels().host()[i];
+        observed += a.w_depth > 0;
+        if (a.w_depth != b.w_depth || std::fabs(TVoxel::sdfToFloat(a.sdf) - TVoxel::sdfToFloat(b.sdf)) > 1e-3f) ++mismatched;
+    }
+    EXPECT_GT(observed, 10000);
+    EXPECT_LE(mismatched, observed / 1000) << mismatched << " of " << observed << " observed voxels differ";
+
+    gpu_engine->resetScene(on_gpu);
+    on_gpu.voxels().copyDeviceToHost();
+    for (std::size_t i = 0; i < on_gpu.voxels().size(); ++i) ASSERT_EQ(on_gpu.voxels().host()[i].w_depth, 0);
+}
+
+}  // namespace
+}  // namespace voxfuse

@@ -1,0 +1,168 @@
+// Integration against closed-form signed distances.
+
+#include <gtest/gtest.h>
+
+#include "SyntheticViews.h"
+#include "voxfuse/engines/IntegrationEngine.h"
+#include "voxfuse/objects/Voxel.h"
+#include "voxfuse/shared/VoxelAccess.h"
+
+namespace voxfuse {
+namespace {
+
+template <class TVoxel>
+class IntegrationEngineTest : public ::testing::Test {};
+using VoxelTypes = ::testing::Types<VoxelS, VoxelF, VoxelSRgb, VoxelFRgb>;
+TYPED_TEST_SUITE(IntegrationEngineTest, VoxelTypes);
+
+SceneParams smallSceneParams() {
+    SceneParams p;
+    p.voxel_size_m = 0.01f;
+    p.mu_m = 0.04f;
+    return p;
+}
+
+// A wall facing the camera at z = 1 m: the projective SDF equals the true SDF, 1 - z, clamped to mu.
+TYPED_TEST(IntegrationEngineTest, FrontoParallelPlaneMatchesAnalyticSdf) {
+    using TVoxel = TypeParam;
+    const SceneParams params = smallSceneParams();
+    Scene<TVoxel, PlainVoxelArray> scene(params, PlainVoxelArray({-40, -30, 0}, {80, 60, 140}), Device::CPU);
+    // World z up in the synthetic scene; look along world +x at a wall x = 1, then express the volume in camera coordinates
+    // by making the camera the world origin: a plane at camera z = 1.
+    View view;
+    view.calib.depth = view.calib.rgb = test::kinectIntrinsics(160, 120);
+    view.depth.resize(view.calib.depth.size());
+    for (std::size_t i = 0; i < view.depth.pixelCount(); ++i) view.depth.host()[i] = 1.0f;
+
+    auto engine = makeIntegrationEngine<TVoxel, PlainVoxelArray>(Device::CPU);
+    engine->integrate(scene, view, Mat4f::identity());
+
+    const PlainVoxelArray::Data index = scene.index().data();
+    int checked = 0;
+    for (int z = 80; z <= 120; ++z) {
+        bool found;
+        const TVoxel v = readVoxel(scene.voxels().host(), index, Vec3i{0, 0, z}, found);
+        ASSERT_TRUE(found);
+        const float z_m = z * params.voxel_size_m;
+        const float eta = 1.0f - z_m;
+        if (eta < -params.mu_m) {
+            EXPECT_EQ(v.w_depth, 0) << "voxel at z=" << z_m << " is behind the band and must not change";
+            continue;
+        }
+        EXPECT_EQ(v.w_depth, 1);
+        const float expected = std::min(1.f, eta / params.mu_m) * params.mu_m;
+        EXPECT_NEAR(TVoxel::sdfToFloat(v.sdf) * params.mu_m, expected, 1e-4f) << "z=" << z_m;
+        ++checked;
+    }
+    EXPECT_GT(checked, 20);
+}
+
+// A tilted plane seen from several poses: the fused zero crossing lies within one voxel of the plane.
+TYPED_TEST(IntegrationEngineTest, TiltedPlaneZeroCrossingWithinOneVoxel) {
+    using TVoxel = TypeParam;
+    const SceneParams params = smallSceneParams();
+    // World: plane through (0, 0, 0) with normal (0.3, 0, 1) (z up); cameras above it looking down-ish.
+    const Eigen::Vector3f normal = Eigen::Vector3f(0.3f, 0.f, 1.f).normalized();
+    const synth::SyntheticScene plane = synth::SyntheticScene::singlePlane(Eigen::Vector3f::Zero(), normal);
+    Scene<TVoxel, PlainVoxelArray> scene(params, PlainVoxelArray({-60, -60, -40}, {120, 120, 80}), Device::CPU);
+    auto engine = makeIntegrationEngine<TVoxel, PlainVoxelArray>(Device::CPU);
+    const Intrinsics intr = test::kinectIntrinsics(160, 120);
+    for (const Eigen::Vector3f& eye : {Eigen::Vector3f(0.2f, 0.1f, 1.0f), Eigen::Vector3f(-0.2f, 0.1f, 0.9f), Eigen::Vector3f(0.0f, -0.3f, 1.1f)})
+        engine->integrate(scene, test::renderView(plane, intr, test::lookAt(eye, Eigen::Vector3f::Zero())), test::lookAt(eye, Eigen::Vector3f::Zero()));
+
+    // Along vertical lines near the origin, find the sign change and compare with the plane's height.
+    const PlainVoxelArray::Data index = scene.index().data();
+    int lines = 0;
+    for (int x = -15; x <= 15; x += 5)
+        for (int y = -15; y <= 15; y += 5) {
+            float prev = 1.f;
+            for (int z = 30; z > -30; --z) {
+                bool found;
+                const TVoxel v = readVoxel(scene.voxels().host(), index, Vec3i{x, y, z}, found);
+                if (v.w_depth == 0) continue;
+                const float sdf = TVoxel::sdfToFloat(v.sdf);
+                if (prev > 0.f && sdf <= 0.f) {
+                    const float z_cross = (z + sdf / (sdf - prev)) * params.voxel_size_m;  // linear interpolation between z and z+1
+                    const float z_plane = -(normal.x() * x * params.voxel_size_m) / normal.z();
+                    EXPECT_NEAR(z_cross, z_plane, params.voxel_size_m) << "x=" << x << " y=" << y;
+                    ++lines;
+                    break;
+                }
+                prev = sdf;
+            }
+        }
+    EXPECT_GE(lines, 40);
+}
+
+TYPED_TEST(IntegrationEngineTest, WeightIsCappedAndInvalidDepthIgnored) {
+    using TVoxel = TypeParam;
+    SceneParams params = smallSceneParams();
+    params.max_weight = 3;
+    Scene<TVoxel, PlainVoxelArray> scene(params, PlainVoxelArray({-40, -30, 0}, {80, 60, 140}), Device::CPU);
+    View view;
+    view.calib.depth = view.calib.rgb = test::kinectIntrinsics(160, 120);
+    view.depth.resize(view.calib.depth.size());
+    for (std::size_t i = 0; i < view.depth.pixelCount(); ++i) view.depth.host()[i] = (i % 2) ? 1.0f : NAN;
+    auto engine = makeIntegrationEngine<TVoxel, PlainVoxelArray>(Device::CPU);
+    for (int k = 0; k < 6; ++k) engine->integrate(scene, view, Mat4f::identity());
+    int max_w = 0;
+    for (std::size_t i = 0; i < scene.voxels().size(); ++i) {
+        max_w = std::max<int>(max_w, scene.voxels().host()[i].w_depth);
+        ASSERT_FALSE(std::isnan(TVoxel::sdfToFloat(scene.voxels().host()[i].sdf)));
+    }
+    EXPECT_EQ(max_w, 3);
+}
+
+TEST(IntegrationColorTest, ColourOfAUniformWallIsFused) {
+    const SceneParams params = smallSceneParams();
+    Scene<VoxelSRgb, PlainVoxelArray> scene(params, PlainVoxelArray({-40, -30, 0}, {80, 60, 140}), Device::CPU);
+    View view;
+    view.calib.depth = view.calib.rgb = test::kinectIntrinsics(160, 120);
+    view.depth.resize(view.calib.depth.size());
+    view.rgb.resize(view.calib.rgb.size());
+    for (std::size_t i = 0; i < view.depth.pixelCount(); ++i) {
+        view.depth.host()[i] = 1.0f;
+        view.rgb.host()[i] = Vec4u8{200, 100, 50, 255};
+    }
+    auto engine = makeIntegrationEngine<VoxelSRgb, PlainVoxelArray>(Device::CPU);
+    engine->integrate(scene, view, Mat4f::identity());
+    bool found;
+    const VoxelSRgb v = readVoxel(scene.voxels().host(), scene.index().data(), Vec3i{0, 0, 100}, found);
+    EXPECT_EQ(v.w_color, 1);
+    EXPECT_EQ(v.clr.x, 200);
+    EXPECT_EQ(v.clr.y, 100);
+    EXPECT_EQ(v.clr.z, 50);
+    const VoxelSRgb far_in_front = readVoxel(scene.voxels().host(), scene.index().data(), Vec3i{0, 0, 50}, found);
+    EXPECT_EQ(far_in_front.w_color, 0) << "only voxels near the surface take colour";
+}
+
+// The frustum clipping of rows must not drop any voxel the per-voxel update would change.
+TEST(IntegrationBoxTest, RowClippingLosesNoUpdate) {
+    const SceneParams params = smallSceneParams();
+    const synth::SyntheticScene world = synth::SyntheticScene::boxAndSphere();
+    const Intrinsics intr = test::kinectIntrinsics(160, 120);
+    const Mat4f pose = test::lookAt({0.9f, -0.7f, 0.8f}, {0.2f, 0.f, 0.1f});
+    const View view = test::renderView(world, intr, pose);
+    Scene<VoxelF, PlainVoxelArray> clipped(params, PlainVoxelArray({-60, -60, -20}, {140, 120, 80}), Device::CPU);
+    makeIntegrationEngine<VoxelF, PlainVoxelArray>(Device::CPU)->integrate(clipped, view, pose);
+
+    // Brute force: every voxel, no clipping.
+    Scene<VoxelF, PlainVoxelArray> brute(params, PlainVoxelArray({-60, -60, -20}, {140, 120, 80}), Device::CPU);
+    const IntegrationFrame frame = makeIntegrationFrame(params, view, pose, view.depth.host(), view.rgb.host());
+    const PlainVoxelArray::Data idx = brute.index().data();
+    for (int z = 0; z < idx.size.z; ++z)
+        for (int y = 0; y < idx.size.y; ++y)
+            for (int x = 0; x < idx.size.x; ++x)
+                integrateVoxel(brute.voxels().host()[x + idx.size.x * (y + idx.size.y * z)],
+                               toFloat(Vec3i{x, y, z} + idx.offset) * params.voxel_size_m, frame);
+    int updated = 0;
+    for (std::size_t i = 0; i < brute.voxels().size(); ++i) {
+        ASSERT_EQ(brute.voxels().host()[i].w_depth, clipped.voxels().host()[i].w_depth) << "voxel " << i;
+        ASSERT_EQ(brute.voxels().host()[i].sdf, clipped.voxels().host()[i].sdf) << "voxel " << i;
+        updated += brute.voxels().host()[i].w_depth;
+    }
+    EXPECT_GT(updated, 10000);
+}
+
+}  // namespace
+}  // namespace voxfuse

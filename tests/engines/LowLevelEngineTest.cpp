@@ -1,0 +1,78 @@
+// Low-level image operations against hand-computed values.
+
+#include <gtest/gtest.h>
+
+#include "SyntheticViews.h"
+#include "voxfuse/engines/LowLevelEngine.h"
+
+namespace voxfuse {
+namespace {
+
+TEST(LowLevelEngineTest, ConvertsAffineAndKinectDepth) {
+    auto engine = makeLowLevelEngine(Device::CPU);
+    Image<std::uint16_t> raw({4, 1});
+    raw.host()[0] = 0;
+    raw.host()[1] = 5000;
+    raw.host()[2] = 10000;
+    raw.host()[3] = 60000;
+    Image<float> depth;
+    engine->convertDepthToMetres(raw, DisparityCalib::affine(0.0002f), 525.f, 0.2f, 5.0f, depth);
+    EXPECT_EQ(depth.host()[0], 0.f);
+    EXPECT_FLOAT_EQ(depth.host()[1], 1.0f);
+    EXPECT_FLOAT_EQ(depth.host()[2], 2.0f);
+    EXPECT_EQ(depth.host()[3], 0.f) << "12 m is beyond the 5 m limit";
+
+    // Kinect: depth = 8 * k2 * fx / (k1 - raw).
+    const DisparityCalib kinect = DisparityCalib::kinect(1135.09f, 0.0819141f);
+    raw.host()[1] = 800;
+    raw.host()[2] = 1135;  // k1 - raw ~ 0: effectively infinite depth
+    engine->convertDepthToMetres(raw, kinect, 573.71f, 0.2f, 10.f, depth);
+    EXPECT_NEAR(depth.host()[1], 8.f * 0.0819141f * 573.71f / (1135.09f - 800.f), 1e-5f);
+    EXPECT_EQ(depth.host()[2], 0.f);
+}
+
+TEST(LowLevelEngineTest, BilateralFilterKeepsPlanesAndEdges) {
+    auto engine = makeLowLevelEngine(Device::CPU);
+    Image<float> depth({20, 10}), filtered;
+    for (int y = 0; y < 10; ++y)
+        for (int x = 0; x < 20; ++x) depth.at(x, y) = x < 10 ? 1.0f : 2.0f;  // a step edge
+    depth.at(3, 3) = 0.f;  // a hole
+    engine->bilateralFilterDepth(depth, filtered, BilateralFilterParams{});
+    EXPECT_EQ(filtered.at(3, 3), 0.f) << "holes stay holes";
+    EXPECT_NEAR(filtered.at(9, 5), 1.0f, 1e-4f) << "the edge is not smeared";
+    EXPECT_NEAR(filtered.at(10, 5), 2.0f, 1e-4f);
+    EXPECT_NEAR(filtered.at(5, 5), 1.0f, 1e-6f);
+}
+
+TEST(LowLevelEngineTest, DownsampleAveragesValidSamplesOnOneSurface) {
+    auto engine = makeLowLevelEngine(Device::CPU);
+    Image<float> depth({4, 2}), half;
+    const float v[8] = {1.0f, 1.2f, 0.f, 2.0f, 1.1f, 0.f, 0.f, 0.f};
+    for (int i = 0; i < 8; ++i) depth.host()[i] = v[i];
+    engine->downsampleDepth(depth, half, 0.25f);
+    ASSERT_EQ(half.size(), (Vec2i{2, 1}));
+    EXPECT_NEAR(half.host()[0], (1.0f + 1.2f + 1.1f) / 3.f, 1e-6f);
+    EXPECT_NEAR(half.host()[1], 2.0f, 1e-6f);
+}
+
+TEST(LowLevelEngineTest, VertexAndNormalMapsOfATiltedPlane) {
+    auto engine = makeLowLevelEngine(Device::CPU);
+    const Intrinsics intr = test::kinectIntrinsics(160, 120);
+    // Plane z = 1 + 0.5 x in camera coordinates: depth at pixel u is 1 / (1 - 0.5 (u - cx) / fx).
+    Image<float> depth(intr.size());
+    for (int y = 0; y < intr.height; ++y)
+        for (int x = 0; x < intr.width; ++x) depth.at(x, y) = 1.f / (1.f - 0.5f * (float(x) - intr.cx) / intr.fx);
+    Image<Vec4f> vertices, normals;
+    engine->computeVertexMap(depth, intr, vertices);
+    engine->computeNormalMap(vertices, normals, 0.1f);
+    const Vec4f p = vertices.at(100, 50);
+    EXPECT_NEAR(p.z, 1.f + 0.5f * p.x, 1e-5f);
+    const Vec3f expected = normalize(Vec3f{0.5f, 0.f, -1.f});  // facing the camera
+    const Vec4f n = normals.at(100, 50);
+    ASSERT_EQ(n.w, 1.f);
+    EXPECT_NEAR(dot(n.xyz(), expected), 1.f, 1e-4f);
+    EXPECT_EQ(normals.at(0, 0).w, 0.f) << "border pixels have no normal";
+}
+
+}  // namespace
+}  // namespace voxfuse
