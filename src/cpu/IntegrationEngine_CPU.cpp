@@ -1,6 +1,8 @@
 // CPU/OpenMP loops of the integration engine; the per-voxel update is integrateVoxel() in shared/Integration.h.
 
+#include "voxfuse/core/Error.h"
 #include "voxfuse/engines/IntegrationEngine.h"
+#include "voxfuse/objects/VoxelBlockHash.h"
 #include "voxfuse/objects/Voxel.h"
 
 namespace voxfuse::cpu {
@@ -43,6 +45,35 @@ public:
     void resetScene(Scene<TVoxel, PlainVoxelArray>& scene) override { scene.voxels().fillHost(TVoxel::initial()); }
 };
 
+// The hash: every voxel of the blocks in the visible list, which the allocation engine built for this view.
+template <class TVoxel>
+class IntegrationEngine_CPU<TVoxel, VoxelBlockHash> final : public IntegrationEngine<TVoxel, VoxelBlockHash> {
+public:
+    void integrate(Scene<TVoxel, VoxelBlockHash>& scene, const View& view, const Mat4f& T_world_camera) override {
+        const VoxelBlockHash& hash = scene.index();
+        if (!hash.visibleListIsFor(T_world_camera, view.calib.depth))
+            throw Error("hash integration: the visible list is not for this view (run the allocation engine on it first)");
+        const IntegrationFrame frame = makeIntegrationFrame(scene.params(), view, T_world_camera, view.depth.host(), view.rgb.host());
+        TVoxel* voxels = scene.voxels().host();
+        const int* visible = hash.visibleEntries();
+        const int count = hash.visibleCount();
+        const float voxel_size = scene.params().voxel_size_m;
+#pragma omp parallel for schedule(dynamic, 8)
+        for (int k = 0; k < count; ++k) {
+            const HashEntry& entry = hash.entry(visible[k]);
+            TVoxel* block = voxels + (long long)entry.ptr * kBlockVoxelCount;
+            const Vec3i corner = Vec3i{entry.pos.x, entry.pos.y, entry.pos.z} * kBlockSide;
+            for (int i = 0; i < kBlockVoxelCount; ++i) {
+                const Vec3i p = corner + Vec3i{i & 7, (i >> 3) & 7, i >> 6};
+                integrateVoxel(block[i], toFloat(p) * voxel_size, frame);
+            }
+        }
+    }
+
+    // Frees every block and returns the voxel storage to its initial (empty) size.
+    void resetScene(Scene<TVoxel, VoxelBlockHash>& scene) override { scene.clearVoxelBlocks(); }
+};
+
 }  // namespace
 
 template <class TVoxel, class TIndex>
@@ -54,5 +85,9 @@ template std::unique_ptr<IntegrationEngine<VoxelS, PlainVoxelArray>> makeIntegra
 template std::unique_ptr<IntegrationEngine<VoxelF, PlainVoxelArray>> makeIntegrationEngine<VoxelF, PlainVoxelArray>();
 template std::unique_ptr<IntegrationEngine<VoxelSRgb, PlainVoxelArray>> makeIntegrationEngine<VoxelSRgb, PlainVoxelArray>();
 template std::unique_ptr<IntegrationEngine<VoxelFRgb, PlainVoxelArray>> makeIntegrationEngine<VoxelFRgb, PlainVoxelArray>();
+template std::unique_ptr<IntegrationEngine<VoxelS, VoxelBlockHash>> makeIntegrationEngine<VoxelS, VoxelBlockHash>();
+template std::unique_ptr<IntegrationEngine<VoxelF, VoxelBlockHash>> makeIntegrationEngine<VoxelF, VoxelBlockHash>();
+template std::unique_ptr<IntegrationEngine<VoxelSRgb, VoxelBlockHash>> makeIntegrationEngine<VoxelSRgb, VoxelBlockHash>();
+template std::unique_ptr<IntegrationEngine<VoxelFRgb, VoxelBlockHash>> makeIntegrationEngine<VoxelFRgb, VoxelBlockHash>();
 
 }  // namespace voxfuse::cpu

@@ -39,7 +39,11 @@ VF_HOST_DEVICE inline bool castRay(Vec3f& hit_grid, const TVoxel* voxels, const 
         const Vec3f p = origin + dir * t;
         sdf = readSdfNearest(voxels, index, p, observed);
         if (!observed) {
-            t += step_scale;  // nothing known here: a truncation band at a time
+            // Nothing known here: a truncation band at a time. The front seen before the gap still counts,
+            // as inside an allocated hash block (castRayHash), so that both indexes find the same surfaces;
+            // a back face met after a long unobserved gap is the price (dense cannot tell "never
+            // allocated" from "not yet observed").
+            t += step_scale;
             continue;
         }
         if (sdf <= 0.1f && sdf >= -0.5f) sdf = readSdfInterpolated(voxels, index, p, observed);
@@ -58,6 +62,86 @@ VF_HOST_DEVICE inline bool castRay(Vec3f& hit_grid, const TVoxel* voxels, const 
     if (!crossed) return false;
 
     // Two SDF-sized corrections around the crossing (sdf <= 0 here, so the first step goes back).
+    bool observed;
+    t += sdf * step_scale;
+    sdf = readSdfInterpolated(voxels, index, origin + dir * t, observed);
+    t += sdf * step_scale;
+    hit_grid = origin + dir * t;
+    return true;
+}
+
+// ---- The voxel block hash: the report's state machine ----
+
+enum class RayState {
+    SearchBlockCoarse,  // in unallocated space: jump to where the ray leaves the current block
+    SearchBlockFine,    // just entered an allocated block: no positive (free-space) SDF seen yet
+    SearchSurface,      // in front of a surface: SDF-sized steps until the SDF turns negative
+    BehindSurface,      // crossed a surface from the front: done
+    WrongSide           // entered an allocated block behind a surface: no surface until free space again
+};
+
+// Parameter t (along origin + t * dir, grid units) where the nearest-voxel rounding of the ray leaves
+// block `block`, i.e. the box [8 * block - 0.5, 8 * block + 7.5] on every axis.
+VF_HOST_DEVICE inline float rayBlockExit(Vec3f origin, Vec3f dir, Vec3i block) {
+    float t_exit = 1e30f;
+    for (int a = 0; a < 3; ++a) {
+        if (fabsf(dir[a]) < 1e-12f) continue;
+        const float face = dir[a] > 0.f ? float(block[a] * kBlockSide) + float(kBlockSide) - 0.5f : float(block[a] * kBlockSide) - 0.5f;
+        const float t = (face - origin[a]) / dir[a];
+        t_exit = t < t_exit ? t : t_exit;
+    }
+    return t_exit;
+}
+
+// castRay() for the voxel block hash (TIndexData: VoxelBlockHash::Data or CachedHashView): the same
+// steps, thresholds and refinement inside allocated blocks, but unallocated blocks are crossed in one
+// go, and a surface counts only when the ray saw its positive side after the last unallocated gap (the
+// report's WRONG_SIDE: the boundary between unallocated space and negative values is no surface).
+// Coarse steps are whole multiples of step_scale, the step castRay() takes through unobserved space,
+// and the march starts on the lattice t_anchor + k * step_scale: where the search range starts and how
+// the blocks are laid out never moves the samples, so the surface found depends on the SDF alone.
+template <class TVoxel, class TIndexData>
+VF_HOST_DEVICE inline bool castRayHash(Vec3f& hit_grid, const TVoxel* voxels, const TIndexData& index, Vec3f origin, Vec3f dir,
+                                       float t_anchor, float t_min, float t_max, float step_scale) {
+    RayState state = RayState::SearchBlockCoarse;
+    float t = t_anchor + ceilf((t_min - t_anchor) / step_scale) * step_scale;
+    float sdf = 1.f;
+    while (t < t_max) {
+        const Vec3f p = origin + dir * t;
+        const Vec3i voxel{int(floorf(p.x + 0.5f)), int(floorf(p.y + 0.5f)), int(floorf(p.z + 0.5f))};
+        bool allocated;
+        const TVoxel v = readVoxel(voxels, index, voxel, allocated);
+        if (!allocated) {
+            state = RayState::SearchBlockCoarse;
+            const float steps = ceilf((rayBlockExit(origin, dir, blockOfVoxel(voxel)) - t) / step_scale);
+            t += (steps > 1.f ? steps : 1.f) * step_scale;
+            continue;
+        }
+        if (state == RayState::SearchBlockCoarse) state = RayState::SearchBlockFine;
+        if (v.w_depth == 0) {
+            t += step_scale;  // unobserved voxels of an allocated block: a truncation band at a time
+            continue;
+        }
+        sdf = TVoxel::sdfToFloat(v.sdf);
+        if (sdf <= 0.1f && sdf >= -0.5f) {
+            bool observed;
+            sdf = readSdfInterpolated(voxels, index, p, observed);
+        }
+        if (sdf <= 0.f) {
+            if (state == RayState::SearchSurface) {
+                state = RayState::BehindSurface;
+                break;
+            }
+            state = RayState::WrongSide;
+            t += step_scale * (-sdf > 0.25f ? -sdf : 0.25f);
+            continue;
+        }
+        state = RayState::SearchSurface;
+        t += sdf * step_scale > 1.f ? sdf * step_scale : 1.f;
+    }
+    if (state != RayState::BehindSurface) return false;
+
+    // Two SDF-sized corrections around the crossing, as castRay() does.
     bool observed;
     t += sdf * step_scale;
     sdf = readSdfInterpolated(voxels, index, origin + dir * t, observed);

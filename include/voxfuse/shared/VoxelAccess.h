@@ -5,6 +5,7 @@
 
 #include "voxfuse/core/Math.h"
 #include "voxfuse/objects/PlainVoxelArray.h"
+#include "voxfuse/shared/HashAccess.h"  // readVoxel() for VoxelBlockHash
 
 namespace voxfuse {
 

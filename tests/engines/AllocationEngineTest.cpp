@@ -1,0 +1,300 @@
+// Allocation for the voxel block hash: every block a depth frame needs is allocated and visible, the
+// visible list follows the frustum, full capacities are counted exactly, empty blocks are removed.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <set>
+#include <tuple>
+#include <vector>
+
+#include "SyntheticViews.h"
+#include "voxfuse/engines/AllocationEngine.h"
+#include "voxfuse/engines/IntegrationEngine.h"
+#include "voxfuse/objects/Voxel.h"
+#include "voxfuse/shared/HashAccess.h"
+
+namespace voxfuse {
+namespace {
+
+using Key = std::tuple<int, int, int>;
+using BlockSet = std::set<Key>;
+Key key(Vec3i b) { return {b.x, b.y, b.z}; }
+using HashScene = Scene<VoxelS, VoxelBlockHash>;
+
+SceneParams testParams() {
+    SceneParams p;
+    p.voxel_size_m = 0.01f;
+    p.mu_m = 0.04f;
+    p.view_frustum_max_m = 2.5f;
+    return p;
+}
+
+HashScene makeScene(const SceneParams& params, VoxelBlockHashSettings s = VoxelBlockHashSettings()) {
+    return HashScene(params, VoxelBlockHash(s), Device::CPU);
+}
+
+const Intrinsics kIntr = test::kinectIntrinsics(160, 120);
+const synth::SyntheticScene& world() {
+    static const synth::SyntheticScene scene = synth::SyntheticScene::boxAndSphere();
+    return scene;
+}
+Mat4f poseA() { return test::lookAt({1.0f, -0.8f, 0.7f}, {0.3f, 0.f, 0.1f}); }
+Mat4f poseB() { return test::lookAt({0.2f, 1.1f, 0.9f}, {0.2f, 0.f, 0.1f}); }
+
+// Brute force, written from integration's own rule and nothing of the allocation code: the blocks of
+// every voxel that the frame gives a signed distance below +1, i.e. that projects into a pixel with a
+// valid depth d and lies at a depth z in [d - mu, d + mu).
+BlockSet blocksTheFrameNeeds(const View& view, const Mat4f& T_world_camera, const SceneParams& params) {
+    const Mat4f T_camera_world = rigidInverse(T_world_camera);
+    const Intrinsics& in = view.calib.depth;
+    BlockSet needed;
+    // Every voxel of the box around the frustum slab between the nearest and farthest depth (+- mu).
+    float d_min = 1e9f, d_max = 0.f;
+    for (std::size_t i = 0; i < view.depth.pixelCount(); ++i) {
+        const float d = view.depth.host()[i];
+        if (d >= params.view_frustum_min_m && d <= params.view_frustum_max_m) d_min = std::min(d_min, d), d_max = std::max(d_max, d);
+    }
+    Vec3f lo{1e9f, 1e9f, 1e9f}, hi{-1e9f, -1e9f, -1e9f};
+    for (int k = 0; k < 8; ++k) {
+        const float z = (k & 4) ? d_max + params.mu_m : d_min - params.mu_m;
+        const Vec3f corner = transformPoint(T_world_camera, in.unproject((k & 1) ? float(in.width) : -1.f, (k & 2) ? float(in.height) : -1.f, z));
+        for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], corner[a]), hi[a] = std::max(hi[a], corner[a]);
+    }
+    const Vec3i first = floorToInt(lo / params.voxel_size_m) - Vec3i{1, 1, 1}, last = floorToInt(hi / params.voxel_size_m) + Vec3i{2, 2, 2};
+    const float reach = d_max + params.mu_m;
+    for (int z = first.z; z <= last.z; ++z)
+        for (int y = first.y; y <= last.y; ++y)
+            for (int x = first.x; x <= last.x; ++x) {
+                const Vec3f p = transformPoint(T_camera_world, toFloat(Vec3i{x, y, z}) * params.voxel_size_m);
+                if (p.z < 0.01f || p.z > reach) continue;
+                const float u = in.fx * p.x / p.z + in.cx, v = in.fy * p.y / p.z + in.cy;
+                if (u < -0.5f || v < -0.5f) continue;
+                const int iu = int(u + 0.5f), iv = int(v + 0.5f);
+                if (iu >= in.width || iv >= in.height) continue;
+                const float d = view.depth.at(iu, iv);
+                if (!(d >= params.view_frustum_min_m && d <= params.view_frustum_max_m)) continue;
+                const float eta = d - p.z;
+                if (eta >= -params.mu_m && eta < params.mu_m) needed.insert(key(blockOfVoxel({x, y, z})));
+            }
+    return needed;
+}
+
+BlockSet allocatedBlocks(const VoxelBlockHash& hash) {
+    BlockSet s;
+    for (int i = 0; i < hash.entryCount(); ++i)
+        if (hash.entry(i).ptr >= 0) s.insert({hash.entry(i).pos.x, hash.entry(i).pos.y, hash.entry(i).pos.z});
+    return s;
+}
+
+BlockSet visibleBlocks(const VoxelBlockHash& hash) {
+    BlockSet s;
+    for (int k = 0; k < hash.visibleCount(); ++k) {
+        const HashEntry& e = hash.entry(hash.visibleEntries()[k]);
+        s.insert({e.pos.x, e.pos.y, e.pos.z});
+    }
+    return s;
+}
+
+// The blocks stage 1 walks for a frame (the shared per-pixel function, serially), for exact accounting.
+BlockSet blocksOnSegments(const View& view, const Mat4f& pose, const SceneParams& params) {
+    const DepthSegmentFrame f = makeDepthSegmentFrame(params, view, pose);
+    BlockSet s;
+    auto collect = [&](Vec3i b) { s.insert(key(b)); };
+    for (int y = 0; y < kIntr.height; ++y)
+        for (int x = 0; x < kIntr.width; ++x) forEachBlockOnDepthSegment(f, x, y, collect);
+    return s;
+}
+
+int missingFrom(const BlockSet& needed, const BlockSet& have) {
+    int missing = 0;
+    for (const Key& k : needed) missing += have.count(k) == 0;
+    return missing;
+}
+
+TEST(AllocationEngineTest, EveryBlockTheDepthNeedsIsAllocatedAndVisible) {
+    const SceneParams params = testParams();
+    HashScene scene = makeScene(params);
+    auto allocation = makeAllocationEngine<VoxelS, VoxelBlockHash>(Device::CPU);
+    for (const Mat4f& pose : {poseA(), poseB()}) {
+        const View view = test::renderView(world(), kIntr, pose, false);
+        const AllocationStats stats = allocation->allocate(scene, view, pose);
+        const BlockSet needed = blocksTheFrameNeeds(view, pose, params);
+        ASSERT_GT(needed.size(), 500u);
+        const BlockSet allocated = allocatedBlocks(scene.index()), visible = visibleBlocks(scene.index());
+        EXPECT_EQ(missingFrom(needed, allocated), 0);
+        EXPECT_EQ(missingFrom(needed, visible), 0);
+        // Conservative, not wasteful: the sideways margin adds a shell, not a multiple.
+        EXPECT_LT(visible.size(), 2 * needed.size());
+        EXPECT_EQ(stats.allocation_failures_this_frame, 0);
+        EXPECT_EQ(stats.blocks_allocated, int(allocated.size()));
+        EXPECT_EQ(stats.visible_blocks, int(visible.size()));
+        EXPECT_GE(stats.block_capacity, stats.blocks_allocated);
+        EXPECT_EQ(scene.voxels().size(), std::size_t(stats.block_capacity) * kBlockVoxelCount);
+    }
+}
+
+TEST(AllocationEngineTest, VisibleListKeepsPreviouslyVisibleBlocksWhileInTheFrustum) {
+    const SceneParams params = testParams();
+    HashScene scene = makeScene(params);
+    auto allocation = makeAllocationEngine<VoxelS, VoxelBlockHash>(Device::CPU);
+    View view = test::renderView(world(), kIntr, poseA(), false);
+    allocation->allocate(scene, view, poseA());
+    const BlockSet first = visibleBlocks(scene.index());
+    const BlockSet needed = blocksTheFrameNeeds(view, poseA(), params);
+
+    // No depth at all: nothing new, the blocks seen before stay visible from the same pose (all but a
+    // few that the sideways margin took from just outside the image)...
+    for (std::size_t i = 0; i < view.depth.pixelCount(); ++i) view.depth.host()[i] = 0.f;
+    AllocationStats stats = allocation->allocate(scene, view, poseA());
+    EXPECT_EQ(stats.blocks_allocated_this_frame, 0);
+    const BlockSet kept = visibleBlocks(scene.index());
+    EXPECT_EQ(missingFrom(kept, first), 0);
+    EXPECT_EQ(missingFrom(needed, kept), 0);
+    EXPECT_GT(kept.size(), first.size() * 95 / 100);
+    // ...and leave the list when the camera turns away from them.
+    const Mat4f away = test::lookAt({1.0f, -0.8f, 0.7f}, {2.0f, -2.0f, 0.7f});
+    stats = allocation->allocate(scene, view, away);
+    EXPECT_LT(stats.visible_blocks, int(first.size()) / 10);
+    stats = allocation->allocate(scene, view, poseA());
+    EXPECT_EQ(stats.visible_blocks, 0) << "blocks re-enter the list only when the depth sees them";
+}
+
+class AllocationCapacityTest : public ::testing::TestWithParam<int> {};
+
+TEST_P(AllocationCapacityTest, FullBucketsAndExcessListAreCountedExactly) {
+    const SceneParams params = testParams();
+    VoxelBlockHashSettings s;
+    s.bucket_count = 4;
+    s.entries_per_bucket = GetParam();
+    s.excess_entry_count = 8;
+    HashScene scene = makeScene(params, s);
+    auto allocation = makeAllocationEngine<VoxelS, VoxelBlockHash>(Device::CPU);
+    auto integration = cpu::makeIntegrationEngine<VoxelS, VoxelBlockHash>();
+    const View view = test::renderView(world(), kIntr, poseA(), false);
+    const int walked = int(blocksOnSegments(view, poseA(), params).size());
+    const int capacity = 4 * s.entries_per_bucket + 8;
+    for (int frame = 1; frame <= 2; ++frame) {
+        const AllocationStats stats = allocation->allocate(scene, view, poseA());
+        EXPECT_EQ(stats.blocks_allocated, capacity);
+        EXPECT_EQ(stats.allocation_failures_this_frame, walked - capacity);
+        EXPECT_EQ(stats.failures_hash_full_this_frame, walked - capacity);
+        EXPECT_EQ(stats.failures_blocks_full_this_frame, 0);
+        EXPECT_EQ(stats.allocation_failures_total, (long long)frame * (walked - capacity));
+        integration->integrate(scene, view, poseA());  // carries on with what it has
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(EntriesPerBucket, AllocationCapacityTest, ::testing::Values(1, 2));
+
+TEST(AllocationEngineTest, FullVoxelBlockArrayIsCountedExactly) {
+    const SceneParams params = testParams();
+    VoxelBlockHashSettings s;
+    s.max_block_count = 50;
+    s.blocks_per_growth = 16;
+    HashScene scene = makeScene(params, s);
+    auto allocation = makeAllocationEngine<VoxelS, VoxelBlockHash>(Device::CPU);
+    const View view = test::renderView(world(), kIntr, poseA(), false);
+    const int walked = int(blocksOnSegments(view, poseA(), params).size());
+    const AllocationStats stats = allocation->allocate(scene, view, poseA());
+    EXPECT_EQ(stats.blocks_allocated, 50);
+    EXPECT_EQ(stats.block_capacity, 50);
+    EXPECT_EQ(stats.allocation_failures_this_frame, walked - 50);
+    EXPECT_EQ(stats.failures_blocks_full_this_frame, walked - 50);
+    EXPECT_EQ(stats.failures_hash_full_this_frame, 0);
+}
+
+TEST(AllocationEngineTest, VoxelArrayGrowsWithTheSceneInSteps) {
+    const SceneParams params = testParams();
+    VoxelBlockHashSettings s;
+    s.blocks_per_growth = 256;
+    HashScene scene = makeScene(params, s);
+    EXPECT_EQ(scene.voxels().size(), 0u);
+    auto allocation = makeAllocationEngine<VoxelS, VoxelBlockHash>(Device::CPU);
+    const AllocationStats a = allocation->allocate(scene, test::renderView(world(), kIntr, poseA(), false), poseA());
+    EXPECT_EQ(a.block_capacity % 256, 0);
+    EXPECT_LT(a.block_capacity, a.blocks_allocated + 256);
+    const AllocationStats b = allocation->allocate(scene, test::renderView(world(), kIntr, poseB(), false), poseB());
+    EXPECT_GT(b.blocks_allocated, a.blocks_allocated);
+    EXPECT_GE(b.block_capacity, b.blocks_allocated);
+    EXPECT_LT(b.block_capacity, b.blocks_allocated + std::max(256, a.block_capacity / 4) + 256);
+}
+
+TEST(AllocationEngineTest, RemovalFreesExactlyTheEmptyBlocksAndKeepsTheRest) {
+    const SceneParams params = testParams();
+    HashScene scene = makeScene(params);
+    auto allocation = makeAllocationEngine<VoxelS, VoxelBlockHash>(Device::CPU);
+    auto integration = cpu::makeIntegrationEngine<VoxelS, VoxelBlockHash>();
+    for (const Mat4f& pose : {poseA(), poseB()}) {
+        const View view = test::renderView(world(), kIntr, pose, false);
+        allocation->allocate(scene, view, pose);
+        integration->integrate(scene, view, pose);
+    }
+    // A block allocated but never integrated (outside every view) must go too.
+    ASSERT_EQ(scene.index().insert({300, 300, 300}), VoxelBlockHash::InsertResult::Inserted);
+    scene.voxels().host()[scene.index().entry(scene.index().findEntry({300, 300, 300})).ptr * kBlockVoxelCount] = VoxelS::initial();
+
+    const VoxelBlockHash& hash = scene.index();
+    const VoxelS* voxels = scene.voxels().host();
+    std::map<Key, std::vector<VoxelS>> kept;
+    int empty = 0;
+    for (int i = 0; i < hash.entryCount(); ++i) {
+        const HashEntry& e = hash.entry(i);
+        if (e.ptr < 0) continue;
+        const VoxelS* block = voxels + e.ptr * kBlockVoxelCount;
+        bool observed = false;
+        for (int v = 0; v < kBlockVoxelCount; ++v) observed = observed || block[v].w_depth > 0;
+        if (observed)
+            kept[{e.pos.x, e.pos.y, e.pos.z}].assign(block, block + kBlockVoxelCount);
+        else
+            ++empty;
+    }
+    ASSERT_GT(empty, 0);
+    const int before = hash.blocksInUse();
+    EXPECT_EQ(allocation->removeEmptyBlocks(scene), empty);
+    EXPECT_EQ(hash.blocksInUse(), before - empty);
+    EXPECT_EQ(hash.stats().blocks_removed_total, empty);
+    EXPECT_EQ(hash.findEntry({300, 300, 300}), -1);
+    EXPECT_EQ(int(allocatedBlocks(hash).size()), int(kept.size()));
+    for (const auto& [k, contents] : kept) {
+        const int e = hash.findEntry({std::get<0>(k), std::get<1>(k), std::get<2>(k)});
+        ASSERT_GE(e, 0);
+        const VoxelS* block = scene.voxels().host() + hash.entry(e).ptr * kBlockVoxelCount;
+        for (int v = 0; v < kBlockVoxelCount; ++v) {
+            ASSERT_EQ(block[v].sdf, contents[v].sdf);
+            ASSERT_EQ(block[v].w_depth, contents[v].w_depth);
+        }
+    }
+    EXPECT_EQ(allocation->removeEmptyBlocks(scene), 0) << "nothing left to remove";
+
+    // The freed blocks are reused, clean, by the next frame.
+    const View view = test::renderView(world(), kIntr, poseA(), false);
+    allocation->allocate(scene, view, poseA());
+    integration->integrate(scene, view, poseA());
+    EXPECT_EQ(missingFrom(blocksTheFrameNeeds(view, poseA(), params), allocatedBlocks(scene.index())), 0);
+}
+
+TEST(AllocationEngineTest, IntegrationRefusesAViewTheAllocationDidNotPrepare) {
+    const SceneParams params = testParams();
+    HashScene scene = makeScene(params);
+    auto allocation = makeAllocationEngine<VoxelS, VoxelBlockHash>(Device::CPU);
+    auto integration = cpu::makeIntegrationEngine<VoxelS, VoxelBlockHash>();
+    const View view = test::renderView(world(), kIntr, poseA(), false);
+    EXPECT_THROW(integration->integrate(scene, view, poseA()), Error);
+    allocation->allocate(scene, view, poseA());
+    EXPECT_NO_THROW(integration->integrate(scene, view, poseA()));
+    EXPECT_THROW(integration->integrate(scene, view, poseB()), Error);
+}
+
+TEST(AllocationEngineTest, DenseIndexNeedsNoAllocation) {
+    Scene<VoxelS, PlainVoxelArray> scene(testParams(), PlainVoxelArray({-8, -8, -8}, {16, 16, 16}), Device::CPU);
+    auto allocation = makeAllocationEngine<VoxelS, PlainVoxelArray>(Device::CPU);
+    const AllocationStats stats = allocation->allocate(scene, test::renderView(world(), kIntr, poseA(), false), poseA());
+    EXPECT_EQ(stats.blocks_allocated, 0);
+    EXPECT_EQ(allocation->removeEmptyBlocks(scene), 0);
+}
+
+}  // namespace
+}  // namespace voxfuse
