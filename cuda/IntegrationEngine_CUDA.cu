@@ -4,6 +4,7 @@
 #include "CudaCheck.h"
 #include "voxfuse/engines/IntegrationEngine.h"
 #include "voxfuse/objects/Voxel.h"
+#include "voxfuse/objects/VoxelBlockHash.h"
 
 namespace voxfuse::cuda {
 namespace {
@@ -74,6 +75,15 @@ private:
     MemoryBlock<Vec4u8> rgb_;
 };
 
+// The hash has no CUDA layer yet: the factory exists so that every pair links, and says so when used.
+template <class TVoxel>
+class IntegrationEngine_CUDA<TVoxel, VoxelBlockHash> final : public IntegrationEngine<TVoxel, VoxelBlockHash> {
+public:
+    IntegrationEngine_CUDA() { throw DeviceError("the voxel block hash has no CUDA integration yet: use the CPU device"); }
+    void integrate(Scene<TVoxel, VoxelBlockHash>&, const View&, const Mat4f&) override {}
+    void resetScene(Scene<TVoxel, VoxelBlockHash>&) override {}
+};
+
 }  // namespace
 
 template <class TVoxel, class TIndex>
@@ -85,5 +95,9 @@ template std::unique_ptr<IntegrationEngine<VoxelS, PlainVoxelArray>> makeIntegra
 template std::unique_ptr<IntegrationEngine<VoxelF, PlainVoxelArray>> makeIntegrationEngine<VoxelF, PlainVoxelArray>();
 template std::unique_ptr<IntegrationEngine<VoxelSRgb, PlainVoxelArray>> makeIntegrationEngine<VoxelSRgb, PlainVoxelArray>();
 template std::unique_ptr<IntegrationEngine<VoxelFRgb, PlainVoxelArray>> makeIntegrationEngine<VoxelFRgb, PlainVoxelArray>();
+template std::unique_ptr<IntegrationEngine<VoxelS, VoxelBlockHash>> makeIntegrationEngine<VoxelS, VoxelBlockHash>();
+template std::unique_ptr<IntegrationEngine<VoxelF, VoxelBlockHash>> makeIntegrationEngine<VoxelF, VoxelBlockHash>();
+template std::unique_ptr<IntegrationEngine<VoxelSRgb, VoxelBlockHash>> makeIntegrationEngine<VoxelSRgb, VoxelBlockHash>();
+template std::unique_ptr<IntegrationEngine<VoxelFRgb, VoxelBlockHash>> makeIntegrationEngine<VoxelFRgb, VoxelBlockHash>();
 
 }  // namespace voxfuse::cuda

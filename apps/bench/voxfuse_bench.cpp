@@ -47,7 +47,7 @@ std::string defaultSource() {
 
 int main(int argc, char** argv) {
     CLI::App cli{"Per-stage timings of the VoxFuse pipeline on a sequence."};
-    std::string source_path, json_path = "voxfuse_bench.json", voxel = "s", index = "dense";
+    std::string source_path, json_path = "voxfuse_bench.json", voxel = "s", index = "hash";
     int max_frames = 0, warmup = 3;
     MainEngineSettings s;
     cli.add_option("source", source_path, "sequence (default: ../shared/data/tum_fr3_teddy_200, else the bundled data)");
@@ -75,6 +75,7 @@ int main(int argc, char** argv) {
         record.wall_s = wall.elapsedMs() / 1000.0;
         record.peak_rss_mb = app::peakRssMb();
         record.scene_mb = double(engine->sceneBytes()) / (1024.0 * 1024.0);
+        record.allocation = engine->allocationStats();
         if (int(record.frames.size()) <= warmup) throw ConfigError("not enough frames for statistics after the warm-up");
 
         std::vector<std::string> order;
@@ -99,6 +100,9 @@ int main(int argc, char** argv) {
             std::printf("  %-12s %10.2f %10.2f %10.2f\n", name.c_str(), summaries[name].median_ms, summaries[name].mean_ms, summaries[name].p90_ms);
         }
         const double engine_fps = 1000.0 / summaries["total"].median_ms;
+        if (s.index_type == IndexType::Hash)
+            std::printf("\n  hash: %d blocks in use, %lld allocation failures", record.allocation.blocks_allocated,
+                        record.allocation.allocation_failures_total);
         std::printf("\n  engine frames/s (1000 / median total): %.1f\n  wall frames/s (incl. decoding): %.1f\n  peak RSS: %.0f MB, scene: %.0f MB\n",
                     engine_fps, app::framesPerSecond(record), record.peak_rss_mb, record.scene_mb);
 
@@ -125,6 +129,8 @@ int main(int argc, char** argv) {
         j.value("wall_fps", app::framesPerSecond(record));
         j.value("peak_rss_mb", record.peak_rss_mb);
         j.value("scene_mb", record.scene_mb);
+        j.value("blocks_allocated", record.allocation.blocks_allocated);
+        j.value("allocation_failures", (long long)record.allocation.allocation_failures_total);
         j.endObject();
         std::printf("  JSON: %s\n", json_path.c_str());
         return 0;

@@ -66,6 +66,10 @@ void writeTimingsJson(const std::string& path, const RunRecord& run) {
         j.value("tracking", toString(f.result.quality));
         for (const auto& s : f.result.stages) j.value(s.stage, s.ms);
         j.value("total", f.result.total_ms);
+        if (run.settings.index_type == IndexType::Hash) {
+            j.value("visible_blocks", f.result.allocation.visible_blocks);
+            j.value("allocation_failures", f.result.allocation.allocation_failures_this_frame);
+        }
         j.endObject();
     }
     j.endArray();
@@ -88,6 +92,9 @@ void writeSummaryJson(const std::string& path, const RunRecord& run) {
     j.value("wall_s", run.wall_s);
     j.value("peak_rss_mb", run.peak_rss_mb);
     j.value("scene_mb", run.scene_mb);
+    j.value("blocks_allocated", run.allocation.blocks_allocated);
+    j.value("allocation_failures", (long long)run.allocation.allocation_failures_total);
+    j.value("blocks_removed", (long long)run.allocation.blocks_removed_total);
     j.beginObject("settings");
     j.value("voxel", toString(run.settings.voxel_type));
     j.value("index", toString(run.settings.index_type));
@@ -118,6 +125,13 @@ std::string summaryText(const RunRecord& run, const std::string& out_dir) {
     std::snprintf(line, sizeof line, "  speed        %.1f ms per frame (median, engine only), %.1f frames/s overall\n",
                   medianTotalMs(run), framesPerSecond(run));
     s << line;
+    if (run.settings.index_type == IndexType::Hash) {
+        std::snprintf(line, sizeof line, "  hash         %d blocks in use (%d backed by memory), %lld removed, %lld could not be allocated%s\n",
+                      run.allocation.blocks_allocated, run.allocation.block_capacity, run.allocation.blocks_removed_total,
+                      run.allocation.allocation_failures_total,
+                      run.allocation.allocation_failures_total > 0 ? " (raise --max-blocks / the hash size)" : "");
+        s << line;
+    }
     s << "  stages (median ms):";
     const auto medians = stageMedians(run);
     for (const auto& n : stageNames(run)) {

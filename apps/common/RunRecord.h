@@ -25,6 +25,7 @@ struct RunRecord {
     double wall_s = 0.0;
     double peak_rss_mb = 0.0;
     double scene_mb = 0.0;
+    AllocationStats allocation;       // the index at the end (hash only)
 };
 
 double medianTotalMs(const RunRecord& run);

@@ -33,7 +33,7 @@ struct CliOptions {
     int max_frames = 0;  // 0 = all
     int render_every = 25;
     std::string voxel = "s_rgb";
-    std::string index = "dense";
+    std::string index = "hash";
     std::string device = "cpu";
     std::string poses = "groundtruth";
     std::vector<int> dense_size{512, 512, 512};
@@ -114,6 +114,7 @@ int run(CliOptions& o) {
 
     record.peak_rss_mb = app::peakRssMb();
     record.scene_mb = double(engine->sceneBytes()) / (1024.0 * 1024.0);
+    record.allocation = engine->allocationStats();
     writeTumTrajectory((fs::path(o.out_dir) / "trajectory.txt").string(), record.trajectory);
     app::writeTimingsJson((fs::path(o.out_dir) / "timings.json").string(), record);
     app::writeSummaryJson((fs::path(o.out_dir) / "summary.json").string(), record);
@@ -142,6 +143,10 @@ int main(int argc, char** argv) {
     cli.add_option("--max-depth", o.engine.scene.view_frustum_max_m, "ignore depth beyond (m)")->capture_default_str();
     cli.add_option("--voxel", o.voxel, "voxel type")->capture_default_str()->check(CLI::IsMember({"s", "f", "s_rgb", "f_rgb"}));
     cli.add_option("--index", o.index, "voxel index")->capture_default_str()->check(CLI::IsMember({"dense", "hash"}));
+    cli.add_option("--max-blocks", o.engine.hash.max_block_count, "hash: most 8^3 voxel blocks (memory grows on demand up to this)")
+        ->capture_default_str()->check(CLI::PositiveNumber);
+    cli.add_option("--hash-buckets", o.engine.hash.bucket_count, "hash: number of ordered buckets")->capture_default_str()->check(CLI::PositiveNumber);
+    cli.add_option("--hash-excess", o.engine.hash.excess_entry_count, "hash: entries in the excess list")->capture_default_str()->check(CLI::NonNegativeNumber);
     cli.add_option("--volume-size", o.dense_size, "dense volume size in voxels (x y z)")->expected(3)->capture_default_str();
     cli.add_option("--volume-offset", o.dense_offset, "dense volume's first voxel, grid units (x y z)")->expected(3)->capture_default_str();
     cli.add_option("--device", o.device, "where the engines run")->capture_default_str()->check(CLI::IsMember({"cpu", "cuda"}));

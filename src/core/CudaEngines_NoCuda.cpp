@@ -3,6 +3,7 @@
 #include "voxfuse/core/Error.h"
 #include "voxfuse/engines/IntegrationEngine.h"
 #include "voxfuse/objects/Voxel.h"
+#include "voxfuse/objects/VoxelBlockHash.h"
 
 namespace voxfuse::cuda {
 
@@ -15,5 +16,9 @@ template std::unique_ptr<IntegrationEngine<VoxelS, PlainVoxelArray>> makeIntegra
 template std::unique_ptr<IntegrationEngine<VoxelF, PlainVoxelArray>> makeIntegrationEngine<VoxelF, PlainVoxelArray>();
 template std::unique_ptr<IntegrationEngine<VoxelSRgb, PlainVoxelArray>> makeIntegrationEngine<VoxelSRgb, PlainVoxelArray>();
 template std::unique_ptr<IntegrationEngine<VoxelFRgb, PlainVoxelArray>> makeIntegrationEngine<VoxelFRgb, PlainVoxelArray>();
+template std::unique_ptr<IntegrationEngine<VoxelS, VoxelBlockHash>> makeIntegrationEngine<VoxelS, VoxelBlockHash>();
+template std::unique_ptr<IntegrationEngine<VoxelF, VoxelBlockHash>> makeIntegrationEngine<VoxelF, VoxelBlockHash>();
+template std::unique_ptr<IntegrationEngine<VoxelSRgb, VoxelBlockHash>> makeIntegrationEngine<VoxelSRgb, VoxelBlockHash>();
+template std::unique_ptr<IntegrationEngine<VoxelFRgb, VoxelBlockHash>> makeIntegrationEngine<VoxelFRgb, VoxelBlockHash>();
 
 }  // namespace voxfuse::cuda

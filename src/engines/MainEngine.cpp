@@ -3,9 +3,11 @@
 #include "voxfuse/engines/MainEngine.h"
 
 #include <cstring>
+#include <type_traits>
 
 #include "voxfuse/core/Error.h"
 #include "voxfuse/core/Timer.h"
+#include "voxfuse/engines/AllocationEngine.h"
 #include "voxfuse/engines/IntegrationEngine.h"
 #include "voxfuse/engines/LowLevelEngine.h"
 #include "voxfuse/engines/RaycastEngine.h"
@@ -17,10 +19,11 @@ namespace {
 template <class TVoxel, class TIndex>
 class MainEngineT final : public MainEngine {
 public:
-    MainEngineT(const MainEngineSettings& settings, const RGBDCalib& calib, const TIndex& index)
+    MainEngineT(const MainEngineSettings& settings, const RGBDCalib& calib, TIndex index)
         : settings_(settings),
-          scene_(settings.scene, index, settings.device),
+          scene_(settings.scene, std::move(index), settings.device),
           low_level_(makeLowLevelEngine(settings.device)),
+          allocation_(makeAllocationEngine<TVoxel, TIndex>(settings.device)),
           integration_(makeIntegrationEngine<TVoxel, TIndex>(settings.device)),
           raycast_(makeRaycastEngine<TVoxel, TIndex>(settings.device)) {
         view_.calib = calib;
@@ -50,6 +53,10 @@ public:
         result.stages.push_back({"track", t.elapsedMs()});
 
         t = Timer();
+        allocation_stats_ = allocation_->allocate(scene_, view_, tracking_.T_world_camera);
+        result.stages.push_back({"allocate", t.elapsedMs()});
+
+        t = Timer();
         integration_->integrate(scene_, view_, tracking_.T_world_camera);
         result.fused = true;
         result.stages.push_back({"integrate", t.elapsedMs()});
@@ -58,6 +65,13 @@ public:
         raycast_->raycast(scene_, view_.calib.depth, tracking_.T_world_camera, render_state_);
         result.stages.push_back({"raycast", t.elapsedMs()});
 
+        // Between frames, so that no stage holds voxel pointers.
+        if (settings_.remove_empty_blocks_every > 0 && ++frames_fused_ % settings_.remove_empty_blocks_every == 0) {
+            allocation_->removeEmptyBlocks(scene_);
+            if constexpr (std::is_same<TIndex, VoxelBlockHash>::value) allocation_stats_ = scene_.index().stats();
+        }
+
+        result.allocation = allocation_stats_;
         result.quality = tracking_.quality;
         result.T_world_camera = tracking_.T_world_camera;
         result.total_ms = total.elapsedMs();
@@ -77,14 +91,25 @@ public:
     }
 
     void reset() override {
-        integration_->resetScene(scene_);
+        resetScene();
         tracking_ = TrackingState();
         render_state_ = RenderState();
     }
 
-    std::size_t sceneBytes() const override { return scene_.voxels().bytes(); }
+    std::size_t sceneBytes() const override {
+        if constexpr (std::is_same<TIndex, VoxelBlockHash>::value) return scene_.voxels().bytes() + scene_.index().tableBytes();
+        return scene_.voxels().bytes();
+    }
+    AllocationStats allocationStats() const override { return allocation_stats_; }
 
 private:
+    void resetScene() {
+        if constexpr (std::is_same<TIndex, VoxelBlockHash>::value) scene_.clearVoxelBlocks();
+        else integration_->resetScene(scene_);
+        allocation_stats_ = AllocationStats();
+        frames_fused_ = 0;
+    }
+
     void copyColor(const RGBDFrame& frame) {
         if (frame.rgb.empty()) {
             view_.rgb = Image<Vec4u8>();
@@ -97,12 +122,15 @@ private:
     MainEngineSettings settings_;
     Scene<TVoxel, TIndex> scene_;
     std::unique_ptr<LowLevelEngine> low_level_;
+    std::unique_ptr<AllocationEngine<TVoxel, TIndex>> allocation_;
     std::unique_ptr<IntegrationEngine<TVoxel, TIndex>> integration_;
     std::unique_ptr<RaycastEngine<TVoxel, TIndex>> raycast_;
     View view_;
     TrackingState tracking_;
     RenderState render_state_;
     RenderState free_view_;
+    AllocationStats allocation_stats_;
+    int frames_fused_ = 0;
 };
 
 template <class TVoxel>
@@ -110,9 +138,9 @@ std::unique_ptr<MainEngine> createForVoxel(const MainEngineSettings& s, const RG
     switch (s.index_type) {
         case IndexType::Dense:
             return std::make_unique<MainEngineT<TVoxel, PlainVoxelArray>>(s, calib, PlainVoxelArray(s.dense_offset, s.dense_size));
-        case IndexType::Hash: break;
+        case IndexType::Hash: return std::make_unique<MainEngineT<TVoxel, VoxelBlockHash>>(s, calib, VoxelBlockHash(s.hash));
     }
-    throw ConfigError("index type 'hash' is not available yet: use --index dense");
+    throw ConfigError("unknown index type");
 }
 
 }  // namespace

@@ -44,7 +44,7 @@ TEST_P(MainEngineVoxelTest, RaycastReproducesTheLastFrameDepth) {
         last = test::renderView(world, intr, pose);
         const FrameResult r = engine->processFrame(toFrame(last, k), &pose);
         EXPECT_TRUE(r.fused);
-        ASSERT_EQ(r.stages.size(), 4u);
+        ASSERT_EQ(r.stages.size(), 5u);
         EXPECT_GT(r.total_ms, 0.0);
     }
     Image<float> depth;

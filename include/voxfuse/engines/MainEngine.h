@@ -10,7 +10,9 @@
 #include "voxfuse/core/DeviceMemory.h"
 #include "voxfuse/engines/RaycastEngine.h"
 #include "voxfuse/io/RGBDFrame.h"
+#include "voxfuse/objects/AllocationStats.h"
 #include "voxfuse/objects/PlainVoxelArray.h"
+#include "voxfuse/objects/VoxelBlockHash.h"
 #include "voxfuse/objects/RGBDCalib.h"
 #include "voxfuse/objects/RenderState.h"
 #include "voxfuse/objects/SceneParams.h"
@@ -23,20 +25,24 @@ namespace voxfuse {
 struct MainEngineSettings {
     SceneParams scene;
     VoxelType voxel_type = VoxelType::S;
-    IndexType index_type = IndexType::Dense;
+    IndexType index_type = IndexType::Hash;
     Device device = Device::CPU;
     // Dense index: the box of voxels (grid units; the first camera looks along +z from the origin).
     Vec3i dense_offset{-256, -256, 0};
     Vec3i dense_size{512, 512, 512};
+    // Hash index: table sizes and the most voxel blocks it may hold (memory grows on demand).
+    VoxelBlockHashSettings hash;
+    // Blocks that never received an update go back to the free stack every this many frames (0 = never).
+    int remove_empty_blocks_every = 10;
 };
 
 VoxelType parseVoxelType(const std::string& name);  // "s", "f", "s_rgb", "f_rgb"; ConfigError otherwise
 const char* toString(VoxelType type);
-IndexType parseIndexType(const std::string& name);  // "dense" (and "hash" once it exists)
+IndexType parseIndexType(const std::string& name);  // "dense" or "hash"; ConfigError otherwise
 const char* toString(IndexType type);
 
 struct StageTime {
-    const char* stage;  // "depth", "track", "integrate", "raycast"
+    const char* stage;  // "depth", "track", "allocate", "integrate", "raycast"
     double ms;
 };
 
@@ -46,6 +52,7 @@ struct FrameResult {
     Mat4f T_world_camera = Mat4f::identity();
     double total_ms = 0.0;  // the engine's processing of this frame (no file decoding)
     std::vector<StageTime> stages;
+    AllocationStats allocation;  // the index after this frame (all zero for the dense index)
 };
 
 class MainEngine {
@@ -69,8 +76,10 @@ public:
                                 Image<Vec4u8>& image) = 0;
     // Clears the map and the pose.
     virtual void reset() = 0;
-    // Bytes held by the voxel storage.
+    // Bytes held by the voxel storage and the index's tables.
     virtual std::size_t sceneBytes() const = 0;
+    // The index after the last frame (all zero for the dense index).
+    virtual AllocationStats allocationStats() const = 0;
 };
 
 }  // namespace voxfuse
