@@ -1,0 +1,51 @@
+#pragma once
+// Surface extraction from the scene: a triangle mesh by marching cubes, or the mesh's vertices alone
+// as a point cloud. The CPU layer (src/cpu/MeshingEngine_CPU.cpp) loops over voxel blocks and calls
+// the per-cell functions of shared/MarchingCubes.h.
+//
+// What the output is:
+// - One vertex per voxel edge whose two ends were observed with opposite SDF signs, at the linear
+//   zero crossing, and only where at least one of the four cells around the edge has all eight corners
+//   observed (weight > 0). Only such complete cells produce triangles, so there is no surface between
+//   observed and never-observed space. A vertex is shared by every triangle that uses it, across
+//   voxel block borders too: no two vertices have the same position.
+// - Normals: the SDF gradient (central differences of the voxels, one-sided beside unobserved ones) at
+//   the edge's two ends, interpolated to the vertex and normalised; they point to free space.
+// - Colours (voxel types with colour): the two ends' colours interpolated the same way.
+// - Triangles wind counter-clockwise seen from free space. Their order, and the vertices', depends on
+//   the scene only, not on the number of threads.
+// Memory: proportional to the surface, about twice the final mesh while it is assembled.
+
+#include <memory>
+
+#include "voxfuse/core/DeviceMemory.h"
+#include "voxfuse/core/Error.h"
+#include "voxfuse/objects/Mesh.h"
+#include "voxfuse/objects/PointCloud.h"
+#include "voxfuse/objects/Scene.h"
+
+namespace voxfuse {
+
+template <class TVoxel, class TIndex>
+class MeshingEngine {
+public:
+    virtual ~MeshingEngine() = default;
+    // Replaces `mesh` with the scene's surface. Reads the host copy of the voxels.
+    virtual void extractMesh(const Scene<TVoxel, TIndex>& scene, Mesh& mesh) = 0;
+    // Replaces `cloud` with the vertices of extractMesh() (points, normals, colours) without building
+    // the triangles: one point per zero-crossing voxel edge.
+    virtual void extractPointCloud(const Scene<TVoxel, TIndex>& scene, PointCloud& cloud) = 0;
+};
+
+namespace cpu {
+template <class TVoxel, class TIndex>
+std::unique_ptr<MeshingEngine<TVoxel, TIndex>> makeMeshingEngine();
+}
+
+template <class TVoxel, class TIndex>
+std::unique_ptr<MeshingEngine<TVoxel, TIndex>> makeMeshingEngine(Device device) {
+    if (device == Device::CUDA) throw DeviceError("meshing has no CUDA layer yet: extract the mesh with Device::CPU");
+    return cpu::makeMeshingEngine<TVoxel, TIndex>();
+}
+
+}  // namespace voxfuse

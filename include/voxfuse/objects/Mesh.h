@@ -1,0 +1,33 @@
+#pragma once
+// An indexed triangle mesh in world coordinates (metres), as the meshing engine extracts it and the
+// mesh writers (io/MeshIO.h) save it.
+
+#include <cstddef>
+#include <vector>
+
+#include "voxfuse/core/Math.h"
+
+namespace voxfuse {
+
+struct Mesh {
+    std::vector<Vec3f> vertices;   // world coordinates (m); no two are equal
+    std::vector<Vec3f> normals;    // one unit normal per vertex pointing to free space, or empty
+    std::vector<Vec3u8> colors;    // one RGB colour per vertex, or empty (voxel types without colour)
+    std::vector<Vec3i> triangles;  // vertex indices, counter-clockwise seen from free space
+
+    bool hasNormals() const { return !normals.empty(); }
+    bool hasColors() const { return !colors.empty(); }
+    void clear() {
+        vertices.clear();
+        normals.clear();
+        colors.clear();
+        triangles.clear();
+    }
+    // Bytes held by the arrays (their sizes, not their capacities).
+    std::size_t bytes() const {
+        return vertices.size() * sizeof(Vec3f) + normals.size() * sizeof(Vec3f) + colors.size() * sizeof(Vec3u8) +
+               triangles.size() * sizeof(Vec3i);
+    }
+};
+
+}  // namespace voxfuse

@@ -1,0 +1,28 @@
+#pragma once
+// Points on the reconstructed surface in world coordinates (metres), with normals and, when the voxel
+// type has colour, colours. Written by io/MeshIO.h, thinned by engines/PointCloudDownsampling.h.
+
+#include <cstddef>
+#include <vector>
+
+#include "voxfuse/core/Math.h"
+
+namespace voxfuse {
+
+struct PointCloud {
+    std::vector<Vec3f> points;   // world coordinates (m)
+    std::vector<Vec3f> normals;  // one unit normal per point pointing to free space, or empty
+    std::vector<Vec3u8> colors;  // one RGB colour per point, or empty
+
+    std::size_t size() const { return points.size(); }
+    bool empty() const { return points.empty(); }
+    bool hasNormals() const { return !normals.empty(); }
+    bool hasColors() const { return !colors.empty(); }
+    void clear() {
+        points.clear();
+        normals.clear();
+        colors.clear();
+    }
+};
+
+}  // namespace voxfuse

@@ -1,0 +1,215 @@
+// Mesh and point-cloud writers: binary PLY, OBJ and binary STL.
+
+#include "voxfuse/io/MeshIO.h"
+
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <cstdint>
+#include <cstring>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "voxfuse/core/Error.h"
+
+namespace voxfuse {
+namespace {
+
+// Buffers bytes in little-endian order whatever the host's order, and writes them in large chunks.
+class BinaryFile {
+public:
+    explicit BinaryFile(const std::string& path) : path_(path), out_(path, std::ios::binary | std::ios::trunc) {
+        if (!out_) throw IoError(path, "cannot open for writing");
+        buffer_.reserve(kChunk + 64);
+    }
+    void text(const std::string& s) {
+        buffer_.append(s);
+        flushIfFull();
+    }
+    void u8(std::uint8_t v) { buffer_.push_back(char(v)); }
+    void u16(std::uint16_t v) {
+        u8(std::uint8_t(v));
+        u8(std::uint8_t(v >> 8));
+    }
+    void u32(std::uint32_t v) {
+        for (int shift = 0; shift < 32; shift += 8) u8(std::uint8_t(v >> shift));
+        flushIfFull();
+    }
+    void i32(std::int32_t v) { u32(std::uint32_t(v)); }
+    void f32(float v) {
+        std::uint32_t bits;
+        std::memcpy(&bits, &v, sizeof bits);
+        u32(bits);
+    }
+    void vec3(Vec3f v) {
+        f32(v.x);
+        f32(v.y);
+        f32(v.z);
+    }
+    void color(Vec3u8 c) {
+        u8(c.x);
+        u8(c.y);
+        u8(c.z);
+    }
+    // Flushes and closes; throws when any write failed (e.g. a full disk).
+    void finish() {
+        flush();
+        out_.close();
+        if (!out_) throw IoError(path_, "write failed (disk full or file not writable?)");
+    }
+
+private:
+    static constexpr std::size_t kChunk = std::size_t(1) << 20;
+    void flushIfFull() {
+        if (buffer_.size() >= kChunk) flush();
+    }
+    void flush() {
+        out_.write(buffer_.data(), std::streamsize(buffer_.size()));
+        buffer_.clear();
+        if (!out_) throw IoError(path_, "write failed (disk full or file not writable?)");
+    }
+    std::string path_;
+    std::ofstream out_;
+    std::string buffer_;
+};
+
+void checkVertexAttributes(const std::string& path, std::size_t vertices, std::size_t normals, std::size_t colors) {
+    if (normals != 0 && normals != vertices)
+        throw IoError(path, "inconsistent data: " + std::to_string(normals) + " normals for " + std::to_string(vertices) + " vertices");
+    if (colors != 0 && colors != vertices)
+        throw IoError(path, "inconsistent data: " + std::to_string(colors) + " colours for " + std::to_string(vertices) + " vertices");
+}
+
+void checkMesh(const std::string& path, const Mesh& mesh) {
+    checkVertexAttributes(path, mesh.vertices.size(), mesh.normals.size(), mesh.colors.size());
+    const long long n = (long long)mesh.vertices.size();
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+        for (int k = 0; k < 3; ++k)
+            if (mesh.triangles[t][k] < 0 || mesh.triangles[t][k] >= n)
+                throw IoError(path, "inconsistent data: triangle " + std::to_string(t) + " refers to vertex " +
+                                        std::to_string(mesh.triangles[t][k]) + " of " + std::to_string(n));
+}
+
+std::string plyVertexHeader(std::size_t count, bool normals, bool colors) {
+    std::string h = "element vertex " + std::to_string(count) + "\nproperty float x\nproperty float y\nproperty float z\n";
+    if (normals) h += "property float nx\nproperty float ny\nproperty float nz\n";
+    if (colors) h += "property uchar red\nproperty uchar green\nproperty uchar blue\n";
+    return h;
+}
+
+void writePlyVertices(BinaryFile& file, const std::vector<Vec3f>& points, const std::vector<Vec3f>& normals, const std::vector<Vec3u8>& colors) {
+    for (std::size_t i = 0; i < points.size(); ++i) {
+        file.vec3(points[i]);
+        if (!normals.empty()) file.vec3(normals[i]);
+        if (!colors.empty()) file.color(colors[i]);
+    }
+}
+
+// Shortest text that reads back to the same float.
+void appendFloat(std::string& out, float v) {
+    char buf[32];
+    const auto result = std::to_chars(buf, buf + sizeof buf, v);
+    out.append(buf, result.ptr);
+}
+
+void appendInt(std::string& out, long long v) {
+    char buf[24];
+    const auto result = std::to_chars(buf, buf + sizeof buf, v);
+    out.append(buf, result.ptr);
+}
+
+std::string lowerExtension(const std::string& path) {
+    const std::size_t slash = path.find_last_of("/\\");
+    const std::size_t dot = path.find_last_of('.');
+    if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return "";
+    std::string ext = path.substr(dot);
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    return ext;
+}
+
+}  // namespace
+
+void writeMeshPly(const std::string& path, const Mesh& mesh) {
+    checkMesh(path, mesh);
+    BinaryFile file(path);
+    file.text("ply\nformat binary_little_endian 1.0\ncomment written by VoxFuse\n" +
+              plyVertexHeader(mesh.vertices.size(), mesh.hasNormals(), mesh.hasColors()) + "element face " +
+              std::to_string(mesh.triangles.size()) + "\nproperty list uchar int vertex_indices\nend_header\n");
+    writePlyVertices(file, mesh.vertices, mesh.normals, mesh.colors);
+    for (const Vec3i& t : mesh.triangles) {
+        file.u8(3);
+        for (int k = 0; k < 3; ++k) file.i32(t[k]);
+    }
+    file.finish();
+}
+
+void writePointCloudPly(const std::string& path, const PointCloud& cloud) {
+    checkVertexAttributes(path, cloud.points.size(), cloud.normals.size(), cloud.colors.size());
+    BinaryFile file(path);
+    file.text("ply\nformat binary_little_endian 1.0\ncomment written by VoxFuse\n" +
+              plyVertexHeader(cloud.points.size(), cloud.hasNormals(), cloud.hasColors()) + "end_header\n");
+    writePlyVertices(file, cloud.points, cloud.normals, cloud.colors);
+    file.finish();
+}
+
+void writeMeshObj(const std::string& path, const Mesh& mesh) {
+    checkMesh(path, mesh);
+    BinaryFile file(path);  // OBJ is text, but written verbatim ("\n" line ends on every platform)
+    std::string line = "# written by VoxFuse: " + std::to_string(mesh.vertices.size()) + " vertices, " +
+                       std::to_string(mesh.triangles.size()) + " triangles\n";
+    file.text(line);
+    for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
+        line = "v";
+        for (int a = 0; a < 3; ++a) appendFloat(line += ' ', mesh.vertices[i][a]);
+        if (mesh.hasColors())
+            for (int a = 0; a < 3; ++a) appendFloat(line += ' ', float(mesh.colors[i][a]) / 255.f);
+        line += '\n';
+        file.text(line);
+    }
+    for (const Vec3f& n : mesh.normals) {
+        line = "vn";
+        for (int a = 0; a < 3; ++a) appendFloat(line += ' ', n[a]);
+        line += '\n';
+        file.text(line);
+    }
+    for (const Vec3i& t : mesh.triangles) {
+        line = "f";
+        for (int k = 0; k < 3; ++k) {
+            appendInt(line += ' ', (long long)t[k] + 1);
+            if (mesh.hasNormals()) appendInt(line += "//", (long long)t[k] + 1);
+        }
+        line += '\n';
+        file.text(line);
+    }
+    file.finish();
+}
+
+void writeMeshStl(const std::string& path, const Mesh& mesh) {
+    checkMesh(path, mesh);
+    if (mesh.triangles.size() > std::size_t(UINT32_MAX)) throw IoError(path, "too many triangles for STL (at most 2^32 - 1)");
+    BinaryFile file(path);
+    std::string header = "binary STL written by VoxFuse";
+    header.resize(80, ' ');  // must not start with "solid": readers would take it for ASCII STL
+    file.text(header);
+    file.u32(std::uint32_t(mesh.triangles.size()));
+    for (const Vec3i& t : mesh.triangles) {
+        const Vec3f a = mesh.vertices[std::size_t(t.x)], b = mesh.vertices[std::size_t(t.y)], c = mesh.vertices[std::size_t(t.z)];
+        file.vec3(normalize(cross(b - a, c - a)));
+        file.vec3(a);
+        file.vec3(b);
+        file.vec3(c);
+        file.u16(0);
+    }
+    file.finish();
+}
+
+void writeMesh(const std::string& path, const Mesh& mesh) {
+    const std::string ext = lowerExtension(path);
+    if (ext == ".ply") return writeMeshPly(path, mesh);
+    if (ext == ".obj") return writeMeshObj(path, mesh);
+    if (ext == ".stl") return writeMeshStl(path, mesh);
+    throw IoError(path, "unknown mesh format '" + ext + "' (expected .ply, .obj or .stl)");
+}
+
+}  // namespace voxfuse
