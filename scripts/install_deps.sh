@@ -6,9 +6,13 @@ set -euo pipefail
 packages=(
   cmake ninja-build g++ pkg-config
   libeigen3-dev        # linear algebra (host side)
-  libopencv-dev        # image codecs (PNG/JPEG)
+  libopencv-dev        # image codecs (PNG/JPEG), video decoding (iPhone rgb.mp4), undistortion maps
+  libopenni2-dev       # optional: OpenNI2 cameras and .oni recordings (VOXFUSE_OPENNI2); pulls in its drivers
   libcli11-dev         # command-line parsing
   libgtest-dev libgmock-dev
+  liboctomap-dev       # optional: the OctoMap occupancy map (--occupancy)
+  libglfw3-dev         # optional: the voxfuse_viewer demo
+  xvfb xauth libgl1-mesa-dri   # the viewer's screenshot test under a virtual display
 )
 
 missing=()

@@ -47,7 +47,7 @@ std::string defaultSource() {
 
 int main(int argc, char** argv) {
     CLI::App cli{"Per-stage timings of the VoxFuse pipeline on a sequence."};
-    std::string source_path, json_path = "voxfuse_bench.json", voxel = "s", index = "hash";
+    std::string source_path, json_path = "voxfuse_bench.json", voxel = "s", index = "hash", poses = "track";
     int max_frames = 0, warmup = 3;
     MainEngineSettings s;
     cli.add_option("source", source_path, "sequence (default: ../shared/data/tum_fr3_teddy_200, else the bundled data)");
@@ -57,6 +57,8 @@ int main(int argc, char** argv) {
     cli.add_option("--index", index, "voxel index")->capture_default_str()->check(CLI::IsMember({"dense", "hash"}));
     cli.add_option("--voxel-size", s.scene.voxel_size_m, "voxel edge (m)")->capture_default_str();
     cli.add_option("--mu", s.scene.mu_m, "truncation band (m)")->capture_default_str();
+    cli.add_option("--poses", poses, "track the camera, or use the source's ground truth")
+        ->capture_default_str()->check(CLI::IsMember({"track", "groundtruth"}));
     cli.add_option("--json", json_path, "where to write the JSON report")->capture_default_str();
     CLI11_PARSE(cli, argc, argv);
 
@@ -69,9 +71,22 @@ int main(int argc, char** argv) {
         app::RunRecord record;
         record.source = source->description();
         record.settings = s;
-        app::SequenceRunner runner(*source, *engine, app::PoseSource::GroundTruth, record);
+        record.tracked = poses == "track";
+        app::SequenceRunner runner(*source, *engine, record.tracked ? app::PoseSource::Tracker : app::PoseSource::GroundTruth, record);
+        // Per pyramid level of the tracker, coarse to fine: "track L0 160x120", ...
+        std::vector<std::string> level_names;
+        std::map<std::string, std::vector<double>> level_samples;
         const Timer wall;
-        while ((max_frames <= 0 || int(record.frames.size()) < max_frames) && runner.step()) {}
+        while ((max_frames <= 0 || int(record.frames.size()) < max_frames) && runner.step()) {
+            if (!record.tracked || int(record.frames.size()) <= warmup) continue;
+            const TrackerStats& ts = engine->trackerStats();
+            for (std::size_t l = 0; l < ts.levels.size(); ++l) {
+                const std::string name = "  L" + std::to_string(l) + " " + std::to_string(ts.levels[l].width) + "x" +
+                                         std::to_string(ts.levels[l].height);
+                if (!level_samples.count(name)) level_names.push_back(name);
+                level_samples[name].push_back(ts.levels[l].ms);
+            }
+        }
         record.wall_s = wall.elapsedMs() / 1000.0;
         record.peak_rss_mb = app::peakRssMb();
         record.scene_mb = double(engine->sceneBytes()) / (1024.0 * 1024.0);
@@ -90,19 +105,34 @@ int main(int argc, char** argv) {
         order.push_back("total");
 
         std::printf("VoxFuse benchmark: %s\n", record.source.c_str());
-        std::printf("  %s voxels, %s index, %.1f mm voxels, device %s; %zu frames (%d warm-up frames left out)\n\n",
+        std::printf("  %s voxels, %s index, %.1f mm voxels, device %s, poses %s; %zu frames (%d warm-up frames left out)\n\n",
                     toString(s.voxel_type), toString(s.index_type), 1000.0 * s.scene.voxel_size_m, deviceName(s.device),
+                    record.tracked ? (std::string("tracked (") + toString(s.tracker.kind) + ")").c_str() : "ground truth",
                     record.frames.size(), warmup);
         std::printf("  %-12s %10s %10s %10s\n", "stage", "median ms", "mean ms", "p90 ms");
         std::map<std::string, StageSummary> summaries;
         for (const auto& name : order) {
             summaries[name] = summarise(samples[name]);
             std::printf("  %-12s %10.2f %10.2f %10.2f\n", name.c_str(), summaries[name].median_ms, summaries[name].mean_ms, summaries[name].p90_ms);
+            if (name != "track") continue;
+            for (const auto& level : level_names) {  // the tracker's levels, indented under it
+                summaries[level] = summarise(level_samples[level]);
+                std::printf("  %-12s %10.2f %10.2f %10.2f\n", level.c_str(), summaries[level].median_ms, summaries[level].mean_ms,
+                            summaries[level].p90_ms);
+            }
+        }
+        if (!source->groundTruth().empty()) {
+            record.trajectory_error = evaluateTrajectory(record.trajectory, source->groundTruth());
+            record.has_trajectory_error = record.trajectory_error.pairs >= 3;
         }
         const double engine_fps = 1000.0 / summaries["total"].median_ms;
         if (s.index_type == IndexType::Hash)
             std::printf("\n  hash: %d blocks in use, %lld allocation failures", record.allocation.blocks_allocated,
                         record.allocation.allocation_failures_total);
+        if (record.has_trajectory_error)
+            std::printf("\n  ATE RMSE %.2f mm over %d poses, RPE %.2f mm/s; %d frames failed tracking", 1000.0 * record.trajectory_error.ate_rmse_m,
+                        record.trajectory_error.pairs, 1000.0 * record.trajectory_error.rpe_trans_m_per_s,
+                        app::countQuality(record, TrackingQuality::Failed));
         std::printf("\n  engine frames/s (1000 / median total): %.1f\n  wall frames/s (incl. decoding): %.1f\n  peak RSS: %.0f MB, scene: %.0f MB\n",
                     engine_fps, app::framesPerSecond(record), record.peak_rss_mb, record.scene_mb);
 
@@ -125,6 +155,14 @@ int main(int argc, char** argv) {
             j.endObject();
         }
         j.endObject();
+        j.beginObject("tracker_levels");
+        for (const auto& level : level_names) j.value(level.c_str() + 2, summaries[level].median_ms);
+        j.endObject();
+        if (record.has_trajectory_error) {
+            j.value("ate_rmse_m", record.trajectory_error.ate_rmse_m);
+            j.value("rpe_trans_m_per_s", record.trajectory_error.rpe_trans_m_per_s);
+        }
+        j.value("tracking_failed_frames", app::countQuality(record, TrackingQuality::Failed));
         j.value("engine_fps", engine_fps);
         j.value("wall_fps", app::framesPerSecond(record));
         j.value("peak_rss_mb", record.peak_rss_mb);

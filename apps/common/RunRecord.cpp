@@ -39,6 +39,12 @@ std::ofstream openForWriting(const std::string& path) {
 
 }  // namespace
 
+int countQuality(const RunRecord& run, TrackingQuality quality) {
+    int n = 0;
+    for (const auto& f : run.frames) n += f.result.quality == quality ? 1 : 0;
+    return n;
+}
+
 double medianTotalMs(const RunRecord& run) {
     std::vector<double> totals;
     for (const auto& f : run.frames) totals.push_back(f.result.total_ms);
@@ -64,6 +70,10 @@ void writeTimingsJson(const std::string& path, const RunRecord& run) {
         j.value("timestamp", f.timestamp_s);
         j.value("fused", f.result.fused);
         j.value("tracking", toString(f.result.quality));
+        if (run.tracked) {
+            j.value("inlier_ratio", double(f.result.tracking.inlier_ratio));
+            j.value("residual", double(f.result.tracking.residual_m));
+        }
         for (const auto& s : f.result.stages) j.value(s.stage, s.ms);
         j.value("total", f.result.total_ms);
         if (run.settings.index_type == IndexType::Hash) {
@@ -87,6 +97,20 @@ void writeSummaryJson(const std::string& path, const RunRecord& run) {
     j.value("frames_fused", fused);
     j.value("frames_without_pose", run.frames_without_pose);
     j.value("frames_unreadable", run.frames_unreadable);
+    j.value("poses", run.tracked ? "tracked" : "groundtruth");
+    j.value("tracking_poor_frames", countQuality(run, TrackingQuality::Poor));
+    j.value("tracking_failed_frames", countQuality(run, TrackingQuality::Failed));
+    if (run.has_trajectory_error) {
+        const TrajectoryError& e = run.trajectory_error;
+        j.value("ate_rmse_m", e.ate_rmse_m);
+        j.value("ate_mean_m", e.ate_mean_m);
+        j.value("ate_median_m", e.ate_median_m);
+        j.value("ate_max_m", e.ate_max_m);
+        j.value("ate_pairs", e.pairs);
+        j.value("rpe_trans_m_per_s", e.rpe_trans_m_per_s);
+        j.value("rpe_rot_deg_per_s", e.rpe_rot_deg_per_s);
+        j.value("rpe_pairs", e.rpe_pairs);
+    }
     j.value("median_ms", medianTotalMs(run));
     j.value("fps", framesPerSecond(run));
     j.value("wall_s", run.wall_s);
@@ -104,6 +128,12 @@ void writeSummaryJson(const std::string& path, const RunRecord& run) {
     j.value("max_weight", run.settings.scene.max_weight);
     j.value("min_depth_m", double(run.settings.scene.view_frustum_min_m));
     j.value("max_depth_m", double(run.settings.scene.view_frustum_max_m));
+    if (run.tracked) {
+        j.value("tracker", toString(run.settings.tracker.kind));
+        std::string levels;
+        for (const auto& l : run.settings.tracker.levels) levels += char(l.motion);
+        j.value("tracker_levels", levels);
+    }
     j.endObject();
     j.endObject();
 }
@@ -118,6 +148,26 @@ std::string summaryText(const RunRecord& run, const std::string& out_dir) {
     std::snprintf(line, sizeof line, "  frames       %zu processed, %d fused, %d without pose, %d unreadable\n", run.frames.size(),
                   fused, run.frames_without_pose, run.frames_unreadable);
     s << line;
+    if (run.tracked) {
+        std::snprintf(line, sizeof line, "  tracking     %s tracker: %d good, %d poor, %d failed (not fused)\n", toString(run.settings.tracker.kind),
+                      int(run.frames.size()) - countQuality(run, TrackingQuality::Poor) - countQuality(run, TrackingQuality::Failed),
+                      countQuality(run, TrackingQuality::Poor), countQuality(run, TrackingQuality::Failed));
+        s << line;
+    } else {
+        s << "  poses        ground truth\n";
+    }
+    if (run.has_trajectory_error) {
+        const TrajectoryError& e = run.trajectory_error;
+        std::snprintf(line, sizeof line, "  accuracy     ATE RMSE %.1f mm (median %.1f, max %.1f, %d poses), ", 1000.0 * e.ate_rmse_m,
+                      1000.0 * e.ate_median_m, 1000.0 * e.ate_max_m, e.pairs);
+        s << line;
+        if (e.rpe_pairs > 0) {
+            std::snprintf(line, sizeof line, "RPE %.1f mm/s %.2f deg/s\n", 1000.0 * e.rpe_trans_m_per_s, e.rpe_rot_deg_per_s);
+            s << line;
+        } else {
+            s << "RPE n/a (sequence shorter than its 1 s step)\n";
+        }
+    }
     std::snprintf(line, sizeof line, "  volume       %s voxels, %s index, %.1f mm voxels, mu %.1f mm, %.0f MB\n",
                   toString(run.settings.voxel_type), toString(run.settings.index_type), 1000.0 * run.settings.scene.voxel_size_m,
                   1000.0 * run.settings.scene.mu_m, run.scene_mb);
@@ -141,7 +191,7 @@ std::string summaryText(const RunRecord& run, const std::string& out_dir) {
     s << "\n";
     std::snprintf(line, sizeof line, "  peak memory  %.0f MB\n", run.peak_rss_mb);
     s << line;
-    s << "  outputs      " << out_dir << "/{trajectory.txt, timings.json, summary.json, render_*.png}\n";
+    s << "  outputs      " << out_dir << "/ (trajectory.txt, timings.json, summary.json, render_*.png and any map outputs)\n";
     return s.str();
 }
 

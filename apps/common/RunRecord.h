@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "voxfuse/engines/MainEngine.h"
+#include "voxfuse/eval/TrajectoryError.h"
 #include "voxfuse/io/TrajectoryIO.h"
 
 namespace voxfuse::app {
@@ -26,7 +27,13 @@ struct RunRecord {
     double peak_rss_mb = 0.0;
     double scene_mb = 0.0;
     AllocationStats allocation;       // the index at the end (hash only)
+    bool tracked = false;             // poses came from the tracker (not ground truth)
+    bool has_trajectory_error = false;
+    TrajectoryError trajectory_error; // against the source's ground truth, when it has one
 };
+
+// Frames whose tracking was poor / failed (failed frames are not fused).
+int countQuality(const RunRecord& run, TrackingQuality quality);
 
 double medianTotalMs(const RunRecord& run);
 double framesPerSecond(const RunRecord& run);

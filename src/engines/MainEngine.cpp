@@ -10,6 +10,7 @@
 #include "voxfuse/engines/AllocationEngine.h"
 #include "voxfuse/engines/IntegrationEngine.h"
 #include "voxfuse/engines/LowLevelEngine.h"
+#include "voxfuse/engines/MeshingEngine.h"
 #include "voxfuse/engines/RaycastEngine.h"
 #include "voxfuse/objects/Scene.h"
 
@@ -25,7 +26,9 @@ public:
           low_level_(makeLowLevelEngine(settings.device)),
           allocation_(makeAllocationEngine<TVoxel, TIndex>(settings.device)),
           integration_(makeIntegrationEngine<TVoxel, TIndex>(settings.device)),
-          raycast_(makeRaycastEngine<TVoxel, TIndex>(settings.device)) {
+          raycast_(makeRaycastEngine<TVoxel, TIndex>(settings.device)),
+          tracker_(makeTracker(settings.tracker, settings.device)),
+          meshing_(makeMeshingEngine<TVoxel, TIndex>(Device::CPU)) {
         view_.calib = calib;
     }
 
@@ -47,10 +50,21 @@ public:
         result.stages.push_back({"depth", t.elapsedMs()});
 
         t = Timer();
-        if (!T_world_camera_given) throw ConfigError("no pose given and no tracker configured");
-        tracking_.T_world_camera = *T_world_camera_given;
-        tracking_.quality = TrackingQuality::Good;
+        if (T_world_camera_given) {
+            tracking_ = TrackingState();
+            tracking_.T_world_camera = *T_world_camera_given;
+        } else {
+            tracker_->track(tracking_, view_, render_state_);
+        }
         result.stages.push_back({"track", t.elapsedMs()});
+        result.tracking = tracking_;
+        result.quality = tracking_.quality;
+        result.T_world_camera = tracking_.T_world_camera;
+        if (tracking_.quality == TrackingQuality::Failed) {
+            // Fusing a frame at a wrong pose would smear the map: keep the map and the model raycast.
+            result.total_ms = total.elapsedMs();
+            return result;
+        }
 
         t = Timer();
         allocation_stats_ = allocation_->allocate(scene_, view_, tracking_.T_world_camera);
@@ -72,8 +86,6 @@ public:
         }
 
         result.allocation = allocation_stats_;
-        result.quality = tracking_.quality;
-        result.T_world_camera = tracking_.T_world_camera;
         result.total_ms = total.elapsedMs();
         return result;
     }
@@ -92,6 +104,7 @@ public:
 
     void reset() override {
         resetScene();
+        tracker_->reset();
         tracking_ = TrackingState();
         render_state_ = RenderState();
     }
@@ -101,6 +114,10 @@ public:
         return scene_.voxels().bytes();
     }
     AllocationStats allocationStats() const override { return allocation_stats_; }
+    const TrackerStats& trackerStats() const override { return tracker_->lastStats(); }
+    // Meshing reads the host copy of the scene, which is the authoritative one on the CPU device.
+    void extractMesh(Mesh& mesh) override { meshing_->extractMesh(scene_, mesh); }
+    void extractPointCloud(PointCloud& cloud) override { meshing_->extractPointCloud(scene_, cloud); }
 
 private:
     void resetScene() {
@@ -125,6 +142,8 @@ private:
     std::unique_ptr<AllocationEngine<TVoxel, TIndex>> allocation_;
     std::unique_ptr<IntegrationEngine<TVoxel, TIndex>> integration_;
     std::unique_ptr<RaycastEngine<TVoxel, TIndex>> raycast_;
+    std::unique_ptr<Tracker> tracker_;
+    std::unique_ptr<MeshingEngine<TVoxel, TIndex>> meshing_;
     View view_;
     TrackingState tracking_;
     RenderState render_state_;

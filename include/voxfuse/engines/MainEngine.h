@@ -9,8 +9,11 @@
 
 #include "voxfuse/core/DeviceMemory.h"
 #include "voxfuse/engines/RaycastEngine.h"
+#include "voxfuse/engines/Tracker.h"
 #include "voxfuse/io/RGBDFrame.h"
 #include "voxfuse/objects/AllocationStats.h"
+#include "voxfuse/objects/Mesh.h"
+#include "voxfuse/objects/PointCloud.h"
 #include "voxfuse/objects/PlainVoxelArray.h"
 #include "voxfuse/objects/VoxelBlockHash.h"
 #include "voxfuse/objects/RGBDCalib.h"
@@ -34,6 +37,8 @@ struct MainEngineSettings {
     VoxelBlockHashSettings hash;
     // Blocks that never received an update go back to the free stack every this many frames (0 = never).
     int remove_empty_blocks_every = 10;
+    // How the pose of each frame is estimated when none is given.
+    TrackerSettings tracker;
 };
 
 VoxelType parseVoxelType(const std::string& name);  // "s", "f", "s_rgb", "f_rgb"; ConfigError otherwise
@@ -47,9 +52,10 @@ struct StageTime {
 };
 
 struct FrameResult {
-    bool fused = false;  // the frame was integrated into the map
+    bool fused = false;  // the frame was integrated into the map (not when tracking failed)
     TrackingQuality quality = TrackingQuality::Good;
-    Mat4f T_world_camera = Mat4f::identity();
+    Mat4f T_world_camera = Mat4f::identity();  // after a failure: the last good pose
+    TrackingState tracking;  // the tracker's full verdict (inlier ratio, residual, condition)
     double total_ms = 0.0;  // the engine's processing of this frame (no file decoding)
     std::vector<StageTime> stages;
     AllocationStats allocation;  // the index after this frame (all zero for the dense index)
@@ -61,7 +67,8 @@ public:
     virtual ~MainEngine() = default;
 
     // Processes one frame. With `T_world_camera_given` (e.g. ground truth) that pose is used; without
-    // it a tracker must estimate the pose. The world frame is whatever the given poses use.
+    // it the tracker estimates the pose against the model (the first frame defines the world). A frame
+    // whose tracking failed is not fused: the map and the last good pose stay as they were.
     virtual FrameResult processFrame(const RGBDFrame& frame, const Mat4f* T_world_camera_given) = 0;
 
     virtual const MainEngineSettings& settings() const = 0;
@@ -80,6 +87,12 @@ public:
     virtual std::size_t sceneBytes() const = 0;
     // The index after the last frame (all zero for the dense index).
     virtual AllocationStats allocationStats() const = 0;
+    // What the tracker did on the last frame (per-level timings and iterations).
+    virtual const TrackerStats& trackerStats() const = 0;
+    // The map's surface by marching cubes (engines/MeshingEngine.h), with colours for colour voxels.
+    virtual void extractMesh(Mesh& mesh) = 0;
+    // The mesh's vertices only (one point per zero-crossing voxel edge): cheaper than extractMesh.
+    virtual void extractPointCloud(PointCloud& cloud) = 0;
 };
 
 }  // namespace voxfuse

@@ -15,7 +15,11 @@ struct TrackingState {
     Mat4f T_world_camera = Mat4f::identity();  // pose of the depth camera
     TrackingQuality quality = TrackingQuality::Good;
     float inlier_ratio = 1.f;  // fraction of valid pixels that found a model correspondence
-    float residual_m = 0.f;    // RMS point-to-plane residual of the inliers
+    float residual_m = 0.f;    // RMS point-to-plane residual of the inliers (colour tracker: RMS intensity error)
+    // Smallest / largest eigenvalue of the tracker's final 6x6 normal matrix (scaled to a unit
+    // diagonal): 1 when the six motions are constrained independently, near 0 when the scene leaves
+    // some motion unconstrained (a single plane, a corridor).
+    float condition = 1.f;
 };
 
 }  // namespace voxfuse

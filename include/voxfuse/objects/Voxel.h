@@ -3,6 +3,7 @@
 // truncation band mu) and its weight; the *Rgb types add a colour and its weight. The short types
 // quantise the SDF to int16 (half the memory of float; step 1/32767 of mu).
 
+#include <cmath>
 #include <cstdint>
 
 #include "voxfuse/core/Math.h"
@@ -19,7 +20,7 @@ struct VoxelS {
     std::uint8_t w_depth;
 
     VF_HOST_DEVICE static float sdfToFloat(std::int16_t v) { return float(v) * (1.f / 32767.f); }
-    VF_HOST_DEVICE static std::int16_t sdfFromFloat(float f) { return std::int16_t(f * 32767.f); }
+    VF_HOST_DEVICE static std::int16_t sdfFromFloat(float f) { return std::int16_t(rintf(f * 32767.f)); }  // nearest, not toward zero
     VF_HOST_DEVICE static VoxelS initial() { return {32767, 0}; }
 };
 
@@ -43,7 +44,7 @@ struct VoxelSRgb {
     Vec3u8 clr;
 
     VF_HOST_DEVICE static float sdfToFloat(std::int16_t v) { return float(v) * (1.f / 32767.f); }
-    VF_HOST_DEVICE static std::int16_t sdfFromFloat(float f) { return std::int16_t(f * 32767.f); }
+    VF_HOST_DEVICE static std::int16_t sdfFromFloat(float f) { return std::int16_t(rintf(f * 32767.f)); }  // nearest, not toward zero
     VF_HOST_DEVICE static VoxelSRgb initial() { return {32767, 0, 0, {0, 0, 0}}; }
 };
 

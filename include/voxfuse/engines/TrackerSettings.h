@@ -1,0 +1,105 @@
+#pragma once
+// Settings of the camera trackers, with their defaults, and the "key = value" settings file that
+// overrides them (see parseTrackerSettingsFile for the keys).
+
+#include <string>
+#include <vector>
+
+#include "voxfuse/shared/RobustKernel.h"
+
+namespace voxfuse {
+
+enum class TrackerKind {
+    Icp,    // depth only: point-to-plane ICP against the model raycast, coarse to fine
+    Color,  // colour only: photometric alignment of model points (Levenberg-Marquardt)
+    Ren,    // ICP on the coarse levels, then a robust (Tukey) refinement at full resolution
+    Rgbd    // depth and colour residuals in one Gauss-Newton system
+};
+const char* toString(TrackerKind kind);
+TrackerKind parseTrackerKind(const std::string& name);  // "icp", "color", "ren", "rgbd"; ConfigError otherwise
+
+// Which pose parameters a pyramid level solves for (InfiniTAM's level types).
+enum class LevelMotion : char {
+    Rotation = 'r',     // rotation only: cheap, robust first guess on coarse images
+    Translation = 't',  // translation only
+    Both = 'b'          // full 6-DoF
+};
+
+struct TrackerLevel {
+    LevelMotion motion = LevelMotion::Both;
+    int max_iterations = 10;
+    float max_distance_m = 0.1f;  // ICP outlier threshold on the point-to-model distance
+};
+
+struct TrackerSettings {
+    TrackerKind kind = TrackerKind::Ren;
+    // Pyramid levels, COARSE TO FINE: with n levels, levels[i] works on images downsampled by
+    // 2^(n-1-i) (the last level is full resolution). Settings file: levels, iterations, max_distance_m.
+    // Chosen by measurement on TUM fr3/teddy (see the report in the tracker's tests).
+    std::vector<TrackerLevel> levels = {
+        {LevelMotion::Both, 10, 0.10f},  // 160x120
+        {LevelMotion::Both, 10, 0.05f},  // 320x240
+        {LevelMotion::Both, 10, 0.02f},  // 640x480
+    };
+    // Frame and model normals further apart than this reject the pair; 180 switches the test off.
+    float max_normal_angle_deg = 30.f;
+    // A level stops iterating when an update rotates less than this AND translates less than this.
+    float min_rotation_step_rad = 1e-4f;
+    float min_translation_step_m = 1e-4f;
+    // Edge-preserving smoothing of the depth before the pyramid is built (KinectFusion's bilateral filter).
+    bool bilateral_filter = true;
+    // Normals of the frame are computed only between neighbours closer than this (metres at full
+    // resolution, doubled per coarser level): larger gaps are depth edges.
+    float max_normal_edge_m = 0.05f;
+
+    // ren: the robust cost of the full-resolution refinement (its iterations are the last level's).
+    RobustKernel robust_kernel = RobustKernel::Tukey;
+    float robust_scale_m = 0.01f;  // Tukey: residuals beyond this get no weight
+
+    // color and rgbd: model points are taken every color_point_step pixels in x and y (2: every 4th
+    // point, as InfiniTAM); photometric residuals are intensities in [0, 1].
+    int color_point_step = 2;
+    RobustKernel color_kernel = RobustKernel::Huber;
+    float color_kernel_scale = 0.1f;
+    // rgbd: weight of a squared photometric residual against a squared point-to-plane one (m^2 per
+    // squared intensity unit), per term: the colour sum is scaled to the number of depth terms, so the
+    // weight means the same at every level. 1e-3 makes an intensity error of 0.03 count like 1 mm.
+    float color_weight = 1e-3f;
+
+    // Quality (see assessTrackingQuality): inlier ratio = inliers / valid pixels at full resolution;
+    // condition = smallest / largest eigenvalue of the full-resolution normal matrix scaled to a unit
+    // diagonal (free of units; near 0 when some motion is unconstrained).
+    float good_inlier_ratio = 0.4f;     // below this: Poor
+    float failed_inlier_ratio = 0.1f;   // below this: Failed
+    float good_condition = 1e-3f;       // below this: Poor (one direction is weakly constrained)
+    float failed_condition = 1e-6f;     // below this: Failed (a degenerate scene, e.g. one plane)
+    float poor_residual_m = 0.01f;      // RMS point-to-plane residual above this: Poor
+    // Colour tracker: an RMS intensity error above this means the images are not aligned (Failed);
+    // aligned TUM frames stay below 0.06, unaligned ones are above 0.15.
+    float failed_color_residual = 0.1f;
+    int min_inliers = 100;              // fewer full-resolution inliers: Failed
+    // A frame-to-frame motion beyond these is not believed (Failed): hand-held cameras at 30 Hz move far less.
+    float max_motion_m = 0.3f;
+    float max_motion_deg = 30.f;
+};
+
+// Throws ConfigError naming the setting when one is out of range.
+void validateTrackerSettings(const TrackerSettings& settings);
+
+// Reads "key = value" lines ('#' starts a comment, blank lines are skipped) over the defaults:
+//   tracker = icp | color | ren | rgbd
+//   levels = rbb                    one letter per level, coarse to fine: r rotation, t translation, b both
+//   iterations = 10 10 10           per level, coarse to fine (one value: every level)
+//   max_distance_m = 0.1 0.05 0.02  per level, coarse to fine (one value: every level)
+//   max_normal_angle_deg, min_rotation_step_rad, min_translation_step_m, max_normal_edge_m,
+//   bilateral_filter (true/false/on/off/1/0), robust_kernel (none/huber/tukey), robust_scale_m,
+//   color_point_step, color_kernel, color_kernel_scale, color_weight,
+//   good_inlier_ratio, failed_inlier_ratio, good_condition, failed_condition, poor_residual_m,
+//   failed_color_residual, min_inliers, max_motion_m, max_motion_deg
+// Throws IoError when the file cannot be read and ParseError(file, line, reason) for an unknown key,
+// a malformed line, a bad value or a per-level list whose length does not match `levels`.
+TrackerSettings parseTrackerSettingsFile(const std::string& path);
+// The same for text already in memory; `name` stands for the file in error messages.
+TrackerSettings parseTrackerSettings(const std::string& text, const std::string& name);
+
+}  // namespace voxfuse

@@ -1,0 +1,201 @@
+// Host side of the icp, ren and rgbd trackers: the frame pyramid, Gauss-Newton on SE(3) coarse to
+// fine, and the quality of the result. The per-pixel sums run in the device layer (DepthTrackerKernels).
+
+#include "voxfuse/engines/DepthTracker.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include "PhotometricFrames.h"
+#include "PoseUpdate.h"
+#include "voxfuse/core/Timer.h"
+#include "voxfuse/engines/LowLevelEngine.h"
+
+namespace voxfuse {
+namespace {
+
+// Pyramid downsampling averages only depths within this of each other (no surfaces across edges).
+constexpr float kPyramidMaxDepthDiffM = 0.05f;
+
+// True when the model has a surface point and its images match its camera.
+bool modelUsable(const RenderState& model) {
+    const Vec2i size = model.intrinsics.size();
+    if (!model.intrinsics.valid() || model.points_world.size() != size || model.normals_world.size() != size) return false;
+    const Vec4f* p = model.points_world.host();
+    return std::any_of(p, p + model.points_world.pixelCount(), [](const Vec4f& v) { return v.w > 0.f; });
+}
+
+class DepthTracker final : public Tracker {
+public:
+    DepthTracker(const TrackerSettings& settings, Device device)
+        : settings_(settings), low_level_(makeLowLevelEngine(device)), kernels_(cpu::makeDepthTrackerKernels()) {
+        if (settings.kind == TrackerKind::Rgbd) {
+            color_kernels_ = cpu::makeColorTrackerKernels();
+            photometric_ = std::make_unique<PhotometricFrames>(*color_kernels_);
+        }
+        pyramid_.resize(settings.levels.size());
+        min_normal_cos_ = settings.max_normal_angle_deg >= 180.f ? -2.f : std::cos(settings.max_normal_angle_deg * float(EIGEN_PI) / 180.f);
+    }
+
+    void track(TrackingState& state, const View& view, const RenderState& model) override {
+        const Timer total;
+        stats_ = TrackerStats();
+        const bool first_frame = !seen_frame_;
+        seen_frame_ = true;
+
+        const Timer prepare;
+        const bool frame_ok = preparePyramid(view);
+        const bool model_ok = modelUsable(model);
+        bool color_ok = photometric_ && photometric_->prepare(view, levelCount());
+        color_ok = color_ok && model_ok && photometric_->colorModel(model, settings_.color_point_step);
+        stats_.prepare_ms = prepare.elapsedMs();
+
+        if (!model_ok && first_frame) {
+            // Nothing to track against yet: this frame defines the map.
+            state.quality = TrackingQuality::Good;
+            state.inlier_ratio = 1.f;
+            state.residual_m = 0.f;
+            state.condition = 1.f;
+        } else if (!model_ok || !frame_ok) {
+            reportFailed(state);
+        } else {
+            estimatePose(state, model, color_ok);
+        }
+        if (photometric_) {
+            if (state.quality == TrackingQuality::Failed)
+                photometric_->forget();  // its pose is unknown: it must not colour the next model
+            else
+                photometric_->rememberCurrent(state.T_world_camera);
+        }
+        stats_.total_ms = total.elapsedMs();
+    }
+
+    void reset() override {
+        seen_frame_ = false;
+        if (photometric_) photometric_->forget();
+    }
+    const TrackerStats& lastStats() const override { return stats_; }
+    const TrackerSettings& settings() const override { return settings_; }
+
+private:
+    int levelCount() const { return int(settings_.levels.size()); }
+
+    // Levels of the current frame: index 0 is full resolution (settings_.levels runs the other way).
+    bool preparePyramid(const View& view) {
+        valid_pixels_ = 0;
+        if (view.depth.empty() || !view.calib.depth.valid() || view.depth.size() != view.calib.depth.size()) return false;
+        for (int i = 0; i < levelCount(); ++i) {
+            DepthFrameLevel& level = pyramid_[std::size_t(i)];
+            level.intrinsics = view.calib.depth.downsampled(1 << i);
+            if (i > 0) {
+                low_level_->downsampleDepth(pyramid_[std::size_t(i - 1)].depth, level.depth, kPyramidMaxDepthDiffM);
+            } else if (settings_.bilateral_filter) {
+                low_level_->bilateralFilterDepth(view.depth, level.depth, BilateralFilterParams{});
+            } else {
+                level.depth.resize(view.depth.size());
+                std::memcpy(level.depth.host(), view.depth.host(), view.depth.pixelCount() * sizeof(float));
+            }
+            low_level_->computeVertexMap(level.depth, level.intrinsics, level.vertices);
+            low_level_->computeNormalMap(level.vertices, level.normals, settings_.max_normal_edge_m * float(1 << i));
+        }
+        const float* d = pyramid_[0].depth.host();
+        valid_pixels_ = int(std::count_if(d, d + pyramid_[0].depth.pixelCount(), [](float v) { return v > 0.f; }));
+        return valid_pixels_ > 0;
+    }
+
+    void estimatePose(TrackingState& state, const RenderState& model, bool use_color) {
+        const Eigen::Matrix4d T_start = pose::toEigenD(state.T_world_camera);
+        Eigen::Matrix4d T = T_start;
+        const Mat4f T_model_world = rigidInverse(model.T_world_camera);
+        NormalEquations<double> finest = NormalEquations<double>::zero();
+
+        for (int li = 0; li < levelCount(); ++li) {
+            const TrackerLevel& ls = settings_.levels[std::size_t(li)];
+            const int pi = levelCount() - 1 - li;
+            const DepthFrameLevel& level = pyramid_[std::size_t(pi)];
+            const RobustKernel kernel = settings_.kind == TrackerKind::Ren && pi == 0 ? settings_.robust_kernel : RobustKernel::None;
+            TrackerLevelStats ls_stats;
+            ls_stats.width = level.depth.width();
+            ls_stats.height = level.depth.height();
+            const Timer level_time;
+            NormalEquations<double> depth_eq = NormalEquations<double>::zero();
+            // rgbd: photometric terms have a basin of a few pixels, so they join only once depth alone
+            // has converged on this level, and then refine together with it until both agree.
+            bool with_color = false;
+            for (int it = 0; it < ls.max_iterations; ++it) {
+                const Mat4f T_f = pose::toMat4f(T);
+                const DepthTermParams params{T_f, T_model_world, model.intrinsics, ls.max_distance_m, min_normal_cos_};
+                depth_eq = kernels_->accumulate(level, model, params, kernel, settings_.robust_scale_m);
+                ls_stats.iterations = it + 1;
+                NormalEquations<double> system = depth_eq;
+                if (with_color) {
+                    const NormalEquations<double> color_eq = color_kernels_->accumulate(
+                        photometric_->points(), photometric_->level(pi), photometric_->termParams(pi, T_f), settings_.color_kernel,
+                        settings_.color_kernel_scale);
+                    // Per term: the colour points are fixed by the model while the depth pixels shrink 4x per
+                    // level, so the colour sum is scaled to the depth term count.
+                    if (color_eq.count > 0 && depth_eq.count > 0)
+                        system.add(color_eq, double(settings_.color_weight) * depth_eq.count / color_eq.count);
+                }
+                pose::Vector6d x;
+                if (system.count < 6 || !pose::solveUpdate(system, ls.motion, 0.0, x)) break;
+                T = pose::applyUpdate(T, x);
+                if (x.head<3>().norm() < settings_.min_rotation_step_rad && x.tail<3>().norm() < settings_.min_translation_step_m) {
+                    if (with_color || !use_color) break;
+                    with_color = true;
+                }
+            }
+            ls_stats.ms = level_time.elapsedMs();
+            ls_stats.inliers = depth_eq.count;
+            ls_stats.rms_residual = depth_eq.count > 0 ? float(std::sqrt(depth_eq.squared_sum / depth_eq.count)) : 0.f;
+            stats_.levels.push_back(ls_stats);
+            if (pi == 0) finest = depth_eq;
+        }
+
+        // Quality from the last full-resolution system (evaluated just before the last, small, update).
+        const float inlier_ratio = float(finest.count) / float(valid_pixels_);
+        const float rms = finest.count > 0 ? float(std::sqrt(finest.squared_sum / finest.count)) : 0.f;
+        const float condition = pose::conditionRatio(finest);
+        float motion_m = 0.f, motion_deg = 0.f;
+        pose::motionBetween(T_start, T, motion_m, motion_deg);
+        TrackingMeasures measures;
+        measures.inliers = finest.count;
+        measures.inlier_ratio = inlier_ratio;
+        measures.condition = condition;
+        measures.depth_rms_m = rms;
+        measures.motion_m = motion_m;
+        measures.motion_deg = motion_deg;
+        state.quality = T.allFinite() ? assessTrackingQuality(settings_, measures) : TrackingQuality::Failed;
+        state.inlier_ratio = inlier_ratio;
+        state.residual_m = rms;
+        state.condition = condition;
+        if (state.quality != TrackingQuality::Failed) state.T_world_camera = pose::toMat4f(T);
+    }
+
+    static void reportFailed(TrackingState& state) {
+        state.quality = TrackingQuality::Failed;
+        state.inlier_ratio = 0.f;
+        state.residual_m = 0.f;
+        state.condition = 0.f;
+    }
+
+    TrackerSettings settings_;
+    std::unique_ptr<LowLevelEngine> low_level_;
+    std::unique_ptr<DepthTrackerKernels> kernels_;
+    std::unique_ptr<ColorTrackerKernels> color_kernels_;  // rgbd only
+    std::unique_ptr<PhotometricFrames> photometric_;      // rgbd only
+    std::vector<DepthFrameLevel> pyramid_;
+    int valid_pixels_ = 0;
+    float min_normal_cos_ = -2.f;
+    bool seen_frame_ = false;
+    TrackerStats stats_;
+};
+
+}  // namespace
+
+std::unique_ptr<Tracker> makeDepthTracker(const TrackerSettings& settings, Device device) {
+    return std::make_unique<DepthTracker>(settings, device);
+}
+
+}  // namespace voxfuse

@@ -1,0 +1,45 @@
+#pragma once
+// The colour side of a tracker's state (host side, shared by the color and rgbd trackers): the
+// current frame's intensity pyramid with gradients, and the previous frame's intensity and pose,
+// which colour the model points (see ColorTracker.h for why the previous frame).
+
+#include <vector>
+
+#include "voxfuse/engines/ColorTracker.h"
+
+namespace voxfuse {
+
+class PhotometricFrames {
+public:
+    explicit PhotometricFrames(ColorTrackerKernels& kernels) : kernels_(kernels) {}
+
+    // Builds the pyramid of the view's colour image (level 0 = full resolution). False when the view
+    // has no colour image of the calibrated size.
+    bool prepare(const View& view, int level_count);
+    // Colours the model points (every `step`-th pixel) with the previous frame. False when there is
+    // no previous frame.
+    bool colorModel(const RenderState& model, int step);
+    // The prepared frame becomes the previous one, its depth camera at T_world_camera.
+    void rememberCurrent(const Mat4f& T_world_camera);
+    void forget() { has_previous_ = false; }
+
+    int levelCount() const { return int(levels_.size()); }
+    const ColorFrameLevel& level(int i) const { return levels_[std::size_t(i)]; }
+    const Image<ColorPoint>& points() const { return points_; }
+    // What every point of an iteration at pyramid level i shares, for the depth-camera pose estimate.
+    ColorTermParams termParams(int i, const Mat4f& T_world_camera) const;
+
+private:
+    ColorTrackerKernels& kernels_;
+    std::vector<ColorFrameLevel> levels_;
+    Image<ColorPoint> points_;
+    Mat4f T_rgb_depth_ = Mat4f::identity();
+    bool has_current_ = false;
+
+    Image<float> previous_;  // full-resolution intensity of the previous frame
+    Intrinsics previous_rgb_;
+    Mat4f previous_T_rgb_world_ = Mat4f::identity();
+    bool has_previous_ = false;
+};
+
+}  // namespace voxfuse

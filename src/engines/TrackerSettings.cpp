@@ -1,0 +1,264 @@
+// Tracker settings: names, validation and the "key = value" settings file.
+
+#include "voxfuse/engines/TrackerSettings.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <sstream>
+
+#include "../io/TextParsing.h"
+#include "voxfuse/core/Error.h"
+
+namespace voxfuse {
+namespace {
+
+std::string trim(const std::string& s) {
+    const auto first = s.find_first_not_of(" \t\r");
+    if (first == std::string::npos) return {};
+    return s.substr(first, s.find_last_not_of(" \t\r") - first + 1);
+}
+
+std::string formatNumber(double v) {
+    std::ostringstream out;
+    out << v;
+    return out.str();
+}
+
+// The first setting out of range: the keys involved (settings-file names) and why; false when all are fine.
+bool findInvalidSetting(const TrackerSettings& s, std::vector<std::string>& keys, std::string& reason) {
+    auto fail = [&](std::vector<std::string> k, std::string r) {
+        keys = std::move(k);
+        reason = std::move(r);
+        return true;
+    };
+    if (s.levels.empty() || s.levels.size() > 8) return fail({"levels"}, "need 1 to 8 pyramid levels");
+    for (const TrackerLevel& l : s.levels) {
+        if (l.motion != LevelMotion::Rotation && l.motion != LevelMotion::Translation && l.motion != LevelMotion::Both)
+            return fail({"levels"}, "level types are r, t or b");
+        if (l.max_iterations < 1 || l.max_iterations > 1000) return fail({"iterations"}, "iterations must be in 1..1000");
+        if (!(l.max_distance_m > 0.f && std::isfinite(l.max_distance_m))) return fail({"max_distance_m"}, "distance thresholds must be > 0");
+    }
+    if (!(s.max_normal_angle_deg > 0.f && s.max_normal_angle_deg <= 180.f)) return fail({"max_normal_angle_deg"}, "must be in (0, 180]");
+    if (!(s.min_rotation_step_rad >= 0.f)) return fail({"min_rotation_step_rad"}, "must be >= 0");
+    if (!(s.min_translation_step_m >= 0.f)) return fail({"min_translation_step_m"}, "must be >= 0");
+    if (!(s.max_normal_edge_m > 0.f)) return fail({"max_normal_edge_m"}, "must be > 0");
+    if (!(s.robust_scale_m > 0.f)) return fail({"robust_scale_m"}, "must be > 0");
+    if (s.color_point_step < 1 || s.color_point_step > 16) return fail({"color_point_step"}, "must be in 1..16");
+    if (!(s.color_kernel_scale > 0.f)) return fail({"color_kernel_scale"}, "must be > 0");
+    if (!(s.color_weight >= 0.f && std::isfinite(s.color_weight))) return fail({"color_weight"}, "must be >= 0");
+    for (auto [key, v] : {std::pair{"good_inlier_ratio", s.good_inlier_ratio}, {"failed_inlier_ratio", s.failed_inlier_ratio},
+                          {"good_condition", s.good_condition}, {"failed_condition", s.failed_condition}})
+        if (!(v >= 0.f && v <= 1.f)) return fail({key}, "must be in [0, 1]");
+    if (s.failed_inlier_ratio > s.good_inlier_ratio)
+        return fail({"failed_inlier_ratio", "good_inlier_ratio"}, "failed_inlier_ratio must not exceed good_inlier_ratio");
+    if (s.failed_condition > s.good_condition)
+        return fail({"failed_condition", "good_condition"}, "failed_condition must not exceed good_condition");
+    if (!(s.poor_residual_m > 0.f)) return fail({"poor_residual_m"}, "must be > 0");
+    if (!(s.failed_color_residual > 0.f)) return fail({"failed_color_residual"}, "must be > 0");
+    if (s.min_inliers < 6) return fail({"min_inliers"}, "must be >= 6 (a pose has 6 parameters)");
+    if (!(s.max_motion_m > 0.f)) return fail({"max_motion_m"}, "must be > 0");
+    if (!(s.max_motion_deg > 0.f && s.max_motion_deg <= 180.f)) return fail({"max_motion_deg"}, "must be in (0, 180]");
+    return false;
+}
+
+RobustKernel parseKernel(const std::string& v, bool& ok) {
+    ok = true;
+    if (v == "none") return RobustKernel::None;
+    if (v == "huber") return RobustKernel::Huber;
+    if (v == "tukey") return RobustKernel::Tukey;
+    ok = false;
+    return RobustKernel::None;
+}
+
+// Levels for a new level string: per-level defaults aligned at the fine end (the coarsest default
+// repeats for extra coarse levels).
+std::vector<TrackerLevel> levelsFor(const std::string& types) {
+    const std::vector<TrackerLevel> defaults = TrackerSettings().levels;
+    const int n = int(types.size()), d = int(defaults.size());
+    std::vector<TrackerLevel> levels(static_cast<std::size_t>(n));
+    for (int i = 0; i < n; ++i) {
+        const int from_fine = n - 1 - i;
+        levels[std::size_t(i)] = defaults[std::size_t(std::max(0, d - 1 - from_fine))];
+        levels[std::size_t(i)].motion = LevelMotion(types[std::size_t(i)]);
+    }
+    return levels;
+}
+
+}  // namespace
+
+const char* toString(TrackerKind kind) {
+    switch (kind) {
+        case TrackerKind::Icp: return "icp";
+        case TrackerKind::Color: return "color";
+        case TrackerKind::Ren: return "ren";
+        case TrackerKind::Rgbd: return "rgbd";
+    }
+    return "?";
+}
+
+TrackerKind parseTrackerKind(const std::string& name) {
+    if (name == "icp") return TrackerKind::Icp;
+    if (name == "color") return TrackerKind::Color;
+    if (name == "ren") return TrackerKind::Ren;
+    if (name == "rgbd") return TrackerKind::Rgbd;
+    throw ConfigError("unknown tracker '" + name + "' (expected icp, color, ren or rgbd)");
+}
+
+void validateTrackerSettings(const TrackerSettings& settings) {
+    std::vector<std::string> keys;
+    std::string reason;
+    if (findInvalidSetting(settings, keys, reason)) throw ConfigError("tracker setting " + keys.front() + ": " + reason);
+}
+
+TrackerSettings parseTrackerSettings(const std::string& text, const std::string& name) {
+    TrackerSettings s;
+    std::map<std::string, int> line_of;  // key -> line where it was set
+    // Per-level lists are applied once the number of levels is known (after the last line).
+    std::vector<double> iterations, distances;
+
+    auto number = [](const std::string& v, double& out) { return text::parseDouble(v, out) && std::isfinite(out); };
+    auto setFloat = [&](float& field) {
+        return [&field, number](const std::string& v) -> std::string {
+            double d;
+            if (!number(v, d)) return "not a number: '" + v + "'";
+            field = float(d);
+            return {};
+        };
+    };
+    auto setInt = [&](int& field) {
+        return [&field](const std::string& v) -> std::string {
+            return text::parseInt(v, field) ? std::string() : "not an integer: '" + v + "'";
+        };
+    };
+    auto setBool = [&](bool& field) {
+        return [&field](const std::string& v) -> std::string {
+            if (v == "true" || v == "on" || v == "1") field = true;
+            else if (v == "false" || v == "off" || v == "0") field = false;
+            else return "expected true or false, got '" + v + "'";
+            return {};
+        };
+    };
+    auto setKernel = [&](RobustKernel& field) {
+        return [&field](const std::string& v) -> std::string {
+            bool ok;
+            field = parseKernel(v, ok);
+            return ok ? std::string() : "unknown kernel '" + v + "' (expected none, huber or tukey)";
+        };
+    };
+    auto setList = [&](std::vector<double>& list) {
+        return [&list, number](const std::string& v) -> std::string {
+            list.clear();
+            for (std::string_view token : text::splitWhitespace(v)) {
+                double d;
+                if (!number(std::string(token), d)) return "not a number: '" + std::string(token) + "'";
+                list.push_back(d);
+            }
+            return {};
+        };
+    };
+
+    const std::map<std::string, std::function<std::string(const std::string&)>> setters = {
+        {"tracker",
+         [&](const std::string& v) -> std::string {
+             try {
+                 s.kind = parseTrackerKind(v);
+             } catch (const ConfigError& e) {
+                 return e.what();
+             }
+             return {};
+         }},
+        {"levels",
+         [&](const std::string& v) -> std::string {
+             for (char c : v)
+                 if (c != 'r' && c != 't' && c != 'b') return "level types are r (rotation), t (translation) or b (both), got '" + v + "'";
+             if (v.empty() || v.size() > 8) return "need 1 to 8 levels, got '" + v + "'";
+             s.levels = levelsFor(v);
+             return {};
+         }},
+        {"iterations", setList(iterations)},
+        {"max_distance_m", setList(distances)},
+        {"max_normal_angle_deg", setFloat(s.max_normal_angle_deg)},
+        {"min_rotation_step_rad", setFloat(s.min_rotation_step_rad)},
+        {"min_translation_step_m", setFloat(s.min_translation_step_m)},
+        {"bilateral_filter", setBool(s.bilateral_filter)},
+        {"max_normal_edge_m", setFloat(s.max_normal_edge_m)},
+        {"robust_kernel", setKernel(s.robust_kernel)},
+        {"robust_scale_m", setFloat(s.robust_scale_m)},
+        {"color_point_step", setInt(s.color_point_step)},
+        {"color_kernel", setKernel(s.color_kernel)},
+        {"color_kernel_scale", setFloat(s.color_kernel_scale)},
+        {"color_weight", setFloat(s.color_weight)},
+        {"good_inlier_ratio", setFloat(s.good_inlier_ratio)},
+        {"failed_inlier_ratio", setFloat(s.failed_inlier_ratio)},
+        {"good_condition", setFloat(s.good_condition)},
+        {"failed_condition", setFloat(s.failed_condition)},
+        {"poor_residual_m", setFloat(s.poor_residual_m)},
+        {"failed_color_residual", setFloat(s.failed_color_residual)},
+        {"min_inliers", setInt(s.min_inliers)},
+        {"max_motion_m", setFloat(s.max_motion_m)},
+        {"max_motion_deg", setFloat(s.max_motion_deg)},
+    };
+
+    std::istringstream in(text);
+    std::string line;
+    int line_number = 0;
+    while (std::getline(in, line)) {
+        ++line_number;
+        const auto hash = line.find('#');
+        if (hash != std::string::npos) line.erase(hash);
+        line = trim(line);
+        if (line.empty()) continue;
+        const auto eq = line.find('=');
+        if (eq == std::string::npos) throw ParseError(name, line_number, "expected 'key = value', got '" + line + "'");
+        const std::string key = trim(line.substr(0, eq)), value = trim(line.substr(eq + 1));
+        const auto setter = setters.find(key);
+        if (setter == setters.end()) throw ParseError(name, line_number, "unknown tracker setting '" + key + "'");
+        if (value.empty()) throw ParseError(name, line_number, "no value for '" + key + "'");
+        const std::string error = setter->second(value);
+        if (!error.empty()) throw ParseError(name, line_number, key + ": " + error);
+        line_of[key] = line_number;
+    }
+
+    const std::size_t n = s.levels.size();
+    auto applyList = [&](const char* key, const std::vector<double>& list, auto apply) {
+        if (!line_of.count(key)) return;
+        if (list.size() != 1 && list.size() != n)
+            throw ParseError(name, line_of[key], std::string(key) + ": expected 1 or " + std::to_string(n) + " values (one per level), got " +
+                                                     std::to_string(list.size()));
+        for (std::size_t i = 0; i < n; ++i) apply(s.levels[i], list.size() == 1 ? list[0] : list[i]);
+    };
+    applyList("iterations", iterations, [&](TrackerLevel& l, double v) {
+        if (v != std::floor(v) || v < 1 || v > 1000)
+            throw ParseError(name, line_of["iterations"], "iterations: expected integers in 1..1000, got " + formatNumber(v));
+        l.max_iterations = int(v);
+    });
+    applyList("max_distance_m", distances, [](TrackerLevel& l, double v) { l.max_distance_m = float(v); });
+
+    std::vector<std::string> keys;
+    std::string reason;
+    if (findInvalidSetting(s, keys, reason)) {
+        int line_at = line_number;  // the last of the involved keys the file set (else its last line)
+        bool in_file = false;
+        for (const std::string& k : keys)
+            if (line_of.count(k)) {
+                line_at = in_file ? std::max(line_at, line_of[k]) : line_of[k];
+                in_file = true;
+            }
+        throw ParseError(name, line_at, keys.front() + ": " + reason);
+    }
+    return s;
+}
+
+TrackerSettings parseTrackerSettingsFile(const std::string& path) {
+    std::ifstream in(path);
+    if (!in) throw IoError(path, "cannot open tracker settings file");
+    std::ostringstream text;
+    text << in.rdbuf();
+    if (in.bad()) throw IoError(path, "read error");
+    return parseTrackerSettings(text.str(), path);
+}
+
+}  // namespace voxfuse

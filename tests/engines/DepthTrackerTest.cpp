@@ -1,0 +1,189 @@
+// The depth trackers (icp, ren, rgbd) on exact synthetic frames: a known rigid motion between two
+// views of the textured room must be recovered, large motions need the coarse levels, and frames
+// that cannot be tracked are reported Failed with the pose left alone.
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "TrackingTestSupport.h"
+#include "voxfuse/engines/Tracker.h"
+
+namespace voxfuse {
+namespace {
+
+class DepthTrackerTest : public ::testing::TestWithParam<TrackerKind> {
+protected:
+    static const synth::SyntheticScene& room() {
+        static const synth::SyntheticScene scene = synth::SyntheticScene::defaultRoom();
+        return scene;
+    }
+    static Mat4f startPose() { return test::lookAt({-1.6f, -1.3f, 1.5f}, {0.15f, 0.1f, 0.75f}); }
+
+    TrackerSettings settings() const {
+        TrackerSettings s;
+        s.kind = GetParam();
+        return s;
+    }
+
+    // Tracks the view from `moved`, starting at startPose() against an exact model seen from there.
+    // The first call (empty model) is what a pipeline does on its first frame; it also gives the
+    // rgbd tracker the colour of the model's frame.
+    TrackingState track(Tracker& tracker, const Mat4f& moved) {
+        const Intrinsics intr = test::kinectIntrinsics();
+        const View first = test::renderView(room(), intr, startPose());
+        TrackingState state;
+        state.T_world_camera = startPose();
+        tracker.track(state, first, test::emptyModel(intr));
+        EXPECT_EQ(state.quality, TrackingQuality::Good) << "the first frame defines the map";
+        EXPECT_EQ(test::translationErrorM(state.T_world_camera, startPose()), 0.f);
+
+        tracker.track(state, test::renderView(room(), intr, moved), test::modelFromView(first, startPose()));
+        return state;
+    }
+};
+
+TEST_P(DepthTrackerTest, RecoversASmallMotion) {
+    auto tracker = makeTracker(settings(), Device::CPU);
+    const Mat4f moved = test::moveInCamera(startPose(), {0.2f, 1.f, 0.3f}, 2.f, {0.02f, -0.01f, 0.015f});
+    const TrackingState state = track(*tracker, moved);
+    EXPECT_EQ(state.quality, TrackingQuality::Good);
+    EXPECT_LT(test::translationErrorM(state.T_world_camera, moved), 0.001f);
+    EXPECT_LT(test::rotationErrorDeg(state.T_world_camera, moved), 0.05f);
+    EXPECT_GT(state.inlier_ratio, 0.8f);
+    EXPECT_LT(state.residual_m, 0.001f);
+    EXPECT_GT(state.condition, settings().good_condition);
+}
+
+TEST_P(DepthTrackerTest, RecoversEightCentimetresAndEightDegrees) {
+    auto tracker = makeTracker(settings(), Device::CPU);
+    const Mat4f moved = test::moveInCamera(startPose(), {0.3f, 1.f, -0.2f}, 8.f, {0.06f, 0.03f, -0.045f});
+    ASSERT_NEAR(test::translationErrorM(startPose(), moved), 0.08f, 0.002f);
+    const TrackingState state = track(*tracker, moved);
+    EXPECT_NE(state.quality, TrackingQuality::Failed);
+    EXPECT_LT(test::translationErrorM(state.T_world_camera, moved), 0.005f);
+    EXPECT_LT(test::rotationErrorDeg(state.T_world_camera, moved), 0.3f);
+    const TrackerStats& stats = tracker->lastStats();
+    ASSERT_EQ(stats.levels.size(), settings().levels.size());
+    EXPECT_EQ(stats.levels.front().width, 160) << "coarse to fine";
+    EXPECT_EQ(stats.levels.back().width, 640);
+    for (const TrackerLevelStats& l : stats.levels) EXPECT_GE(l.iterations, 1);
+}
+
+TEST_P(DepthTrackerTest, NoiseFrameFailsAndKeepsThePose) {
+    auto tracker = makeTracker(settings(), Device::CPU);
+    const Intrinsics intr = test::kinectIntrinsics();
+    const View first = test::renderView(room(), intr, startPose());
+    TrackingState state;
+    state.T_world_camera = startPose();
+    tracker->track(state, first, test::emptyModel(intr));
+
+    View noise = test::renderView(room(), intr, startPose());
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> depth_m(0.4f, 4.f);
+    for (std::size_t i = 0; i < noise.depth.pixelCount(); ++i) noise.depth.host()[i] = depth_m(rng);
+    tracker->track(state, noise, test::modelFromView(first, startPose()));
+    EXPECT_EQ(state.quality, TrackingQuality::Failed);
+    EXPECT_LT(state.inlier_ratio, settings().failed_inlier_ratio);
+    for (int k = 0; k < 16; ++k) EXPECT_EQ(state.T_world_camera.m[k], startPose().m[k]) << "pose restored exactly";
+}
+
+INSTANTIATE_TEST_SUITE_P(Kinds, DepthTrackerTest, ::testing::Values(TrackerKind::Icp, TrackerKind::Ren, TrackerKind::Rgbd),
+                         [](const ::testing::TestParamInfo<TrackerKind>& info) { return std::string(toString(info.param)); });
+
+TEST(DepthTrackerLevelsTest, LargeMotionNeedsTheCoarseLevels) {
+    const synth::SyntheticScene room = synth::SyntheticScene::defaultRoom();
+    const Intrinsics intr = test::kinectIntrinsics();
+    const Mat4f start = test::lookAt({-1.6f, -1.3f, 1.5f}, {0.15f, 0.1f, 0.75f});
+    const Mat4f moved = test::moveInCamera(start, {0.3f, 1.f, -0.2f}, 8.f, {0.06f, 0.03f, -0.045f});
+    const View first = test::renderView(room, intr, start, false);
+    const RenderState model = test::modelFromView(first, start);
+    const View second = test::renderView(room, intr, moved, false);
+
+    TrackerSettings fine_only;
+    fine_only.kind = TrackerKind::Icp;
+    fine_only.levels = {{LevelMotion::Both, 30, 0.02f}};  // the finest level alone, with three levels' iterations
+    auto tracker = makeTracker(fine_only, Device::CPU);
+    TrackingState state;
+    state.T_world_camera = start;
+    tracker->track(state, first, test::emptyModel(intr));
+    tracker->track(state, second, model);
+    EXPECT_TRUE(state.quality == TrackingQuality::Failed || test::translationErrorM(state.T_world_camera, moved) > 0.01f)
+        << "without the coarse levels an 8 cm / 8 degree motion is out of reach";
+}
+
+TEST(DepthTrackerQualityTest, ASinglePlaneIsNotGood) {
+    const synth::SyntheticScene wall = synth::SyntheticScene::singlePlane({0.f, 0.f, 0.f}, {0.f, 0.f, 1.f});
+    const Intrinsics intr = test::kinectIntrinsics(320, 240);
+    const Mat4f start = test::lookAt({0.3f, -0.2f, 1.5f}, {0.3f, 0.f, 0.f});
+    const View first = test::renderView(wall, intr, start, false);
+    TrackerSettings s;
+    s.kind = TrackerKind::Icp;
+    auto tracker = makeTracker(s, Device::CPU);
+    TrackingState state;
+    state.T_world_camera = start;
+    tracker->track(state, first, test::emptyModel(intr));
+    tracker->track(state, test::renderView(wall, intr, test::moveInCamera(start, {0.f, 0.f, 1.f}, 1.f, {0.01f, 0.f, 0.f}), false),
+                   test::modelFromView(first, start));
+    EXPECT_NE(state.quality, TrackingQuality::Good) << "motion along the plane is unconstrained";
+    EXPECT_LT(state.condition, s.good_condition);
+}
+
+TEST(DepthTrackerQualityTest, AnImplausibleMotionFailsAndRestoresThePose) {
+    // The tracker finds the 8 cm motion, but a 5 cm limit says no camera moves that far between frames.
+    const synth::SyntheticScene room = synth::SyntheticScene::defaultRoom();
+    const Intrinsics intr = test::kinectIntrinsics();
+    const Mat4f start = test::lookAt({-1.6f, -1.3f, 1.5f}, {0.15f, 0.1f, 0.75f});
+    const Mat4f moved = test::moveInCamera(start, {0.3f, 1.f, -0.2f}, 8.f, {0.06f, 0.03f, -0.045f});
+    const View first = test::renderView(room, intr, start, false);
+    TrackerSettings s;
+    s.max_motion_m = 0.05f;
+    auto tracker = makeTracker(s, Device::CPU);
+    TrackingState state;
+    state.T_world_camera = start;
+    tracker->track(state, first, test::emptyModel(intr));
+    tracker->track(state, test::renderView(room, intr, moved, false), test::modelFromView(first, start));
+    EXPECT_EQ(state.quality, TrackingQuality::Failed);
+    EXPECT_GT(state.inlier_ratio, s.good_inlier_ratio) << "the alignment itself succeeded";
+    for (int k = 0; k < 16; ++k) EXPECT_EQ(state.T_world_camera.m[k], start.m[k]) << "pose restored exactly";
+}
+
+TEST(DepthTrackerQualityTest, EmptyModelAfterTheFirstFrameFails) {
+    const synth::SyntheticScene room = synth::SyntheticScene::defaultRoom();
+    const Intrinsics intr = test::kinectIntrinsics(320, 240);
+    const Mat4f start = test::lookAt({-1.6f, -1.3f, 1.5f}, {0.15f, 0.1f, 0.75f});
+    const View view = test::renderView(room, intr, start, false);
+    auto tracker = makeTracker(TrackerSettings(), Device::CPU);
+    TrackingState state;
+    state.T_world_camera = start;
+    tracker->track(state, view, test::emptyModel(intr));
+    EXPECT_EQ(state.quality, TrackingQuality::Good);
+    tracker->track(state, view, test::emptyModel(intr));
+    EXPECT_EQ(state.quality, TrackingQuality::Failed) << "after the first frame, nothing to track against is a failure";
+    tracker->reset();
+    tracker->track(state, view, test::emptyModel(intr));
+    EXPECT_EQ(state.quality, TrackingQuality::Good) << "reset() starts a new map";
+}
+
+TEST(DepthTrackerQualityTest, AViewWithoutDepthFailsWithoutThrowing) {
+    const synth::SyntheticScene room = synth::SyntheticScene::defaultRoom();
+    const Intrinsics intr = test::kinectIntrinsics(320, 240);
+    const Mat4f start = test::lookAt({-1.6f, -1.3f, 1.5f}, {0.15f, 0.1f, 0.75f});
+    const View first = test::renderView(room, intr, start, false);
+    auto tracker = makeTracker(TrackerSettings(), Device::CPU);
+    TrackingState state;
+    state.T_world_camera = start;
+    tracker->track(state, first, test::emptyModel(intr));
+    View empty;
+    empty.calib = first.calib;
+    EXPECT_NO_THROW(tracker->track(state, empty, test::modelFromView(first, start)));
+    EXPECT_EQ(state.quality, TrackingQuality::Failed);
+    View zeros = test::renderView(room, intr, start, false);
+    zeros.depth.memory().fillBytes(0);
+    tracker->track(state, zeros, test::modelFromView(first, start));
+    EXPECT_EQ(state.quality, TrackingQuality::Failed);
+    EXPECT_EQ(test::translationErrorM(state.T_world_camera, start), 0.f);
+}
+
+}  // namespace
+}  // namespace voxfuse

@@ -1,0 +1,108 @@
+// The tracker settings file: every key reaches its field, and bad lines are reported with file and line.
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include "voxfuse/core/Error.h"
+#include "voxfuse/engines/Tracker.h"
+
+namespace voxfuse {
+namespace {
+
+TEST(TrackerSettingsTest, DefaultsAreValidAndDocumented) {
+    const TrackerSettings s;
+    EXPECT_NO_THROW(validateTrackerSettings(s));
+    EXPECT_EQ(s.levels.size(), 3u);
+    EXPECT_EQ(s.levels.back().motion, LevelMotion::Both);
+}
+
+TEST(TrackerSettingsTest, ParsesEveryKindOfValue) {
+    const TrackerSettings s = parseTrackerSettings(
+        "# comment line\n"
+        "tracker = rgbd   # trailing comment\n"
+        "\n"
+        "levels = rrtb\n"
+        "iterations = 20 10 5 3\n"
+        "max_distance_m = 0.2\n"
+        "bilateral_filter = off\n"
+        "robust_kernel = huber\n"
+        "color_weight = 0.5\n"
+        "min_inliers = 50\n",
+        "test.txt");
+    EXPECT_EQ(s.kind, TrackerKind::Rgbd);
+    ASSERT_EQ(s.levels.size(), 4u);
+    EXPECT_EQ(s.levels[0].motion, LevelMotion::Rotation);
+    EXPECT_EQ(s.levels[2].motion, LevelMotion::Translation);
+    EXPECT_EQ(s.levels[3].motion, LevelMotion::Both);
+    EXPECT_EQ(s.levels[0].max_iterations, 20);
+    EXPECT_EQ(s.levels[3].max_iterations, 3);
+    for (const TrackerLevel& l : s.levels) EXPECT_FLOAT_EQ(l.max_distance_m, 0.2f);
+    EXPECT_FALSE(s.bilateral_filter);
+    EXPECT_EQ(s.robust_kernel, RobustKernel::Huber);
+    EXPECT_FLOAT_EQ(s.color_weight, 0.5f);
+    EXPECT_EQ(s.min_inliers, 50);
+}
+
+TEST(TrackerSettingsTest, ANewLevelStringKeepsTheFineLevelDefaults) {
+    const TrackerSettings defaults;
+    const TrackerSettings s = parseTrackerSettings("levels = rbbb\n", "x");
+    ASSERT_EQ(s.levels.size(), 4u);
+    EXPECT_FLOAT_EQ(s.levels[3].max_distance_m, defaults.levels[2].max_distance_m);
+    EXPECT_FLOAT_EQ(s.levels[0].max_distance_m, defaults.levels[0].max_distance_m);
+}
+
+void expectParseError(const std::string& text, int line, const std::string& reason_part) {
+    try {
+        parseTrackerSettings(text, "bad.txt");
+        FAIL() << "no error for: " << text;
+    } catch (const ParseError& e) {
+        EXPECT_EQ(e.file(), "bad.txt");
+        EXPECT_EQ(e.line(), line) << e.what();
+        EXPECT_NE(e.reason().find(reason_part), std::string::npos) << e.what();
+    }
+}
+
+TEST(TrackerSettingsTest, BadLinesNameFileLineAndReason) {
+    expectParseError("tracker = icp\nspeed = 3\n", 2, "unknown tracker setting 'speed'");
+    expectParseError("tracker = fast\n", 1, "unknown tracker 'fast'");
+    expectParseError("# x\nlevels = rxb\n", 2, "level types");
+    expectParseError("levels = bb\niterations = 1 2 3\n", 2, "expected 1 or 2 values");
+    expectParseError("iterations = 10 2.5 3\n", 1, "integers");
+    expectParseError("max_distance_m = 0.1 -0.05 0.02\n", 1, "distance thresholds must be > 0");
+    expectParseError("max_normal_angle_deg = abc\n", 1, "not a number");
+    expectParseError("bilateral_filter = maybe\n", 1, "true or false");
+    expectParseError("just some words\n", 1, "key = value");
+    expectParseError("color_weight =\n", 1, "no value");
+    expectParseError("good_inlier_ratio = 0.3\n\nfailed_inlier_ratio = 0.5\n", 3, "must not exceed");
+}
+
+TEST(TrackerSettingsTest, ReadsAFileAndReportsAMissingOne) {
+    const std::string path = (std::filesystem::temp_directory_path() / "voxfuse_tracker_settings_test.txt").string();
+    {
+        std::ofstream out(path);
+        out << "tracker = icp\nlevels = bbb\niterations = 8 6 4\n";
+    }
+    const TrackerSettings s = parseTrackerSettingsFile(path);
+    EXPECT_EQ(s.kind, TrackerKind::Icp);
+    EXPECT_EQ(s.levels[1].max_iterations, 6);
+    std::remove(path.c_str());
+    EXPECT_THROW(parseTrackerSettingsFile(path), IoError);
+}
+
+TEST(TrackerSettingsTest, MakeTrackerRejectsInvalidSettings) {
+    TrackerSettings s;
+    s.levels.clear();
+    EXPECT_THROW(makeTracker(s, Device::CPU), ConfigError);
+    s = TrackerSettings();
+    s.min_inliers = 2;
+    EXPECT_THROW(makeTracker(s, Device::CPU), ConfigError);
+    EXPECT_THROW(parseTrackerKind("orb"), ConfigError);
+    for (TrackerKind k : {TrackerKind::Icp, TrackerKind::Color, TrackerKind::Ren, TrackerKind::Rgbd})
+        EXPECT_EQ(parseTrackerKind(toString(k)), k);
+}
+
+}  // namespace
+}  // namespace voxfuse
