@@ -6,6 +6,8 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <iostream>
 
 #include "ResourceUsage.h"
@@ -14,7 +16,11 @@
 #include "voxfuse/core/Error.h"
 #include "voxfuse/core/Timer.h"
 #include "voxfuse/engines/MainEngine.h"
+#include "voxfuse/eval/TrajectoryError.h"
+#include "voxfuse/engines/PointCloudDownsampling.h"
 #include "voxfuse/io/ImageIO.h"
+#include "voxfuse/io/MeshIO.h"
+#include "voxfuse/mapping/OccupancyMapper.h"
 #include "voxfuse/io/ImageSource.h"
 
 #ifndef VOXFUSE_DEFAULT_DATA_DIR
@@ -35,7 +41,17 @@ struct CliOptions {
     std::string voxel = "s_rgb";
     std::string index = "hash";
     std::string device = "cpu";
-    std::string poses = "groundtruth";
+    std::string poses = "track";
+    bool write_mesh = false;              // DIR/mesh.ply at the end
+    std::string mesh_path;                // or this file (.ply, .obj, .stl)
+    bool write_cloud = false;             // DIR/cloud.ply at the end
+    float cloud_voxel_m = 0.f;            // downsample the cloud to one point per cell of this size
+    float occupancy_res_m = 0.f;          // > 0: an OctoMap with cells of this size -> DIR/occupancy.bt
+    std::string tracker;                  // overrides of the tracker settings, applied in this order:
+    std::string tracker_config;           //   the settings file, then the single options
+    std::string tracker_levels;
+    std::vector<int> tracker_iterations;
+    std::vector<float> tracker_max_distance;
     std::vector<int> dense_size{512, 512, 512};
     std::vector<int> dense_offset{-256, -256, 0};
     MainEngineSettings engine;
@@ -66,6 +82,50 @@ private:
     bool tty_;
 };
 
+// The tracker settings: defaults, then --tracker-config FILE, then the single options, all read by one
+// parser so that every value is checked the same way.
+TrackerSettings trackerSettings(const CliOptions& o) {
+    std::string text, name = "command line";
+    if (!o.tracker_config.empty()) {
+        std::ifstream in(o.tracker_config);
+        if (!in) throw IoError(o.tracker_config, "cannot open the tracker settings file");
+        text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+        text += "\n";
+        name = o.tracker_config + " and the command line";
+    }
+    auto list = [](const auto& values) {
+        std::string out;
+        for (const auto& v : values) out += " " + std::to_string(v);
+        return out;
+    };
+    if (!o.tracker.empty()) text += "tracker = " + o.tracker + "\n";
+    if (!o.tracker_levels.empty()) text += "levels = " + o.tracker_levels + "\n";
+    if (!o.tracker_iterations.empty()) text += "iterations =" + list(o.tracker_iterations) + "\n";
+    if (!o.tracker_max_distance.empty()) text += "max_distance_m =" + list(o.tracker_max_distance) + "\n";
+    return parseTrackerSettings(text, name);
+}
+
+void writeMapOutputs(MainEngine& engine, const CliOptions& o) {
+    if (o.write_mesh || !o.mesh_path.empty()) {
+        const std::string path = o.mesh_path.empty() ? (fs::path(o.out_dir) / "mesh.ply").string() : o.mesh_path;
+        const Timer t;
+        Mesh mesh;
+        engine.extractMesh(mesh);
+        writeMesh(path, mesh);
+        std::cerr << "voxfuse: mesh " << mesh.vertices.size() << " vertices, " << mesh.triangles.size() << " triangles in "
+                  << int(t.elapsedMs()) << " ms -> " << path << "\n";
+    }
+    if (o.write_cloud || o.cloud_voxel_m > 0.f) {
+        const std::string path = (fs::path(o.out_dir) / "cloud.ply").string();
+        PointCloud cloud;
+        engine.extractPointCloud(cloud);
+        const std::size_t surface_points = cloud.points.size();
+        if (o.cloud_voxel_m > 0.f) cloud = downsampleVoxelGrid(cloud, o.cloud_voxel_m);
+        writePointCloudPly(path, cloud);
+        std::cerr << "voxfuse: point cloud " << cloud.points.size() << " points (of " << surface_points << " surface points) -> " << path << "\n";
+    }
+}
+
 void saveRender(MainEngine& engine, RenderMode mode, const std::string& out_dir, int frame_index) {
     Image<Vec4u8> image;
     engine.renderLast(mode, image);
@@ -85,7 +145,7 @@ int run(CliOptions& o) {
     s.device = o.device == "cuda" ? Device::CUDA : Device::CPU;
     s.dense_size = {o.dense_size[0], o.dense_size[1], o.dense_size[2]};
     s.dense_offset = {o.dense_offset[0], o.dense_offset[1], o.dense_offset[2]};
-    if (o.poses != "groundtruth") throw ConfigError("--poses must be 'groundtruth' (camera tracking is not built yet)");
+    s.tracker = trackerSettings(o);
 
     std::unique_ptr<MainEngine> engine = MainEngine::create(s, source->calib());
     fs::create_directories(o.out_dir);
@@ -94,13 +154,23 @@ int run(CliOptions& o) {
     app::RunRecord record;
     record.source = source->description();
     record.settings = s;
-    app::SequenceRunner runner(*source, *engine, app::PoseSource::GroundTruth, record);
+    record.tracked = o.poses == "track";
+    app::SequenceRunner runner(*source, *engine, record.tracked ? app::PoseSource::Tracker : app::PoseSource::GroundTruth, record);
     const int total = o.max_frames > 0 && (source->frameCount() < 0 || o.max_frames < source->frameCount()) ? o.max_frames
                                                                                                                : source->frameCount();
+    // The occupancy map is built on its own thread; the loop hands it each fused frame and never waits.
+    std::unique_ptr<OccupancyMapper> occupancy;
+    if (o.occupancy_res_m > 0.f) {
+        OccupancySettings os;
+        os.resolution_m = o.occupancy_res_m;
+        occupancy = std::make_unique<OccupancyMapper>(os);
+    }
     ProgressLine progress(total);
     const Timer wall;
     int last_rendered = -1;
     while ((o.max_frames <= 0 || int(record.frames.size()) < o.max_frames) && runner.step()) {
+        const FrameResult& fr = runner.lastRecord().result;
+        if (occupancy && fr.fused) occupancy->submit(engine->view().depth, engine->view().calib.depth, fr.T_world_camera);
         if (o.render_every > 0 && int(record.frames.size() - 1) % o.render_every == 0) {
             saveRender(*engine, render_mode, o.out_dir, runner.frame().index);
             last_rendered = runner.frame().index;
@@ -115,7 +185,19 @@ int run(CliOptions& o) {
     record.peak_rss_mb = app::peakRssMb();
     record.scene_mb = double(engine->sceneBytes()) / (1024.0 * 1024.0);
     record.allocation = engine->allocationStats();
+    if (!source->groundTruth().empty()) {
+        record.trajectory_error = evaluateTrajectory(record.trajectory, source->groundTruth());
+        record.has_trajectory_error = record.trajectory_error.pairs >= 3;
+    }
     writeTumTrajectory((fs::path(o.out_dir) / "trajectory.txt").string(), record.trajectory);
+    writeMapOutputs(*engine, o);
+    if (occupancy) {
+        const std::string path = (fs::path(o.out_dir) / "occupancy.bt").string();
+        occupancy->write(path);  // drains the queue first
+        const OccupancyStats st = occupancy->stats();
+        std::cerr << "voxfuse: occupancy map " << st.frames_inserted << " frames inserted, " << st.frames_dropped
+                  << " dropped while the mapper lagged, " << st.points_inserted << " points -> " << path << "\n";
+    }
     app::writeTimingsJson((fs::path(o.out_dir) / "timings.json").string(), record);
     app::writeSummaryJson((fs::path(o.out_dir) / "summary.json").string(), record);
     std::cout << app::summaryText(record, o.out_dir);
@@ -150,7 +232,21 @@ int main(int argc, char** argv) {
     cli.add_option("--volume-size", o.dense_size, "dense volume size in voxels (x y z)")->expected(3)->capture_default_str();
     cli.add_option("--volume-offset", o.dense_offset, "dense volume's first voxel, grid units (x y z)")->expected(3)->capture_default_str();
     cli.add_option("--device", o.device, "where the engines run")->capture_default_str()->check(CLI::IsMember({"cpu", "cuda"}));
-    cli.add_option("--poses", o.poses, "where camera poses come from")->capture_default_str()->check(CLI::IsMember({"groundtruth"}));
+    cli.add_flag("--mesh", o.write_mesh, "write the map's mesh (marching cubes) to DIR/mesh.ply at the end");
+    cli.add_option("--mesh-file", o.mesh_path, "write the mesh to this file instead (.ply, .obj or .stl)");
+    cli.add_flag("--cloud", o.write_cloud, "write the surface points with normals (and colours) to DIR/cloud.ply");
+    cli.add_option("--cloud-voxel", o.cloud_voxel_m, "downsample the cloud to one point (the centroid) per cell of M metres; implies --cloud")
+        ->check(CLI::NonNegativeNumber);
+    cli.add_option("--occupancy", o.occupancy_res_m, "also build an OctoMap with RES-metre cells on a background thread -> DIR/occupancy.bt")
+        ->check(CLI::PositiveNumber);
+    cli.add_option("--poses", o.poses, "track the camera, or take the source's ground truth")
+        ->capture_default_str()->check(CLI::IsMember({"track", "groundtruth"}));
+    cli.add_option("--tracker", o.tracker, "icp | color | ren | rgbd (default: ren, ICP then a robust refinement)")
+        ->check(CLI::IsMember({"icp", "color", "ren", "rgbd"}));
+    cli.add_option("--tracker-config", o.tracker_config, "tracker settings file ('key = value' lines)")->check(CLI::ExistingFile);
+    cli.add_option("--tracker-levels", o.tracker_levels, "pyramid levels coarse to fine: r rotation, t translation, b both (e.g. rbb)");
+    cli.add_option("--tracker-iterations", o.tracker_iterations, "iterations per level, coarse to fine");
+    cli.add_option("--tracker-max-distance", o.tracker_max_distance, "ICP outlier distance per level (m), coarse to fine");
     CLI11_PARSE(cli, argc, argv);
 
     try {
