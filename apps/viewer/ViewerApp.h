@@ -1,0 +1,83 @@
+#pragma once
+// The interactive viewer: InfiniTAM's UI on a MainEngine. A large panel shows the model raycast from
+// the tracked camera (or from the free view), two small ones the live depth and colour; the title
+// and status bars show the frame, per-frame time and fps. Frames come through app::SequenceRunner, the loop
+// every front-end shares.
+
+#include <memory>
+#include <string>
+
+#include "GlfwWindow.h"
+#include "OrbitCamera.h"
+#include "RunRecord.h"
+#include "SequenceRunner.h"
+#include "TextureImage.h"
+#include "voxfuse/engines/MainEngine.h"
+#include "voxfuse/io/ImageSource.h"
+
+namespace voxfuse::viewer {
+
+struct ViewerOptions {
+    int window_width = 1200;  // 2/3 for the model, 1/3 for the live images, a 40-pixel status bar:
+    int window_height = 640;  // 4:3 panels at this size
+    int max_frames = 0;                  // stop processing after N frames (0 = the whole source)
+    bool start_running = true;           // process continuously from the start (space toggles)
+    std::string screenshot_path;         // save the window as PNG once processing stops
+    bool exit_when_done = false;         // quit once processing stops (after the screenshot)
+    std::string out_dir = "voxfuse_out"; // where m writes mesh.ply and p screenshot.png
+    app::PoseSource poses = app::PoseSource::Tracker;
+};
+
+class ViewerApp {
+public:
+    ViewerApp(const ViewerOptions& options, std::unique_ptr<ImageSource> source, std::unique_ptr<MainEngine> engine);
+    ~ViewerApp();
+    // Runs until the window closes (q, Esc) or, with exit_when_done, until processing stops. Returns
+    // the process exit status.
+    int run();
+
+    // Input, forwarded from GLFW's callbacks.
+    void onKey(int key, int action, int mods);
+    void onMouseButton(int button, int action);
+    void onCursor(double x, double y);
+    void onScroll(double steps);
+
+private:
+    bool processingDone() const;
+    void processNextFrame();
+    void updateLiveImages();
+    void renderModel();
+    void drawPanels();
+    void saveMesh();
+    void saveScreenshot(const std::string& path);
+    void resetMap();
+    void setMode(RenderMode mode);
+    void startFreeViewIfNeeded();
+    bool cursorInModelPanel(double x, double y) const;
+    std::string statusLine() const;  // frame, times, tracking, mode: the title bar and the status bar show it
+    void updateTitle();
+
+    ViewerOptions options_;
+    std::unique_ptr<ImageSource> source_;
+    std::unique_ptr<MainEngine> engine_;
+    app::RunRecord record_;
+    std::unique_ptr<app::SequenceRunner> runner_;
+    GlfwWindow window_;
+
+    TextureImage model_texture_, depth_texture_, colour_texture_;
+    Image<Vec4u8> model_image_, depth_image_;
+    RenderMode mode_ = RenderMode::Shaded;
+    OrbitCamera free_view_;
+    bool have_frame_ = false;       // a frame was processed since start or reset: there is a model to show
+    bool model_dirty_ = false;      // the model panel must be rendered again
+    bool running_ = true;           // continuous processing
+    bool step_requested_ = false;   // n was pressed
+    bool screenshot_requested_ = false;  // p was pressed
+    bool end_of_source_ = false;
+    bool dragging_ = false;
+    double last_cursor_x_ = 0.0, last_cursor_y_ = 0.0;
+    double smoothed_frame_s_ = 0.0; // wall time per frame (reading, processing, display), smoothed
+    std::string status_;            // last action, e.g. "mesh saved to voxfuse_out/mesh.ply"
+};
+
+}  // namespace voxfuse::viewer

@@ -1,0 +1,107 @@
+// voxfuse_viewer: the interactive front-end. Takes the same sources as the voxfuse CLI and shows the
+// reconstruction as it grows, InfiniTAM style.
+
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+
+#include "ViewerApp.h"
+#include "voxfuse/core/Error.h"
+
+#ifndef VOXFUSE_DEFAULT_DATA_DIR
+#define VOXFUSE_DEFAULT_DATA_DIR "data/synthetic_room"
+#endif
+
+namespace fs = std::filesystem;
+using namespace voxfuse;
+
+namespace {
+
+constexpr const char* kKeyHelp =
+    "keys: n next frame | space run/pause | 1-4 shaded/colour/normals/depth (Tab cycles) | left-drag orbit, wheel zoom,\n"
+    "      c back to the camera | m save mesh | p screenshot | r reset the map | q/Esc quit\n";
+
+struct Options {
+    std::string source;
+    SourceOptions source_options;
+    std::string voxel = "s_rgb";
+    std::string index = "hash";
+    std::string device = "cpu";
+    std::string poses = "track";
+    std::string size;
+    bool paused = false;
+    MainEngineSettings engine;
+    viewer::ViewerOptions viewer;
+};
+
+// Default data: the same rule as the CLI (next to the sources in a build tree, else where `cmake --install` put it).
+std::string defaultSource() {
+    for (const std::string& candidate : {std::string(VOXFUSE_DEFAULT_DATA_DIR), std::string("data/synthetic_room")})
+        if (fs::exists(fs::path(candidate) / "rgb.txt")) return candidate;
+    throw IoError(VOXFUSE_DEFAULT_DATA_DIR, "the default data set is missing: give a SOURCE (see voxfuse_viewer --help)");
+}
+
+// "WxH" -> the window size; ConfigError for anything else.
+void parseWindowSize(const std::string& text, viewer::ViewerOptions& out) {
+    int width = 0, height = 0;
+    char x = 0, extra = 0;
+    if (std::sscanf(text.c_str(), "%d%c%d%c", &width, &x, &height, &extra) != 3 || (x != 'x' && x != 'X') || width < 64 || height < 64)
+        throw ConfigError("--size must be WIDTHxHEIGHT with both at least 64, e.g. 1200x640 (got '" + text + "')");
+    out.window_width = width;
+    out.window_height = height;
+}
+
+int run(Options& o) {
+    if (o.source.empty() && o.source_options.rgb_pattern.empty()) o.source = defaultSource();
+    if (!o.size.empty()) parseWindowSize(o.size, o.viewer);
+    std::unique_ptr<ImageSource> source = openImageSource(o.source, o.source_options);
+    std::cerr << "voxfuse_viewer: " << source->description() << "\n";
+
+    MainEngineSettings& s = o.engine;
+    s.voxel_type = parseVoxelType(o.voxel);
+    s.index_type = parseIndexType(o.index);
+    s.device = o.device == "cuda" ? Device::CUDA : Device::CPU;
+    std::unique_ptr<MainEngine> engine = MainEngine::create(s, source->calib());
+
+    o.viewer.poses = o.poses == "track" ? app::PoseSource::Tracker : app::PoseSource::GroundTruth;
+    o.viewer.start_running = !o.paused || o.viewer.exit_when_done;  // --exit waits for processing to stop
+    viewer::ViewerApp app(o.viewer, std::move(source), std::move(engine));
+    std::cerr << kKeyHelp;
+    return app.run();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    CLI::App cli{"VoxFuse viewer: watch the reconstruction grow, frame by frame.\n"
+                 "With no SOURCE, runs on the bundled synthetic sequence.\n" + std::string(kKeyHelp)};
+    Options o;
+    cli.add_option("source", o.source, "TUM RGB-D folder, per-frame folder, Stray Scanner capture or .oni recording");
+    cli.add_option("--rgb", o.source_options.rgb_pattern, "PPM colour file pattern, e.g. frames/%04i.ppm");
+    cli.add_option("--depth", o.source_options.depth_pattern, "16-bit PGM depth file pattern, e.g. frames/%04i.pgm");
+    cli.add_option("--calib", o.source_options.calib_path, "InfiniTAM calib.txt (overrides the source's own)");
+    cli.add_option("--voxel", o.voxel, "voxel type")->capture_default_str()->check(CLI::IsMember({"s", "f", "s_rgb", "f_rgb"}));
+    cli.add_option("--index", o.index, "voxel index")->capture_default_str()->check(CLI::IsMember({"dense", "hash"}));
+    cli.add_option("--voxel-size", o.engine.scene.voxel_size_m, "voxel edge in metres")->capture_default_str()->check(CLI::PositiveNumber);
+    cli.add_option("--device", o.device, "where the engines run")->capture_default_str()->check(CLI::IsMember({"cpu", "cuda"}));
+    cli.add_option("--poses", o.poses, "track the camera, or take the source's ground truth")
+        ->capture_default_str()->check(CLI::IsMember({"track", "groundtruth"}));
+    cli.add_option("--out", o.viewer.out_dir, "folder for the mesh (m) and screenshot (p)")->capture_default_str();
+    cli.add_option("--frames", o.viewer.max_frames, "stop processing after N frames (0 = all)")->check(CLI::NonNegativeNumber);
+    cli.add_flag("--paused", o.paused, "start paused (n steps, space runs)");
+    cli.add_option("--size", o.size, "window size WIDTHxHEIGHT (default 1200x640)");
+    cli.add_option("--screenshot", o.viewer.screenshot_path, "save the window as PNG once processing stops (end of source or --frames)");
+    cli.add_flag("--exit", o.viewer.exit_when_done, "quit once processing stops (after --screenshot); for scripts and tests");
+    CLI11_PARSE(cli, argc, argv);
+
+    try {
+        return run(o);
+    } catch (const Error& e) {
+        std::cerr << "voxfuse_viewer: error: " << e.what() << "\n";
+        return 2;
+    } catch (const std::exception& e) {
+        std::cerr << "voxfuse_viewer: unexpected error: " << e.what() << "\n";
+        return 3;
+    }
+}
