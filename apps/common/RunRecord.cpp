@@ -97,6 +97,7 @@ void writeSummaryJson(const std::string& path, const RunRecord& run) {
     j.value("frames_fused", fused);
     j.value("frames_without_pose", run.frames_without_pose);
     j.value("frames_unreadable", run.frames_unreadable);
+    j.value("frames_dropped", run.frames_dropped);
     j.value("poses", run.tracked ? "tracked" : "groundtruth");
     j.value("tracking_poor_frames", countQuality(run, TrackingQuality::Poor));
     j.value("tracking_failed_frames", countQuality(run, TrackingQuality::Failed));
@@ -145,8 +146,8 @@ std::string summaryText(const RunRecord& run, const std::string& out_dir) {
     char line[256];
     s << "VoxFuse run\n";
     s << "  source       " << run.source << "\n";
-    std::snprintf(line, sizeof line, "  frames       %zu processed, %d fused, %d without pose, %d unreadable\n", run.frames.size(),
-                  fused, run.frames_without_pose, run.frames_unreadable);
+    std::snprintf(line, sizeof line, "  frames       %zu processed, %d fused, %d without pose, %d unreadable, %d dropped (live)\n",
+                  run.frames.size(), fused, run.frames_without_pose, run.frames_unreadable, run.frames_dropped);
     s << line;
     if (run.tracked) {
         std::snprintf(line, sizeof line, "  tracking     %s tracker: %d good, %d poor, %d failed (not fused)\n", toString(run.settings.tracker.kind),

@@ -23,6 +23,7 @@ struct RunRecord {
     std::vector<TimedPose> trajectory;
     int frames_without_pose = 0;      // skipped: --poses groundtruth but no ground truth for the frame
     int frames_unreadable = 0;        // skipped: the source could not read them
+    int frames_dropped = 0;           // live input: dropped by the reader thread while the engine lagged
     double wall_s = 0.0;
     double peak_rss_mb = 0.0;
     double scene_mb = 0.0;

@@ -20,6 +20,8 @@
 #include "voxfuse/engines/PointCloudDownsampling.h"
 #include "voxfuse/io/ImageIO.h"
 #include "voxfuse/io/MeshIO.h"
+#include "voxfuse/io/OpenNISource.h"
+#include "voxfuse/io/ThreadedImageSource.h"
 #include "voxfuse/mapping/OccupancyMapper.h"
 #include "voxfuse/io/ImageSource.h"
 
@@ -42,6 +44,10 @@ struct CliOptions {
     std::string index = "hash";
     std::string device = "cpu";
     std::string poses = "track";
+    bool threaded = false;                // decode (and undistort) on a reader thread ahead of the engine
+    bool live = false;                    // read an OpenNI2 camera instead of a recording
+    std::string device_uri;               // which camera ("" = the first)
+    bool list_devices = false;
     bool write_mesh = false;              // DIR/mesh.ply at the end
     std::string mesh_path;                // or this file (.ply, .obj, .stl)
     bool write_cloud = false;             // DIR/cloud.ply at the end
@@ -135,8 +141,26 @@ void saveRender(MainEngine& engine, RenderMode mode, const std::string& out_dir,
 }
 
 int run(CliOptions& o) {
-    if (o.source.empty() && o.source_options.rgb_pattern.empty()) o.source = defaultSource();
-    std::unique_ptr<ImageSource> source = openImageSource(o.source, o.source_options);
+    if (o.list_devices) {
+        const std::vector<std::string> uris = OpenNISource::deviceUris();
+        std::cout << (uris.empty() ? "no OpenNI2 camera found\n" : "OpenNI2 cameras:\n");
+        for (const auto& uri : uris) std::cout << "  " << uri << "\n";
+        return 0;
+    }
+    std::unique_ptr<ImageSource> source;
+    if (o.live) {
+        source = OpenNISource::openDevice(o.device_uri, o.source_options);
+    } else {
+        if (o.source.empty() && o.source_options.rgb_pattern.empty()) o.source = defaultSource();
+        source = openImageSource(o.source, o.source_options);
+    }
+    // Live cameras always get the reader thread, so that the engine never makes the driver wait.
+    ThreadedImageSource* threaded = nullptr;
+    if (o.threaded || source->isLive()) {
+        auto wrapped = std::make_unique<ThreadedImageSource>(std::move(source), ThreadedSourceOptions{});
+        threaded = wrapped.get();
+        source = std::move(wrapped);
+    }
     std::cerr << "voxfuse: " << source->description() << "\n";
 
     MainEngineSettings& s = o.engine;
@@ -178,6 +202,7 @@ int run(CliOptions& o) {
         progress.update(int(record.frames.size()), double(record.frames.size()) / (wall.elapsedMs() / 1000.0));
     }
     record.wall_s = wall.elapsedMs() / 1000.0;
+    if (threaded) record.frames_dropped = int(threaded->droppedFrames());
     progress.finish();
     if (record.frames.empty()) throw ConfigError("no frame could be processed from " + source->description());
     if (last_rendered != record.frames.back().index) saveRender(*engine, render_mode, o.out_dir, record.frames.back().index);
@@ -210,7 +235,14 @@ int main(int argc, char** argv) {
     CLI::App cli{"VoxFuse: dense 3D reconstruction from RGB-D sequences.\n"
                  "With no SOURCE, runs on the bundled synthetic sequence."};
     CliOptions o;
-    cli.add_option("source", o.source, "TUM RGB-D folder or per-frame folder (frame-XXXXXX.depth.png)");
+    cli.add_option("source", o.source,
+                   "TUM RGB-D folder, per-frame folder (frame-XXXXXX.depth.png), OpenNI .oni recording, or Stray Scanner (iPhone LiDAR) folder");
+    cli.add_flag("--live", o.live, "read a live OpenNI2 camera (Kinect, PrimeSense, Structure)");
+    cli.add_option("--device-uri", o.device_uri, "with --live: which camera (see --list-devices; default: the first)");
+    cli.add_flag("--list-devices", o.list_devices, "list the OpenNI2 cameras and exit");
+    cli.add_flag("--threaded", o.threaded, "decode and undistort frames on a reader thread ahead of the engine (always on for --live)");
+    cli.add_option("--min-confidence", o.source_options.min_depth_confidence, "iPhone LiDAR: keep depth of at least this confidence (0-2)")
+        ->capture_default_str()->check(CLI::Range(0, 2));
     cli.add_option("--rgb", o.source_options.rgb_pattern, "PPM colour file pattern, e.g. frames/%04i.ppm");
     cli.add_option("--depth", o.source_options.depth_pattern, "16-bit PGM depth file pattern, e.g. frames/%04i.pgm");
     cli.add_option("--calib", o.source_options.calib_path, "InfiniTAM calib.txt (overrides the source's own)");

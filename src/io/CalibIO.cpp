@@ -6,6 +6,8 @@
 #include <cmath>
 #include <fstream>
 #include <initializer_list>
+#include <utility>
+#include <vector>
 
 #include "TextParsing.h"
 #include "voxfuse/core/Error.h"
@@ -148,6 +150,35 @@ DisparityCalib readDisparity(CalibLineReader& reader) {
     return DisparityCalib::kinect(float(v[0]), float(v[1]));
 }
 
+// The optional lines after the disparity calibration: "distortion_rgb k1 k2 p1 p2 k3" and
+// "distortion_depth k1 k2 p1 p2 k3", each at most once, in either order. Anything else there is an
+// error, so a typo cannot silently drop a camera's distortion.
+void readDistortionLines(CalibLineReader& reader, RGBDCalib& calib) {
+    bool seen_rgb = false, seen_depth = false;
+    while (reader.findTrailingContent()) {
+        auto tokens = text::splitWhitespace(reader.line());
+        const std::string keyword(tokens.front());
+        const bool is_rgb = keyword == "distortion_rgb";
+        if (!is_rgb && keyword != "distortion_depth")
+            reader.fail("unexpected content after the disparity calibration: '" + reader.line() +
+                        "' (only 'distortion_rgb k1 k2 p1 p2 k3' and 'distortion_depth k1 k2 p1 p2 k3' may follow)");
+        bool& seen = is_rgb ? seen_rgb : seen_depth;
+        if (seen) reader.fail("'" + keyword + "' is given twice");
+        seen = true;
+        tokens.erase(tokens.begin());
+        if (tokens.size() != 5)
+            reader.fail("expected 5 numbers after '" + keyword + "' (k1 k2 p1 p2 k3), got " +
+                        std::to_string(tokens.size()) + ": '" + reader.line() + "'");
+        std::vector<double> v;
+        std::string bad;
+        if (!text::parseDoubles(tokens, v, bad)) reader.fail("not a number: '" + bad + "' (" + keyword + ")");
+        for (double x : v)
+            if (!std::isfinite(x)) reader.fail("non-finite value in " + keyword);
+        LensDistortion& d = is_rgb ? calib.rgb_distortion : calib.depth_distortion;
+        d = LensDistortion{float(v[0]), float(v[1]), float(v[2]), float(v[3]), float(v[4])};
+    }
+}
+
 std::string numbers(std::initializer_list<float> values) {
     std::string line;
     for (float v : values) line += (line.empty() ? "" : " ") + text::formatFloat(v);
@@ -169,8 +200,7 @@ RGBDCalib readCalib(const std::string& path) {
     calib.depth = readCamera(reader, "depth camera");
     calib.T_depth_rgb = readExtrinsics(reader);
     calib.disparity = readDisparity(reader);
-    if (reader.findTrailingContent())
-        reader.fail("unexpected content after the disparity calibration: '" + reader.line() + "'");
+    readDistortionLines(reader, calib);
     return calib;
 }
 
@@ -182,6 +212,10 @@ void writeCalib(const std::string& path, const RGBDCalib& calib) {
     for (int r = 0; r < 3; ++r) out << numbers({T(r, 0), T(r, 1), T(r, 2), T(r, 3)});
     out << '\n' << (calib.disparity.type == DisparityCalib::Type::Kinect ? "kinect " : "affine ")
         << numbers({calib.disparity.a, calib.disparity.b});
+    // Written only when present, so that files without distortion stay readable by older readers.
+    for (const auto& [keyword, d] : {std::pair{"distortion_rgb ", calib.rgb_distortion},
+                                     std::pair{"distortion_depth ", calib.depth_distortion}})
+        if (d.any()) out << keyword << numbers({d.k1, d.k2, d.p1, d.p2, d.k3});
     out.flush();
     if (!out) throw IoError(path, "write failed");
 }

@@ -8,7 +8,9 @@
 #include "voxfuse/core/Error.h"
 #include "voxfuse/io/FrameFolderSource.h"
 #include "voxfuse/io/ImageSource.h"
+#include "voxfuse/io/OpenNISource.h"
 #include "voxfuse/io/PpmPgmSource.h"
+#include "voxfuse/io/StrayScannerSource.h"
 #include "voxfuse/io/TumSource.h"
 
 namespace voxfuse {
@@ -17,9 +19,12 @@ namespace fs = std::filesystem;
 
 namespace {
 
-const char* const kAccepted =
-    "expected one of: a TUM RGB-D folder (rgb.txt + depth.txt); a per-frame folder (frame-XXXXXX.depth.png); "
-    "a PPM/PGM sequence (SourceOptions rgb/depth patterns + calib_path); an .oni recording (not in this build)";
+std::string accepted() {
+    return std::string("expected one of: a TUM RGB-D folder (rgb.txt + depth.txt); a per-frame folder "
+                       "(frame-XXXXXX.depth.png); a Stray Scanner capture (odometry.csv + depth/ + rgb.mp4); a PPM/PGM "
+                       "sequence (SourceOptions rgb/depth patterns + calib_path); an .oni recording") +
+           (OpenNISource::available() ? "" : " (not in this build: no OpenNI2)");
+}
 
 bool hasOniExtension(const std::string& path) {
     std::string ext = fs::path(path).extension().string();
@@ -54,18 +59,19 @@ std::unique_ptr<ImageSource> openImageSource(const std::string& path, const Sour
                                               resolvePattern(path, options.depth_pattern), options.calib_path,
                                               options.first_index);
     }
-    if (hasOniExtension(path)) throw IoError(path, "OpenNI2 input is not available in this build");
+    if (hasOniExtension(path)) return OpenNISource::openFile(path, options);
 
     std::error_code ec;
-    if (!fs::exists(path, ec)) throw IoError(path, std::string("no such file or folder; ") + kAccepted);
+    if (!fs::exists(path, ec)) throw IoError(path, "no such file or folder; " + accepted());
     if (fs::is_directory(path, ec)) {
         const fs::path folder(path);
         if (frame_reading::fileExists((folder / "rgb.txt").string()) &&
             frame_reading::fileExists((folder / "depth.txt").string()))
             return std::make_unique<TumSource>(path, options.calib_path);
         if (holdsFrameFiles(folder)) return std::make_unique<FrameFolderSource>(path, options.calib_path);
+        if (StrayScannerSource::isCapture(path)) return std::make_unique<StrayScannerSource>(path, options);
     }
-    throw IoError(path, std::string("not a known image source; ") + kAccepted);
+    throw IoError(path, "not a known image source; " + accepted());
 }
 
 }  // namespace voxfuse

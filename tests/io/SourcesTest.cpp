@@ -8,6 +8,7 @@
 
 #include "IoTestUtil.h"
 #include "voxfuse/core/Error.h"
+#include "voxfuse/io/OpenNISource.h"
 #include "voxfuse/io/CalibIO.h"
 #include "voxfuse/io/FrameFolderSource.h"
 #include "voxfuse/io/ImageIO.h"
@@ -395,7 +396,8 @@ TEST(OpenImageSource, ExplainsWhatIsAccepted) {
         }
     };
     ScratchDir empty;
-    expectReason(empty.path() + "/recording.oni", {}, "OpenNI2 input is not available in this build");
+    expectReason(empty.path() + "/recording.oni", {},
+                 OpenNISource::available() ? "no such file" : "OpenNI2 input is not available in this build");
     expectReason(empty.path(), {}, "not a known image source; expected one of: a TUM RGB-D folder");
     expectReason(empty.path() + "/nothing_here", {}, "no such file or folder");
     SourceOptions no_calib;

@@ -1,7 +1,10 @@
 #pragma once
 // InfiniTAM's calib.txt: RGB camera (size, focal lengths, principal point), depth camera (same),
 // the 3x4 RGB-to-depth extrinsics, then the disparity calibration as "kinect k1 k2", "affine a b" or
-// the bare two numbers "k1 k2" (Kinect form). Blank lines between blocks are optional.
+// the bare two numbers "k1 k2" (Kinect form). Blank lines between blocks are optional; whole-line '#'
+// comments are allowed. Optional trailing lines "distortion_rgb k1 k2 p1 p2 k3" and
+// "distortion_depth k1 k2 p1 p2 k3" give lens distortion (OpenCV's model); files without them are
+// undistorted cameras, as before.
 
 #include <string>
 

@@ -1,5 +1,6 @@
 #pragma once
-// The one interface every input (files, TUM folders, per-frame folders, OpenNI) implements.
+// The one interface every input (files, TUM folders, per-frame folders, iPhone captures, OpenNI)
+// implements.
 
 #include <memory>
 #include <string>
@@ -28,6 +29,10 @@ public:
         static const std::vector<TimedPose> none;
         return none;
     }
+    // True for a camera that produces frames whether or not they are read (frames not read in time
+    // are lost); false for recordings, which wait for the reader. ThreadedImageSource drops frames
+    // of live sources when the engine lags and never drops frames of recordings.
+    virtual bool isLive() const { return false; }
 };
 
 struct SourceOptions {
@@ -35,11 +40,21 @@ struct SourceOptions {
     std::string rgb_pattern;     // printf patterns for PPM/PGM sequences, e.g. "frames/%04i.ppm"
     std::string depth_pattern;
     int first_index = 0;         // first index substituted into the patterns
+    // iPhone LiDAR captures (Stray Scanner): depth samples whose confidence (0 low, 1 medium, 2 high)
+    // is below this are dropped (set to 0); 0 keeps every sample. Medium and high are kept by default
+    // because low-confidence LiDAR depth is mostly wrong at edges and on dark or shiny surfaces.
+    int min_depth_confidence = 1;
+    // iPhone captures: colour wider than this is downscaled as it is read (aspect ratio kept, the
+    // intrinsics scaled to match); 0 keeps the full resolution. A 1920x1440 video frame costs 11 MB
+    // as RGBA, and the engine samples colour at depth resolution (256x192) anyway. Other sources
+    // deliver colour as recorded.
+    int max_colour_width = 640;
 };
 
 // Opens `path` as whatever it is: a TUM RGB-D folder (rgb.txt + depth.txt), a per-frame folder
-// (frame-XXXXXX.depth.png), or, with rgb/depth patterns set, a PPM/PGM sequence. Throws IoError
-// naming the path and why it is not a known source.
+// (frame-XXXXXX.depth.png), a Stray Scanner capture (odometry.csv + depth/ + rgb.mp4), an OpenNI
+// recording (*.oni, needs a build with OpenNI2), or, with rgb/depth patterns set, a PPM/PGM
+// sequence. Throws IoError naming the path and why it is not a known source.
 std::unique_ptr<ImageSource> openImageSource(const std::string& path, const SourceOptions& options = {});
 
 }  // namespace voxfuse

@@ -36,11 +36,22 @@ struct DisparityCalib {
     }
 };
 
+// Radial (k1, k2, k3) and tangential (p1, p2) lens distortion in the Brown-Conrady model that OpenCV
+// and the Matlab toolbox use, on normalised image coordinates. All zero means an ideal pinhole: the
+// images are used as they are. Sources deliver raw images; ThreadedImageSource can undistort them.
+struct LensDistortion {
+    float k1 = 0.f, k2 = 0.f, p1 = 0.f, p2 = 0.f, k3 = 0.f;
+
+    bool any() const { return k1 != 0.f || k2 != 0.f || p1 != 0.f || p2 != 0.f || k3 != 0.f; }
+};
+
 struct RGBDCalib {
     Intrinsics rgb;
     Intrinsics depth;
     Mat4f T_depth_rgb = Mat4f::identity();  // maps RGB-camera coordinates to depth-camera coordinates
     DisparityCalib disparity;
+    LensDistortion rgb_distortion;    // optional "distortion_rgb" line of calib.txt
+    LensDistortion depth_distortion;  // optional "distortion_depth" line of calib.txt
 };
 
 }  // namespace voxfuse

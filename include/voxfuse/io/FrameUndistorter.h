@@ -1,0 +1,42 @@
+#pragma once
+// Removes lens distortion from raw frames with per-pixel lookup maps computed once from the
+// calibration (OpenCV's initUndistortRectifyMap), so that each frame costs one remap per image.
+
+#include <memory>
+
+#include "voxfuse/io/RGBDFrame.h"
+#include "voxfuse/objects/RGBDCalib.h"
+
+namespace voxfuse {
+
+class FrameUndistorter {
+public:
+    // Builds maps for each camera whose LensDistortion is non-zero. An undistorted image keeps its
+    // camera's size and intrinsics; only the distortion is gone.
+    explicit FrameUndistorter(const RGBDCalib& calib);
+    ~FrameUndistorter();
+    FrameUndistorter(FrameUndistorter&&) noexcept;
+    FrameUndistorter& operator=(FrameUndistorter&&) noexcept;
+
+    // False when neither camera has distortion: apply() leaves frames as they are.
+    bool active() const { return rgb_maps_ != nullptr || depth_maps_ != nullptr; }
+    // The calibration that undistorted frames have: the input's, with zero distortion.
+    const RGBDCalib& undistortedCalib() const { return undistorted_; }
+
+    // Depth is resampled nearest-neighbour (never blended across object edges, and 0 stays "no
+    // measurement"), colour bilinearly; pixels that see outside the raw image become 0. An image
+    // that does not have its camera's calibrated size throws IoError naming frame.depth_path and
+    // frame.index. Safe to call from several threads at once.
+    void apply(RGBDFrame& frame) const;
+
+private:
+    struct Maps;
+    // Null when the camera has no distortion (nothing to do for its images).
+    static std::unique_ptr<Maps> makeMaps(const Intrinsics& camera, const LensDistortion& distortion, int map_type);
+
+    std::unique_ptr<Maps> rgb_maps_;
+    std::unique_ptr<Maps> depth_maps_;
+    RGBDCalib undistorted_;
+};
+
+}  // namespace voxfuse
