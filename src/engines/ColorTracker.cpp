@@ -26,28 +26,26 @@ public:
     void track(TrackingState& state, const View& view, const RenderState& model) override {
         const Timer total;
         stats_ = TrackerStats();
-        const bool first_frame = !seen_frame_;
-        seen_frame_ = true;
-
         const Timer prepare;
         const bool has_color = frames_.prepare(view, int(settings_.levels.size()));
-        const bool has_model = hasSurface(model);
+        const bool has_model = hasTrackableSurface(model);
         const bool colored = has_color && has_model && frames_.colorModel(model, settings_.color_point_step);
         stats_.prepare_ms = prepare.elapsedMs();
 
         if (colored) {
             estimatePose(state);
         } else {
-            // Nothing to track against yet: the first frame defines the map. No colour, or a model that
-            // vanished: Failed. A model but no earlier colour frame to colour it: the pose is kept,
-            // unverified (Poor).
-            state.quality = !has_model && first_frame ? TrackingQuality::Good
+            // No map yet (the first frame, or nothing fused so far): this frame's pose defines it. No
+            // colour, or a map that vanished: Failed. A map but no earlier colour frame to colour it:
+            // the pose is kept, unverified (Poor).
+            state.quality = !has_model && !seen_model_ ? TrackingQuality::Good
                             : !has_color || !has_model ? TrackingQuality::Failed
                                                        : TrackingQuality::Poor;
             state.inlier_ratio = state.quality == TrackingQuality::Good ? 1.f : 0.f;
             state.residual_m = 0.f;
             state.condition = state.quality == TrackingQuality::Good ? 1.f : 0.f;
         }
+        seen_model_ = seen_model_ || has_model;
         if (state.quality == TrackingQuality::Failed)
             frames_.forget();
         else
@@ -56,18 +54,13 @@ public:
     }
 
     void reset() override {
-        seen_frame_ = false;
+        seen_model_ = false;
         frames_.forget();
     }
     const TrackerStats& lastStats() const override { return stats_; }
     const TrackerSettings& settings() const override { return settings_; }
 
 private:
-    static bool hasSurface(const RenderState& model) {
-        const Vec4f* p = model.points_world.host();
-        return model.intrinsics.valid() && std::any_of(p, p + model.points_world.pixelCount(), [](const Vec4f& v) { return v.w > 0.f; });
-    }
-
     NormalEquations<double> evaluate(int pyramid_level, const Eigen::Matrix4d& T) {
         return kernels_->accumulate(frames_.points(), frames_.level(pyramid_level), frames_.termParams(pyramid_level, pose::toMat4f(T)),
                                     settings_.color_kernel, settings_.color_kernel_scale);
@@ -77,65 +70,62 @@ private:
         const Eigen::Matrix4d T_start = pose::toEigenD(state.T_world_camera);
         Eigen::Matrix4d T = T_start;
         NormalEquations<double> finest = NormalEquations<double>::zero();
-        const int n = int(settings_.levels.size());
-        for (int li = 0; li < n; ++li) {
-            const TrackerLevel& ls = settings_.levels[std::size_t(li)];
-            const int pi = n - 1 - li;
-            TrackerLevelStats ls_stats;
-            ls_stats.width = frames_.level(pi).intensity.width();
-            ls_stats.height = frames_.level(pi).intensity.height();
-            const Timer level_time;
-            NormalEquations<double> eq = evaluate(pi, T);
-            double lambda = kInitialLambda;
-            for (int it = 0; it < ls.max_iterations && eq.count >= 6; ++it) {
-                ls_stats.iterations = it + 1;
-                pose::Vector6d x;
-                if (!pose::solveUpdate(eq, ls.motion, lambda, x)) break;
-                const Eigen::Matrix4d T_new = pose::applyUpdate(T, x);
-                const NormalEquations<double> eq_new = evaluate(pi, T_new);
-                // Mean cost: a step that pushes points out of the image must not look like progress.
-                if (eq_new.count >= 6 && meanCost(eq_new) < meanCost(eq)) {
-                    T = T_new;
-                    eq = eq_new;
-                    lambda = std::max(lambda * 0.1, 1e-7);
-                    if (x.head<3>().norm() < settings_.min_rotation_step_rad && x.tail<3>().norm() < settings_.min_translation_step_m) break;
-                } else {
-                    lambda *= 10.0;
-                    if (lambda > kMaxLambda) break;
-                }
-            }
-            ls_stats.ms = level_time.elapsedMs();
-            ls_stats.inliers = eq.count;
-            ls_stats.rms_residual = eq.count > 0 ? float(std::sqrt(eq.squared_sum / eq.count)) : 0.f;
-            stats_.levels.push_back(ls_stats);
-            if (pi == 0) finest = eq;
-        }
+        for (int li = 0; li < int(settings_.levels.size()); ++li) finest = refineOnLevel(li, T);
 
         const ColorPoint* pts = frames_.points().host();
         const int colored = int(std::count_if(pts, pts + frames_.points().pixelCount(), [](const ColorPoint& c) { return c.intensity >= 0.f; }));
-        const float inlier_ratio = colored > 0 ? float(finest.count) / float(colored) : 0.f;
-        const float rms = finest.count > 0 ? float(std::sqrt(finest.squared_sum / finest.count)) : 0.f;
-        const float condition = pose::conditionRatio(finest);
-        float motion_m = 0.f, motion_deg = 0.f;
-        pose::motionBetween(T_start, T, motion_m, motion_deg);
-        TrackingMeasures measures;
-        measures.inliers = finest.count;
-        measures.inlier_ratio = inlier_ratio;
-        measures.condition = condition;
-        measures.color_rms = rms;
-        measures.motion_m = motion_m;
-        measures.motion_deg = motion_deg;
-        state.quality = T.allFinite() ? assessTrackingQuality(settings_, measures) : TrackingQuality::Failed;
-        state.inlier_ratio = inlier_ratio;
-        state.residual_m = rms;
-        state.condition = condition;
+        TrackingMeasures m;
+        m.inliers = finest.count;
+        m.inlier_ratio = colored > 0 ? float(finest.count) / float(colored) : 0.f;
+        m.condition = pose::conditionRatio(finest);
+        m.color_rms = finest.count > 0 ? float(std::sqrt(finest.squared_sum / finest.count)) : 0.f;
+        pose::motionBetween(T_start, T, m.motion_m, m.motion_deg);
+        state.quality = T.allFinite() ? assessTrackingQuality(settings_, m) : TrackingQuality::Failed;
+        state.inlier_ratio = m.inlier_ratio;
+        state.residual_m = m.color_rms;
+        state.condition = m.condition;
         if (state.quality != TrackingQuality::Failed) state.T_world_camera = pose::toMat4f(T);
+    }
+
+    // Levenberg-Marquardt on settings level `li` (coarse to fine), updating T. Returns the system at
+    // the final T.
+    NormalEquations<double> refineOnLevel(int li, Eigen::Matrix4d& T) {
+        const TrackerLevel& ls = settings_.levels[std::size_t(li)];
+        const int pi = int(settings_.levels.size()) - 1 - li;
+        TrackerLevelStats stats;
+        stats.width = frames_.level(pi).intensity.width();
+        stats.height = frames_.level(pi).intensity.height();
+        const Timer level_time;
+        NormalEquations<double> eq = evaluate(pi, T);
+        double lambda = kInitialLambda;
+        for (int it = 0; it < ls.max_iterations && eq.count >= 6; ++it) {
+            stats.iterations = it + 1;
+            pose::Vector6d x;
+            if (!pose::solveUpdate(eq, ls.motion, lambda, x)) break;
+            const Eigen::Matrix4d T_new = pose::applyUpdate(T, x);
+            const NormalEquations<double> eq_new = evaluate(pi, T_new);
+            // Mean cost: a step that pushes points out of the image must not look like progress.
+            if (eq_new.count >= 6 && meanCost(eq_new) < meanCost(eq)) {
+                T = T_new;
+                eq = eq_new;
+                lambda = std::max(lambda * 0.1, 1e-7);
+                if (x.head<3>().norm() < settings_.min_rotation_step_rad && x.tail<3>().norm() < settings_.min_translation_step_m) break;
+            } else {
+                lambda *= 10.0;
+                if (lambda > kMaxLambda) break;
+            }
+        }
+        stats.ms = level_time.elapsedMs();
+        stats.inliers = eq.count;
+        stats.rms_residual = eq.count > 0 ? float(std::sqrt(eq.squared_sum / eq.count)) : 0.f;
+        stats_.levels.push_back(stats);
+        return eq;
     }
 
     TrackerSettings settings_;
     std::unique_ptr<ColorTrackerKernels> kernels_;
     PhotometricFrames frames_;
-    bool seen_frame_ = false;
+    bool seen_model_ = false;  // a map existed: from now on an empty model means lost tracking
     TrackerStats stats_;
 };
 

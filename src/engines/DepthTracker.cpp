@@ -18,14 +18,6 @@ namespace {
 // Pyramid downsampling averages only depths within this of each other (no surfaces across edges).
 constexpr float kPyramidMaxDepthDiffM = 0.05f;
 
-// True when the model has a surface point and its images match its camera.
-bool modelUsable(const RenderState& model) {
-    const Vec2i size = model.intrinsics.size();
-    if (!model.intrinsics.valid() || model.points_world.size() != size || model.normals_world.size() != size) return false;
-    const Vec4f* p = model.points_world.host();
-    return std::any_of(p, p + model.points_world.pixelCount(), [](const Vec4f& v) { return v.w > 0.f; });
-}
-
 class DepthTracker final : public Tracker {
 public:
     DepthTracker(const TrackerSettings& settings, Device device)
@@ -41,18 +33,15 @@ public:
     void track(TrackingState& state, const View& view, const RenderState& model) override {
         const Timer total;
         stats_ = TrackerStats();
-        const bool first_frame = !seen_frame_;
-        seen_frame_ = true;
-
         const Timer prepare;
         const bool frame_ok = preparePyramid(view);
-        const bool model_ok = modelUsable(model);
+        const bool model_ok = hasTrackableSurface(model);
         bool color_ok = photometric_ && photometric_->prepare(view, levelCount());
         color_ok = color_ok && model_ok && photometric_->colorModel(model, settings_.color_point_step);
         stats_.prepare_ms = prepare.elapsedMs();
 
-        if (!model_ok && first_frame) {
-            // Nothing to track against yet: this frame defines the map.
+        if (!model_ok && !seen_model_) {
+            // No map yet (the first frame, or nothing fused so far): this frame's pose defines it.
             state.quality = TrackingQuality::Good;
             state.inlier_ratio = 1.f;
             state.residual_m = 0.f;
@@ -62,6 +51,7 @@ public:
         } else {
             estimatePose(state, model, color_ok);
         }
+        seen_model_ = seen_model_ || model_ok;
         if (photometric_) {
             if (state.quality == TrackingQuality::Failed)
                 photometric_->forget();  // its pose is unknown: it must not colour the next model
@@ -72,7 +62,7 @@ public:
     }
 
     void reset() override {
-        seen_frame_ = false;
+        seen_model_ = false;
         if (photometric_) photometric_->forget();
     }
     const TrackerStats& lastStats() const override { return stats_; }
@@ -107,70 +97,67 @@ private:
     void estimatePose(TrackingState& state, const RenderState& model, bool use_color) {
         const Eigen::Matrix4d T_start = pose::toEigenD(state.T_world_camera);
         Eigen::Matrix4d T = T_start;
-        const Mat4f T_model_world = rigidInverse(model.T_world_camera);
         NormalEquations<double> finest = NormalEquations<double>::zero();
-
-        for (int li = 0; li < levelCount(); ++li) {
-            const TrackerLevel& ls = settings_.levels[std::size_t(li)];
-            const int pi = levelCount() - 1 - li;
-            const DepthFrameLevel& level = pyramid_[std::size_t(pi)];
-            const RobustKernel kernel = settings_.kind == TrackerKind::Ren && pi == 0 ? settings_.robust_kernel : RobustKernel::None;
-            TrackerLevelStats ls_stats;
-            ls_stats.width = level.depth.width();
-            ls_stats.height = level.depth.height();
-            const Timer level_time;
-            NormalEquations<double> depth_eq = NormalEquations<double>::zero();
-            // rgbd: photometric terms have a basin of a few pixels, so they join only once depth alone
-            // has converged on this level, and then refine together with it until both agree.
-            bool with_color = false;
-            for (int it = 0; it < ls.max_iterations; ++it) {
-                const Mat4f T_f = pose::toMat4f(T);
-                const DepthTermParams params{T_f, T_model_world, model.intrinsics, ls.max_distance_m, min_normal_cos_};
-                depth_eq = kernels_->accumulate(level, model, params, kernel, settings_.robust_scale_m);
-                ls_stats.iterations = it + 1;
-                NormalEquations<double> system = depth_eq;
-                if (with_color) {
-                    const NormalEquations<double> color_eq = color_kernels_->accumulate(
-                        photometric_->points(), photometric_->level(pi), photometric_->termParams(pi, T_f), settings_.color_kernel,
-                        settings_.color_kernel_scale);
-                    // Per term: the colour points are fixed by the model while the depth pixels shrink 4x per
-                    // level, so the colour sum is scaled to the depth term count.
-                    if (color_eq.count > 0 && depth_eq.count > 0)
-                        system.add(color_eq, double(settings_.color_weight) * depth_eq.count / color_eq.count);
-                }
-                pose::Vector6d x;
-                if (system.count < 6 || !pose::solveUpdate(system, ls.motion, 0.0, x)) break;
-                T = pose::applyUpdate(T, x);
-                if (x.head<3>().norm() < settings_.min_rotation_step_rad && x.tail<3>().norm() < settings_.min_translation_step_m) {
-                    if (with_color || !use_color) break;
-                    with_color = true;
-                }
-            }
-            ls_stats.ms = level_time.elapsedMs();
-            ls_stats.inliers = depth_eq.count;
-            ls_stats.rms_residual = depth_eq.count > 0 ? float(std::sqrt(depth_eq.squared_sum / depth_eq.count)) : 0.f;
-            stats_.levels.push_back(ls_stats);
-            if (pi == 0) finest = depth_eq;
-        }
+        for (int li = 0; li < levelCount(); ++li) finest = refineOnLevel(li, model, use_color, T);
 
         // Quality from the last full-resolution system (evaluated just before the last, small, update).
-        const float inlier_ratio = float(finest.count) / float(valid_pixels_);
-        const float rms = finest.count > 0 ? float(std::sqrt(finest.squared_sum / finest.count)) : 0.f;
-        const float condition = pose::conditionRatio(finest);
-        float motion_m = 0.f, motion_deg = 0.f;
-        pose::motionBetween(T_start, T, motion_m, motion_deg);
-        TrackingMeasures measures;
-        measures.inliers = finest.count;
-        measures.inlier_ratio = inlier_ratio;
-        measures.condition = condition;
-        measures.depth_rms_m = rms;
-        measures.motion_m = motion_m;
-        measures.motion_deg = motion_deg;
-        state.quality = T.allFinite() ? assessTrackingQuality(settings_, measures) : TrackingQuality::Failed;
-        state.inlier_ratio = inlier_ratio;
-        state.residual_m = rms;
-        state.condition = condition;
+        TrackingMeasures m;
+        m.inliers = finest.count;
+        m.inlier_ratio = float(finest.count) / float(valid_pixels_);
+        m.condition = pose::conditionRatio(finest);
+        m.depth_rms_m = finest.count > 0 ? float(std::sqrt(finest.squared_sum / finest.count)) : 0.f;
+        pose::motionBetween(T_start, T, m.motion_m, m.motion_deg);
+        state.quality = T.allFinite() ? assessTrackingQuality(settings_, m) : TrackingQuality::Failed;
+        state.inlier_ratio = m.inlier_ratio;
+        state.residual_m = m.depth_rms_m;
+        state.condition = m.condition;
         if (state.quality != TrackingQuality::Failed) state.T_world_camera = pose::toMat4f(T);
+    }
+
+    // Gauss-Newton on settings level `li` (coarse to fine), updating T. Returns the depth system of
+    // the last iteration.
+    NormalEquations<double> refineOnLevel(int li, const RenderState& model, bool use_color, Eigen::Matrix4d& T) {
+        const TrackerLevel& ls = settings_.levels[std::size_t(li)];
+        const int pi = levelCount() - 1 - li;
+        const DepthFrameLevel& level = pyramid_[std::size_t(pi)];
+        const RobustKernel kernel = settings_.kind == TrackerKind::Ren && pi == 0 ? settings_.robust_kernel : RobustKernel::None;
+        const Mat4f T_model_world = rigidInverse(model.T_world_camera);
+        TrackerLevelStats stats;
+        stats.width = level.depth.width();
+        stats.height = level.depth.height();
+        const Timer level_time;
+        NormalEquations<double> depth_eq = NormalEquations<double>::zero();
+        // rgbd: photometric terms have a basin of a few pixels, so they join only once depth alone has
+        // converged on this level, and then refine together with it until both agree.
+        bool with_color = false;
+        for (int it = 0; it < ls.max_iterations; ++it) {
+            const Mat4f T_f = pose::toMat4f(T);
+            const DepthTermParams params{T_f, T_model_world, model.intrinsics, ls.max_distance_m, min_normal_cos_};
+            depth_eq = kernels_->accumulate(level, model, params, kernel, settings_.robust_scale_m);
+            stats.iterations = it + 1;
+            NormalEquations<double> system = depth_eq;
+            if (with_color) {
+                const NormalEquations<double> color_eq =
+                    color_kernels_->accumulate(photometric_->points(), photometric_->level(pi), photometric_->termParams(pi, T_f),
+                                               settings_.color_kernel, settings_.color_kernel_scale);
+                // Per term: the colour points are fixed by the model while the depth pixels shrink 4x per
+                // level, so the colour sum is scaled to the depth term count.
+                if (color_eq.count > 0 && depth_eq.count > 0)
+                    system.add(color_eq, double(settings_.color_weight) * depth_eq.count / color_eq.count);
+            }
+            pose::Vector6d x;
+            if (system.count < 6 || !pose::solveUpdate(system, ls.motion, 0.0, x)) break;
+            T = pose::applyUpdate(T, x);
+            if (x.head<3>().norm() < settings_.min_rotation_step_rad && x.tail<3>().norm() < settings_.min_translation_step_m) {
+                if (with_color || !use_color) break;
+                with_color = true;
+            }
+        }
+        stats.ms = level_time.elapsedMs();
+        stats.inliers = depth_eq.count;
+        stats.rms_residual = depth_eq.count > 0 ? float(std::sqrt(depth_eq.squared_sum / depth_eq.count)) : 0.f;
+        stats_.levels.push_back(stats);
+        return depth_eq;
     }
 
     static void reportFailed(TrackingState& state) {
@@ -188,7 +175,7 @@ private:
     std::vector<DepthFrameLevel> pyramid_;
     int valid_pixels_ = 0;
     float min_normal_cos_ = -2.f;
-    bool seen_frame_ = false;
+    bool seen_model_ = false;  // a map existed: from now on an empty model means lost tracking
     TrackerStats stats_;
 };
 

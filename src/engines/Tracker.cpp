@@ -2,6 +2,8 @@
 
 #include "voxfuse/engines/Tracker.h"
 
+#include <algorithm>
+
 #include "voxfuse/engines/ColorTracker.h"
 #include "voxfuse/engines/DepthTracker.h"
 
@@ -12,6 +14,13 @@ std::unique_ptr<Tracker> makeTracker(const TrackerSettings& settings, Device dev
     // Every tracker runs its loops on the CPU until CUDA layers land (the host side is device-agnostic).
     if (settings.kind == TrackerKind::Color) return makeColorTracker(settings, device);
     return makeDepthTracker(settings, device);
+}
+
+bool hasTrackableSurface(const RenderState& model) {
+    const Vec2i size = model.intrinsics.size();
+    if (!model.intrinsics.valid() || model.points_world.size() != size || model.normals_world.size() != size) return false;
+    const Vec4f* p = model.points_world.host();
+    return std::any_of(p, p + model.points_world.pixelCount(), [](const Vec4f& v) { return v.w > 0.f; });
 }
 
 TrackingQuality assessTrackingQuality(const TrackerSettings& s, const TrackingMeasures& m) {

@@ -38,11 +38,12 @@ public:
     // tracking_state. Never throws for bad frames: reports TrackingQuality::Failed instead and then
     // leaves the pose as it was.
     //
-    // Call it for every frame, the first one included: with no earlier call (or after reset()) the
-    // pose is kept and reported Good (the first frame defines the map), and the colour trackers
-    // remember each frame's colour to colour the model at the next one.
+    // Call it for every frame, the first one included: while there is no map yet (the model has no
+    // surface and never had one since construction or reset()) the pose is kept and reported Good,
+    // as that frame defines the map; once a map existed, an empty model is a failure. The colour
+    // trackers also remember each frame's colour to colour the model at the next one.
     virtual void track(TrackingState& tracking_state, const View& view, const RenderState& model) = 0;
-    // Forgets the previous frame (after a map reset or relocalisation).
+    // Forgets the previous frame and the map (after a map reset).
     virtual void reset() = 0;
     virtual const TrackerStats& lastStats() const = 0;
     virtual const TrackerSettings& settings() const = 0;
@@ -51,6 +52,10 @@ public:
 // The tracker `settings.kind` asks for (validated first: ConfigError when a setting is out of range).
 // Every tracker runs on the CPU for now; Device::CUDA gets the CPU implementation.
 std::unique_ptr<Tracker> makeTracker(const TrackerSettings& settings, Device device);
+
+// True when `model` holds a surface point and point/normal images of its camera's size: something
+// to track against.
+bool hasTrackableSurface(const RenderState& model);
 
 // What the quality rules look at: the tracker's final full-resolution system and the estimated motion.
 struct TrackingMeasures {

@@ -36,7 +36,7 @@ VF_HOST_DEVICE inline int modelPixelIndex(const Intrinsics& model, Vec3f p_model
 }
 
 // The point-to-plane term of one frame vertex (camera coordinates, w = 1 when valid) with its normal
-// (w = 1 when valid; only needed when the normal test is on). Writes the residual
+// (w = 1 when valid; with the normal test on, vertices without a normal are rejected). Writes the residual
 // r = n_model . (T * vertex - p_model) in metres and its Jacobian J = dr/dx for the update
 // T * exp(x), x = (omega, v) in camera coordinates: J = [vertex x n_c, n_c] with n_c = R^T n_model.
 // Returns false when the vertex has no acceptable model correspondence.
