@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "voxfuse/engines/AllocationEngine.h"
+#include "voxfuse/engines/EnginePairs.h"
 #include "voxfuse/engines/IntegrationEngine.h"
 #include "voxfuse/objects/Voxel.h"
 #include "voxfuse/shared/BlockProjection.h"
@@ -233,13 +234,8 @@ std::unique_ptr<AllocationEngine<TVoxel, TIndex>> makeAllocationEngine() {
     return std::make_unique<AllocationEngine_CPU<TVoxel, TIndex>>();
 }
 
-template std::unique_ptr<AllocationEngine<VoxelS, PlainVoxelArray>> makeAllocationEngine<VoxelS, PlainVoxelArray>();
-template std::unique_ptr<AllocationEngine<VoxelF, PlainVoxelArray>> makeAllocationEngine<VoxelF, PlainVoxelArray>();
-template std::unique_ptr<AllocationEngine<VoxelSRgb, PlainVoxelArray>> makeAllocationEngine<VoxelSRgb, PlainVoxelArray>();
-template std::unique_ptr<AllocationEngine<VoxelFRgb, PlainVoxelArray>> makeAllocationEngine<VoxelFRgb, PlainVoxelArray>();
-template std::unique_ptr<AllocationEngine<VoxelS, VoxelBlockHash>> makeAllocationEngine<VoxelS, VoxelBlockHash>();
-template std::unique_ptr<AllocationEngine<VoxelF, VoxelBlockHash>> makeAllocationEngine<VoxelF, VoxelBlockHash>();
-template std::unique_ptr<AllocationEngine<VoxelSRgb, VoxelBlockHash>> makeAllocationEngine<VoxelSRgb, VoxelBlockHash>();
-template std::unique_ptr<AllocationEngine<VoxelFRgb, VoxelBlockHash>> makeAllocationEngine<VoxelFRgb, VoxelBlockHash>();
+#define VF_INSTANTIATE(TVoxel, TIndex) template std::unique_ptr<AllocationEngine<TVoxel, TIndex>> makeAllocationEngine<TVoxel, TIndex>();
+VF_FOR_EACH_ENGINE_PAIR(VF_INSTANTIATE)
+#undef VF_INSTANTIATE
 
 }  // namespace voxfuse::cpu

@@ -2,6 +2,7 @@
 
 #include "voxfuse/core/Error.h"
 #include "voxfuse/engines/IntegrationEngine.h"
+#include "voxfuse/engines/EnginePairs.h"
 #include "voxfuse/objects/VoxelBlockHash.h"
 #include "voxfuse/objects/Voxel.h"
 
@@ -81,13 +82,8 @@ std::unique_ptr<IntegrationEngine<TVoxel, TIndex>> makeIntegrationEngine() {
     return std::make_unique<IntegrationEngine_CPU<TVoxel, TIndex>>();
 }
 
-template std::unique_ptr<IntegrationEngine<VoxelS, PlainVoxelArray>> makeIntegrationEngine<VoxelS, PlainVoxelArray>();
-template std::unique_ptr<IntegrationEngine<VoxelF, PlainVoxelArray>> makeIntegrationEngine<VoxelF, PlainVoxelArray>();
-template std::unique_ptr<IntegrationEngine<VoxelSRgb, PlainVoxelArray>> makeIntegrationEngine<VoxelSRgb, PlainVoxelArray>();
-template std::unique_ptr<IntegrationEngine<VoxelFRgb, PlainVoxelArray>> makeIntegrationEngine<VoxelFRgb, PlainVoxelArray>();
-template std::unique_ptr<IntegrationEngine<VoxelS, VoxelBlockHash>> makeIntegrationEngine<VoxelS, VoxelBlockHash>();
-template std::unique_ptr<IntegrationEngine<VoxelF, VoxelBlockHash>> makeIntegrationEngine<VoxelF, VoxelBlockHash>();
-template std::unique_ptr<IntegrationEngine<VoxelSRgb, VoxelBlockHash>> makeIntegrationEngine<VoxelSRgb, VoxelBlockHash>();
-template std::unique_ptr<IntegrationEngine<VoxelFRgb, VoxelBlockHash>> makeIntegrationEngine<VoxelFRgb, VoxelBlockHash>();
+#define VF_INSTANTIATE(TVoxel, TIndex) template std::unique_ptr<IntegrationEngine<TVoxel, TIndex>> makeIntegrationEngine<TVoxel, TIndex>();
+VF_FOR_EACH_ENGINE_PAIR(VF_INSTANTIATE)
+#undef VF_INSTANTIATE
 
 }  // namespace voxfuse::cpu

@@ -26,6 +26,7 @@
 #include "BlockNeighbourhood_CPU.h"
 #include "voxfuse/core/Error.h"
 #include "voxfuse/engines/MeshingEngine.h"
+#include "voxfuse/engines/EnginePairs.h"
 #include "voxfuse/objects/Voxel.h"
 
 namespace voxfuse::cpu {
@@ -323,13 +324,8 @@ std::unique_ptr<MeshingEngine<TVoxel, TIndex>> makeMeshingEngine() {
     return std::make_unique<MeshingEngine_CPU<TVoxel, TIndex>>();
 }
 
-template std::unique_ptr<MeshingEngine<VoxelS, PlainVoxelArray>> makeMeshingEngine<VoxelS, PlainVoxelArray>();
-template std::unique_ptr<MeshingEngine<VoxelF, PlainVoxelArray>> makeMeshingEngine<VoxelF, PlainVoxelArray>();
-template std::unique_ptr<MeshingEngine<VoxelSRgb, PlainVoxelArray>> makeMeshingEngine<VoxelSRgb, PlainVoxelArray>();
-template std::unique_ptr<MeshingEngine<VoxelFRgb, PlainVoxelArray>> makeMeshingEngine<VoxelFRgb, PlainVoxelArray>();
-template std::unique_ptr<MeshingEngine<VoxelS, VoxelBlockHash>> makeMeshingEngine<VoxelS, VoxelBlockHash>();
-template std::unique_ptr<MeshingEngine<VoxelF, VoxelBlockHash>> makeMeshingEngine<VoxelF, VoxelBlockHash>();
-template std::unique_ptr<MeshingEngine<VoxelSRgb, VoxelBlockHash>> makeMeshingEngine<VoxelSRgb, VoxelBlockHash>();
-template std::unique_ptr<MeshingEngine<VoxelFRgb, VoxelBlockHash>> makeMeshingEngine<VoxelFRgb, VoxelBlockHash>();
+#define VF_INSTANTIATE(TVoxel, TIndex) template std::unique_ptr<MeshingEngine<TVoxel, TIndex>> makeMeshingEngine<TVoxel, TIndex>();
+VF_FOR_EACH_ENGINE_PAIR(VF_INSTANTIATE)
+#undef VF_INSTANTIATE
 
 }  // namespace voxfuse::cpu

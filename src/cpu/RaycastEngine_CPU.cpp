@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "voxfuse/engines/RaycastEngine.h"
+#include "voxfuse/engines/EnginePairs.h"
 #include "voxfuse/objects/PlainVoxelArray.h"
 #include "voxfuse/objects/VoxelBlockHash.h"
 #include "voxfuse/objects/Voxel.h"
@@ -218,13 +219,8 @@ std::unique_ptr<RaycastEngine<TVoxel, TIndex>> makeRaycastEngine() {
     return std::make_unique<RaycastEngine_CPU<TVoxel, TIndex>>();
 }
 
-template std::unique_ptr<RaycastEngine<VoxelS, PlainVoxelArray>> makeRaycastEngine<VoxelS, PlainVoxelArray>();
-template std::unique_ptr<RaycastEngine<VoxelF, PlainVoxelArray>> makeRaycastEngine<VoxelF, PlainVoxelArray>();
-template std::unique_ptr<RaycastEngine<VoxelSRgb, PlainVoxelArray>> makeRaycastEngine<VoxelSRgb, PlainVoxelArray>();
-template std::unique_ptr<RaycastEngine<VoxelFRgb, PlainVoxelArray>> makeRaycastEngine<VoxelFRgb, PlainVoxelArray>();
-template std::unique_ptr<RaycastEngine<VoxelS, VoxelBlockHash>> makeRaycastEngine<VoxelS, VoxelBlockHash>();
-template std::unique_ptr<RaycastEngine<VoxelF, VoxelBlockHash>> makeRaycastEngine<VoxelF, VoxelBlockHash>();
-template std::unique_ptr<RaycastEngine<VoxelSRgb, VoxelBlockHash>> makeRaycastEngine<VoxelSRgb, VoxelBlockHash>();
-template std::unique_ptr<RaycastEngine<VoxelFRgb, VoxelBlockHash>> makeRaycastEngine<VoxelFRgb, VoxelBlockHash>();
+#define VF_INSTANTIATE(TVoxel, TIndex) template std::unique_ptr<RaycastEngine<TVoxel, TIndex>> makeRaycastEngine<TVoxel, TIndex>();
+VF_FOR_EACH_ENGINE_PAIR(VF_INSTANTIATE)
+#undef VF_INSTANTIATE
 
 }  // namespace voxfuse::cpu
