@@ -1,9 +1,8 @@
 // CPU/OpenMP loops of colour tracking; per-pixel work is in shared/ColorTracker.h.
 
-#include <omp.h>
-
 #include <vector>
 
+#include "NormalEquationsReduction_CPU.h"
 #include "voxfuse/engines/ColorTracker.h"
 
 namespace voxfuse::cpu {
@@ -61,24 +60,9 @@ public:
         const Vec2f* gradient = level.gradient.host();
         const Vec2i size = level.intensity.size();
         const int n = int(points.pixelCount());
-        // Per-thread partial sums added in thread order: deterministic for a given thread count.
-        const int threads = omp_get_max_threads();
-        partials_.assign(std::size_t(threads), NormalEquations<double>::zero());
-#pragma omp parallel num_threads(threads)
-        {
-            NormalEquations<double> local = NormalEquations<double>::zero();
-#pragma omp for schedule(static) nowait
-            for (int i = 0; i < n; ++i) {
-                float J[6], r;
-                if (!photometricTerm(pts[i], intensity, gradient, size, params, J, r)) continue;
-                const float w = robustWeight(kernel, r, kernel_scale);
-                if (w > 0.f) local.addTerm(J, r, w);
-            }
-            partials_[std::size_t(omp_get_thread_num())] = local;
-        }
-        NormalEquations<double> total = NormalEquations<double>::zero();
-        for (const NormalEquations<double>& p : partials_) total.add(p);
-        return total;
+        return accumulateNormalEquations(
+            n, kernel, kernel_scale,
+            [&](int i, float* J, float& r) { return photometricTerm(pts[i], intensity, gradient, size, params, J, r); }, partials_);
     }
 
 private:

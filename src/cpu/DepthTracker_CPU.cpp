@@ -1,9 +1,8 @@
 // CPU/OpenMP loop of depth tracking; the per-pixel term is pointToPlaneTerm() in shared/DepthTracker.h.
 
-#include <omp.h>
-
 #include <vector>
 
+#include "NormalEquationsReduction_CPU.h"
 #include "voxfuse/engines/DepthTracker.h"
 
 namespace voxfuse::cpu {
@@ -19,25 +18,10 @@ public:
         const Vec4f* model_normals = model.normals_world.host();
         const int n = int(level.vertices.pixelCount());
 
-        // Per-thread partial sums, added in thread order afterwards: the result does not depend on
-        // which thread finished first (an omp reduction clause would not promise that).
-        const int threads = omp_get_max_threads();
-        partials_.assign(std::size_t(threads), NormalEquations<double>::zero());
-#pragma omp parallel num_threads(threads)
-        {
-            NormalEquations<double> local = NormalEquations<double>::zero();
-#pragma omp for schedule(static) nowait
-            for (int i = 0; i < n; ++i) {
-                float J[6], r;
-                if (!pointToPlaneTerm(vertices[i], normals[i], model_points, model_normals, params, J, r)) continue;
-                const float w = robustWeight(kernel, r, kernel_scale_m);
-                if (w > 0.f) local.addTerm(J, r, w);
-            }
-            partials_[std::size_t(omp_get_thread_num())] = local;
-        }
-        NormalEquations<double> total = NormalEquations<double>::zero();
-        for (const NormalEquations<double>& p : partials_) total.add(p);
-        return total;
+        return accumulateNormalEquations(
+            n, kernel, kernel_scale_m,
+            [&](int i, float* J, float& r) { return pointToPlaneTerm(vertices[i], normals[i], model_points, model_normals, params, J, r); },
+            partials_);
     }
 
 private:
