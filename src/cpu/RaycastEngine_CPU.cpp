@@ -86,10 +86,7 @@ public:
                 if (!clipRayToBox(origin, dir, box_lo, box_hi, t_min, t_max)) continue;
                 Vec3f hit;
                 if (!castRay(hit, voxels, index, origin, dir, t_min, t_max, step_scale)) continue;
-                const Vec3f n = sdfGradientNormal(voxels, index, hit);
-                const Vec3f p = hit * params.voxel_size_m;
-                points[i] = Vec4f{p.x, p.y, p.z, 1.f};
-                if (length(n) > 0.5f) normals[i] = Vec4f{n.x, n.y, n.z, 1.f};
+                raycastHitOutputs(voxels, index, hit, params.voxel_size_m, points[i], normals[i]);
             }
     }
 
@@ -135,10 +132,7 @@ public:
                 if (!castRayHash(hit, voxels, view, origin, dir, params.view_frustum_min_m * t_scale, z_min * t_scale, z_max * t_scale,
                                  step_scale))
                     continue;
-                const Vec3f n = sdfGradientNormal(voxels, view, hit);
-                const Vec3f p = hit * params.voxel_size_m;
-                points[i] = Vec4f{p.x, p.y, p.z, 1.f};
-                if (length(n) > 0.5f) normals[i] = Vec4f{n.x, n.y, n.z, 1.f};
+                raycastHitOutputs(voxels, view, hit, params.voxel_size_m, points[i], normals[i]);
             }
         }
     }

@@ -150,6 +150,17 @@ VF_HOST_DEVICE inline bool castRayHash(Vec3f& hit_grid, const TVoxel* voxels, co
     return true;
 }
 
+// A surface hit (grid units) as the raycast's per-pixel outputs: world point (w = 1) and the SDF
+// gradient normal (w = 1, or all zero where the gradient vanishes).
+template <class TVoxel, class TIndexData>
+VF_HOST_DEVICE inline void raycastHitOutputs(const TVoxel* voxels, const TIndexData& index, Vec3f hit_grid, float voxel_size_m,
+                                             Vec4f& point_world, Vec4f& normal_world) {
+    const Vec3f n = sdfGradientNormal(voxels, index, hit_grid);
+    const Vec3f p = hit_grid * voxel_size_m;
+    point_world = Vec4f{p.x, p.y, p.z, 1.f};
+    normal_world = length(n) > 0.5f ? Vec4f{n.x, n.y, n.z, 1.f} : Vec4f{0.f, 0.f, 0.f, 0.f};
+}
+
 // The unit-length ray direction through pixel (x, y) in camera coordinates and the factor that
 // turns a depth z into a distance along that ray.
 VF_HOST_DEVICE inline Vec3f pixelRayDirection(const Intrinsics& intr, float x, float y, float& distance_per_depth) {
