@@ -48,14 +48,25 @@ FrameUndistorter::FrameUndistorter(const RGBDCalib& calib)
     // map just outside the image (it repeats the edge instead of giving 0 = no measurement).
     : rgb_maps_(makeMaps(calib.rgb, calib.rgb_distortion, CV_16SC2)),
       depth_maps_(makeMaps(calib.depth, calib.depth_distortion, CV_32FC1)),
-      undistorted_(calib) {
+      undistorted_(calib),
+      rgb_distortion_(calib.rgb_distortion) {
     undistorted_.rgb_distortion = LensDistortion{};
     undistorted_.depth_distortion = LensDistortion{};
 }
 
 FrameUndistorter::~FrameUndistorter() = default;
-FrameUndistorter::FrameUndistorter(FrameUndistorter&&) noexcept = default;
-FrameUndistorter& FrameUndistorter::operator=(FrameUndistorter&&) noexcept = default;
+FrameUndistorter::FrameUndistorter(FrameUndistorter&& other) noexcept
+    : rgb_maps_(std::move(other.rgb_maps_)), depth_maps_(std::move(other.depth_maps_)), undistorted_(other.undistorted_),
+      rgb_distortion_(other.rgb_distortion_), label_maps_(std::move(other.label_maps_)) {}
+
+FrameUndistorter& FrameUndistorter::operator=(FrameUndistorter&& other) noexcept {
+    rgb_maps_ = std::move(other.rgb_maps_);
+    depth_maps_ = std::move(other.depth_maps_);
+    undistorted_ = other.undistorted_;
+    rgb_distortion_ = other.rgb_distortion_;
+    label_maps_ = std::move(other.label_maps_);
+    return *this;
+}
 
 void FrameUndistorter::apply(RGBDFrame& frame) const {
     auto check = [&](Vec2i actual, const Maps& maps, const char* what) {
@@ -80,6 +91,23 @@ void FrameUndistorter::apply(RGBDFrame& frame) const {
         cv::remap(wrap(frame.rgb, CV_8UC4), dst, rgb_maps_->map1, rgb_maps_->map2, cv::INTER_LINEAR,
                   cv::BORDER_CONSTANT, cv::Scalar(0, 0, 0, 0));
         frame.rgb = std::move(out);
+    }
+    if (rgb_maps_ && !frame.labels.empty()) {
+        // The colour camera at the label image's resolution: same distortion coefficients (they act
+        // on normalised coordinates), float maps for the nearest-neighbour border reason above.
+        std::shared_ptr<const Maps> maps;
+        {
+            const std::lock_guard<std::mutex> lock(label_maps_mutex_);
+            if (!label_maps_ || label_maps_->size != frame.labels.size())
+                label_maps_ = makeMaps(undistorted_.rgb.resized(frame.labels.width(), frame.labels.height()),
+                                       rgb_distortion_, CV_32FC1);
+            maps = label_maps_;
+        }
+        Image<ClassId> out(frame.labels.size());
+        cv::Mat dst = wrap(out, CV_16UC1);
+        cv::remap(wrap(frame.labels, CV_16UC1), dst, maps->map1, maps->map2, cv::INTER_NEAREST, cv::BORDER_CONSTANT,
+                  cv::Scalar(kNoLabel));
+        frame.labels = std::move(out);
     }
 }
 

@@ -295,4 +295,26 @@ void writeDepthPNG(const std::string& path, const Image<std::uint16_t>& depth) {
     writeWithOpenCV(path, wrapped);
 }
 
+Image<ClassId> readLabelImage(const std::string& path, int ignore_id) {
+    if (ignore_id < -1 || ignore_id > 65535)
+        throw ConfigError("label ignore id " + std::to_string(ignore_id) + " out of range: expected -1 (none) or 0..65535");
+    const cv::Mat m = readWithOpenCV(path);
+    const std::string requirement = "label images must be single-channel 8- or 16-bit class ids; ";
+    // IMREAD_UNCHANGED expands palette PNGs to BGR, so their indices are lost: say what to do about it.
+    if (m.channels() != 1)
+        throw IoError(path, requirement + "this one has " + std::to_string(m.channels()) +
+                                " channels (colour-coded or palette images must be converted to class ids first)");
+    if (m.depth() != CV_8U && m.depth() != CV_16U) throw IoError(path, requirement + "this one is " + describeMat(m));
+    Image<ClassId> labels(Vec2i{m.cols, m.rows});
+    const bool eight_bit = m.depth() == CV_8U;
+    for (int y = 0; y < m.rows; ++y) {
+        ClassId* dst = &labels.at(0, y);
+        for (int x = 0; x < m.cols; ++x) {
+            const int id = eight_bit ? int(m.ptr<std::uint8_t>(y)[x]) : int(m.ptr<std::uint16_t>(y)[x]);
+            dst[x] = (id == ignore_id || id == int(kNoLabel)) ? kNoLabel : ClassId(id);
+        }
+    }
+    return labels;
+}
+
 }  // namespace voxfuse

@@ -137,6 +137,27 @@ TEST(FrameUndistorter, DepthIsResampledNearestNeighbourSoNoValueIsInvented) {
     EXPECT_EQ(frame.depth_raw.at(70, 60), 2000);  // the patch moved to where the pinhole camera sees it
 }
 
+// Labels follow the colour camera at their own resolution (here half), nearest-neighbour: only ids
+// that were there (or kNoLabel outside the raw image), and a class patch lands where the pinhole sees it.
+TEST(FrameUndistorter, LabelsAreUndistortedLikeColourAtTheirOwnResolution) {
+    const Intrinsics half = kCamera.resized(kCamera.width / 2, kCamera.height / 2);
+    const Vec2f ideal{35.f, 30.f};  // (70, 60) at full resolution, where the lens moves pixels a lot
+    const Vec2f raw = distortPixel(half, kLens, ideal);
+    Image<ClassId> labels(half.size());
+    for (int y = 0; y < half.height; ++y)
+        for (int x = 0; x < half.width; ++x)
+            labels.at(x, y) = std::abs(x - raw.x) <= 1.5f && std::abs(y - raw.y) <= 1.5f ? ClassId(9) : ClassId(x < half.width / 2 ? 1 : 2);
+    RGBDFrame frame = frameWith(Image<Vec4u8>(), Image<std::uint16_t>());
+    frame.labels = std::move(labels);
+    FrameUndistorter(calibWithLens()).apply(frame);
+    ASSERT_EQ(frame.labels.size(), half.size());
+    for (std::size_t i = 0; i < frame.labels.pixelCount(); ++i) {
+        const ClassId v = frame.labels.host()[i];
+        ASSERT_TRUE(v == 1 || v == 2 || v == 9 || v == kNoLabel) << "pixel " << i << " = " << v;
+    }
+    EXPECT_EQ(frame.labels.at(35, 30), 9);
+}
+
 TEST(FrameUndistorter, WithoutDistortionFramesStayAsTheyAre) {
     RGBDCalib calib;
     calib.rgb = kCamera;

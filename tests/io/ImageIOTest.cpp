@@ -216,3 +216,58 @@ TEST(ImageIO, WriteErrors) {
 
 }  // namespace
 }  // namespace voxfuse
+
+// ---------------------------------------------------------------------------------------------
+// Label images (readLabelImage)
+
+namespace voxfuse {
+namespace {
+
+TEST(ImageIO, LabelImageEightBitIdsWithIgnoreId) {
+    ScratchDir dir;
+    // An 8-bit PGM, which OpenCV reads as single-channel 8-bit: ids 0, 3, 254, 255.
+    const std::string path = dir.file("labels.pgm");
+    writeBytes(path, "P5\n2 2\n255\n" + bytesOf({0, 3, 254, 255}));
+    const Image<ClassId> ignoring_zero = readLabelImage(path, 0);
+    ASSERT_EQ(ignoring_zero.size(), (Vec2i{2, 2}));
+    EXPECT_EQ(ignoring_zero.at(0, 0), kNoLabel);
+    EXPECT_EQ(ignoring_zero.at(1, 0), 3);
+    EXPECT_EQ(ignoring_zero.at(0, 1), 254);
+    EXPECT_EQ(ignoring_zero.at(1, 1), 255);  // an ordinary class unless it is the ignore id
+    const Image<ClassId> ignoring_none = readLabelImage(path, -1);
+    EXPECT_EQ(ignoring_none.at(0, 0), 0);
+    EXPECT_EQ(readLabelImage(path, 255).at(1, 1), kNoLabel);
+}
+
+TEST(ImageIO, LabelImageSixteenBitIdsAnd65535IsNoLabel) {
+    ScratchDir dir;
+    Image<std::uint16_t> ids({3, 1});
+    ids.at(0, 0) = 1000;
+    ids.at(1, 0) = 65535;
+    ids.at(2, 0) = 7;
+    const std::string path = dir.file("labels16.png");
+    writeDepthPNG(path, ids);
+    const Image<ClassId> labels = readLabelImage(path, 7);
+    ASSERT_EQ(labels.size(), (Vec2i{3, 1}));
+    EXPECT_EQ(labels.at(0, 0), 1000);
+    EXPECT_EQ(labels.at(1, 0), kNoLabel);
+    EXPECT_EQ(labels.at(2, 0), kNoLabel);  // the ignore id
+    EXPECT_EQ(readLabelImage(path, -1).at(2, 0), 7);
+}
+
+TEST(ImageIO, LabelImageErrors) {
+    ScratchDir dir;
+    const auto read = [](const std::string& p) { readLabelImage(p, 0); };
+    const std::string colour = dir.file("colour.png");
+    writePNG(colour, makeRgb({4, 4}, 1));
+    expectIoError(read, colour, "label images must be single-channel 8- or 16-bit class ids; this one has 3 channels");
+    expectIoError(read, dir.file("missing.png"), "no such file");
+    const std::string garbage = dir.file("garbage.png");
+    writeBytes(garbage, "not a png at all");
+    expectIoError(read, garbage, "cannot decode image");
+    EXPECT_THROW(readLabelImage(garbage, 65536), ConfigError);
+    EXPECT_THROW(readLabelImage(garbage, -2), ConfigError);
+}
+
+}  // namespace
+}  // namespace voxfuse

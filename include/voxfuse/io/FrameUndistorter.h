@@ -3,6 +3,7 @@
 // calibration (OpenCV's initUndistortRectifyMap), so that each frame costs one remap per image.
 
 #include <memory>
+#include <mutex>
 
 #include "voxfuse/io/RGBDFrame.h"
 #include "voxfuse/objects/RGBDCalib.h"
@@ -24,9 +25,11 @@ public:
     const RGBDCalib& undistortedCalib() const { return undistorted_; }
 
     // Depth is resampled nearest-neighbour (never blended across object edges, and 0 stays "no
-    // measurement"), colour bilinearly; pixels that see outside the raw image become 0. An image
-    // that does not have its camera's calibrated size throws IoError naming frame.depth_path and
-    // frame.index. Safe to call from several threads at once.
+    // measurement"), colour bilinearly; pixels that see outside the raw image become 0. Label images
+    // (any resolution of the colour camera) are resampled nearest-neighbour with the colour camera's
+    // distortion; outside pixels become kNoLabel. An image that does not have its camera's calibrated
+    // size throws IoError naming frame.depth_path and frame.index. Safe to call from several threads
+    // at once.
     void apply(RGBDFrame& frame) const;
 
 private:
@@ -37,6 +40,10 @@ private:
     std::unique_ptr<Maps> rgb_maps_;
     std::unique_ptr<Maps> depth_maps_;
     RGBDCalib undistorted_;
+    LensDistortion rgb_distortion_;
+    // Label images: maps for the last label resolution seen, made on first use.
+    mutable std::mutex label_maps_mutex_;
+    mutable std::shared_ptr<const Maps> label_maps_;
 };
 
 }  // namespace voxfuse

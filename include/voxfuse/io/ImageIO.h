@@ -7,6 +7,7 @@
 #include <string>
 
 #include "voxfuse/core/Image.h"
+#include "voxfuse/objects/ClassLabel.h"
 
 namespace voxfuse {
 
@@ -19,5 +20,12 @@ Image<Vec4u8> readColorImage(const std::string& path);         // PNG/JPEG/PPM..
 Image<std::uint16_t> readDepthPNG(const std::string& path);    // must be single-channel 16-bit
 void writePNG(const std::string& path, const Image<Vec4u8>& rgba);
 void writeDepthPNG(const std::string& path, const Image<std::uint16_t>& depth);
+
+// A semantic label image: one class id per pixel, in a single-channel 8- or 16-bit lossless file (PNG,
+// PGM, TIFF... through OpenCV). Pixels equal to `ignore_id` (-1: none) and 65535 become kNoLabel; 255 in
+// an 8-bit image stays class 255 unless it is the ignore id. Colour-coded or palette images, other bit
+// depths and unreadable files throw IoError naming the file and the reason; an ignore_id outside
+// -1..65535 throws ConfigError.
+Image<ClassId> readLabelImage(const std::string& path, int ignore_id);
 
 }  // namespace voxfuse

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "voxfuse/core/Image.h"
+#include "voxfuse/objects/ClassLabel.h"
 
 namespace voxfuse {
 
@@ -17,6 +18,11 @@ struct RGBDFrame {
     bool has_ground_truth = false;
     Mat4f T_world_camera_gt = Mat4f::identity();  // ground-truth pose when has_ground_truth
     std::string depth_path;           // where the depth came from, for error messages
+    // Semantic labels (io/LabelledImageSource.h): one class id per pixel, kNoLabel where there is none,
+    // seen by the colour camera (any resolution of the colour image's aspect ratio); empty when the
+    // frame has none.
+    Image<ClassId> labels;
+    std::string labels_path;
 };
 
 }  // namespace voxfuse

@@ -30,6 +30,18 @@ struct Intrinsics {
         r.cy = (cy + 0.5f) / factor - 0.5f;
         return r;
     }
+    // The same camera seen through an image of another resolution (same field of view).
+    Intrinsics resized(int new_width, int new_height) const {
+        Intrinsics r = *this;
+        const float sx = float(new_width) / float(width), sy = float(new_height) / float(height);
+        r.width = new_width;
+        r.height = new_height;
+        r.fx = fx * sx;
+        r.fy = fy * sy;
+        r.cx = (cx + 0.5f) * sx - 0.5f;
+        r.cy = (cy + 0.5f) * sy - 0.5f;
+        return r;
+    }
     bool valid() const { return width > 0 && height > 0 && fx > 0.f && fy > 0.f; }
 };
 

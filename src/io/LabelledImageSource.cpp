@@ -1,0 +1,269 @@
+#include "voxfuse/io/LabelledImageSource.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include "TextParsing.h"
+#include "voxfuse/core/Error.h"
+#include "voxfuse/io/ImageIO.h"
+
+namespace voxfuse {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string lowerExtension(const fs::path& p) {
+    std::string ext = p.extension().string();
+    for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+    return ext;
+}
+
+// Lossless formats only: JPEG compression would turn class ids into their neighbours' values.
+bool isLabelImageName(const fs::path& p) {
+    const std::string ext = lowerExtension(p);
+    return ext == ".png" || ext == ".pgm" || ext == ".tif" || ext == ".tiff";
+}
+
+bool isJpegName(const fs::path& p) {
+    const std::string ext = lowerExtension(p);
+    return ext == ".jpg" || ext == ".jpeg";
+}
+
+bool isDigit(char c) { return c >= '0' && c <= '9'; }
+
+// Digits with at most one '.' ("1305031102.175304", "17"): a time in seconds. Stricter than
+// text::parseDouble, which would also take "1e3", "inf" or "-2".
+bool parseDecimalName(const std::string& stem, double& value, bool& has_point) {
+    int digits = 0, points = 0;
+    for (char c : stem) {
+        if (isDigit(c))
+            ++digits;
+        else if (c == '.')
+            ++points;
+        else
+            return false;
+    }
+    has_point = points == 1;
+    return digits > 0 && points <= 1 && text::parseDouble(stem, value) && std::isfinite(value);
+}
+
+// "frame2" before "frame10": runs of digits compare by value, everything else by character. Names
+// equal in that order ("07" and "7") fall back to plain comparison so that the order is total.
+bool naturalLess(const std::string& a, const std::string& b) {
+    std::size_t i = 0, j = 0;
+    while (i < a.size() && j < b.size()) {
+        if (isDigit(a[i]) && isDigit(b[j])) {
+            std::size_t ei = i, ej = j;
+            while (ei < a.size() && isDigit(a[ei])) ++ei;
+            while (ej < b.size() && isDigit(b[ej])) ++ej;
+            std::size_t si = i, sj = j;  // skip leading zeros
+            while (si + 1 < ei && a[si] == '0') ++si;
+            while (sj + 1 < ej && b[sj] == '0') ++sj;
+            if (ei - si != ej - sj) return ei - si < ej - sj;
+            const int c = a.compare(si, ei - si, b, sj, ej - sj);
+            if (c != 0) return c < 0;
+            i = ei;
+            j = ej;
+        } else {
+            if (a[i] != b[j]) return static_cast<unsigned char>(a[i]) < static_cast<unsigned char>(b[j]);
+            ++i;
+            ++j;
+        }
+    }
+    if ((i < a.size()) != (j < b.size())) return i >= a.size();  // a prefix sorts first
+    return a < b;
+}
+
+const char* matchName(LabelStreamOptions::Match match) {
+    return match == LabelStreamOptions::Match::Timestamp ? "timestamp" : "frame index";
+}
+
+}  // namespace
+
+LabelledImageSource::LabelledImageSource(std::unique_ptr<ImageSource> source, const LabelStreamOptions& options)
+    : source_(std::move(source)), options_(options) {
+    if (!source_) throw ConfigError("labelled source: no image source to attach labels to");
+    if (options_.path.empty()) throw ConfigError("labels: no label folder or list file given");
+    if (!std::isfinite(options_.max_time_difference_s) || options_.max_time_difference_s < 0.0)
+        throw ConfigError("labels: the maximum time difference must be finite and >= 0, got " +
+                          std::to_string(options_.max_time_difference_s) + " s");
+    if (options_.ignore_id < -1 || options_.ignore_id > 65535)
+        throw ConfigError("labels: ignore id " + std::to_string(options_.ignore_id) +
+                          " out of range: expected -1 (none) or 0..65535");
+
+    std::error_code ec;
+    if (fs::is_directory(options_.path, ec)) {
+        readFolder();
+    } else if (fs::is_regular_file(options_.path, ec)) {
+        if (isLabelImageName(options_.path) || isJpegName(options_.path))
+            throw IoError(options_.path, "this is an image; labels need a folder of label images or a list file of them");
+        is_list_ = true;
+        readList();
+    } else {
+        throw IoError(options_.path, "no such label folder or list file");
+    }
+}
+
+void LabelledImageSource::readFolder() {
+    const std::string& folder = options_.path;
+    struct Found {
+        std::string path, stem;
+        double time_s;
+        bool decimal, has_point;
+    };
+    std::vector<Found> found;
+    int jpegs = 0;
+    std::error_code ec;
+    for (fs::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
+        const fs::path& p = it->path();
+        const std::string name = p.filename().string();
+        std::error_code type_ec;
+        if (name.empty() || name[0] == '.' || !it->is_regular_file(type_ec)) continue;  // hidden files, folders
+        if (isJpegName(p)) ++jpegs;
+        if (!isLabelImageName(p)) continue;
+        Found f{p.string(), p.stem().string(), 0.0, false, false};
+        f.decimal = parseDecimalName(f.stem, f.time_s, f.has_point);
+        found.push_back(std::move(f));
+    }
+    if (ec) throw IoError(folder, "cannot list the label folder: " + ec.message());
+    if (found.empty())
+        throw IoError(folder, "no label images (.png, .pgm, .tif, .tiff) in this folder" +
+                                  (jpegs > 0 ? "; its " + std::to_string(jpegs) +
+                                                   " JPEG files cannot hold class ids (lossy compression changes them)"
+                                             : std::string()));
+
+    const bool all_decimal = std::all_of(found.begin(), found.end(), [](const Found& f) { return f.decimal; });
+    const bool all_timestamps =
+        all_decimal && std::all_of(found.begin(), found.end(), [](const Found& f) { return f.has_point; });
+    match_ = options_.match != LabelStreamOptions::Match::Automatic
+                 ? options_.match
+                 : (all_timestamps ? LabelStreamOptions::Match::Timestamp : LabelStreamOptions::Match::Index);
+
+    if (match_ == LabelStreamOptions::Match::Timestamp) {
+        const auto bad = std::find_if(found.begin(), found.end(), [](const Found& f) { return !f.decimal; });
+        if (bad != found.end())
+            throw IoError(folder, "timestamp matching needs label files named by their time in seconds (e.g. "
+                                  "1305031102.175304.png); '" +
+                                      fs::path(bad->path).filename().string() + "' is not");
+        std::sort(found.begin(), found.end(), [](const Found& a, const Found& b) {
+            return a.time_s != b.time_s ? a.time_s < b.time_s : a.path < b.path;
+        });
+    } else if (all_decimal) {
+        // Natural order would compare "1.5" and "1.25" digit run by digit run; by value is what is meant.
+        std::sort(found.begin(), found.end(), [](const Found& a, const Found& b) {
+            return a.time_s != b.time_s ? a.time_s < b.time_s : naturalLess(a.stem, b.stem);
+        });
+    } else {
+        std::sort(found.begin(), found.end(), [](const Found& a, const Found& b) {
+            return a.stem != b.stem ? naturalLess(a.stem, b.stem) : a.path < b.path;
+        });
+    }
+    images_.reserve(found.size());
+    for (Found& f : found) images_.push_back({f.time_s, std::move(f.path)});
+}
+
+void LabelledImageSource::readList() {
+    const std::string& path = options_.path;
+    std::ifstream in(path);
+    if (!in) throw IoError(path, "cannot open the label list");
+    const fs::path folder = fs::path(path).parent_path();
+    std::string line;
+    int line_number = 0;
+    while (std::getline(in, line)) {
+        ++line_number;
+        if (text::isBlankOrComment(line)) continue;
+        const auto tokens = text::splitWhitespace(line);
+        if (tokens.size() != 2)
+            throw ParseError(path, line_number,
+                             "expected 'timestamp filename', got " + std::to_string(tokens.size()) + " fields");
+        double time = 0.0;
+        if (!text::parseDouble(tokens[0], time) || !std::isfinite(time))
+            throw ParseError(path, line_number, "not a timestamp: '" + std::string(tokens[0]) + "'");
+        const fs::path file{std::string(tokens[1])};
+        const std::string resolved = (file.is_absolute() ? file : folder / file).string();
+        std::error_code ec;
+        if (fs::is_regular_file(resolved, ec))
+            images_.push_back({time, resolved});
+        else
+            ++missing_listed_files_;
+    }
+    if (in.bad()) throw IoError(path, "read error in the label list");
+    if (images_.empty())
+        throw IoError(path, missing_listed_files_ > 0 ? "none of the " + std::to_string(missing_listed_files_) +
+                                                            " listed label images is on disk"
+                                                      : std::string("the label list names no images"));
+    match_ = options_.match == LabelStreamOptions::Match::Automatic ? LabelStreamOptions::Match::Timestamp : options_.match;
+    if (match_ == LabelStreamOptions::Match::Timestamp)
+        std::stable_sort(images_.begin(), images_.end(),
+                         [](const LabelImage& a, const LabelImage& b) { return a.time_s < b.time_s; });
+}
+
+const LabelledImageSource::LabelImage* LabelledImageSource::find(const RGBDFrame& frame) const {
+    if (match_ == LabelStreamOptions::Match::Index)
+        return frame.index >= 0 && std::size_t(frame.index) < images_.size() ? &images_[std::size_t(frame.index)] : nullptr;
+    const double t = frame.timestamp_s;
+    const auto after = std::lower_bound(images_.begin(), images_.end(), t,
+                                        [](const LabelImage& image, double time) { return image.time_s < time; });
+    const LabelImage* best = nullptr;
+    if (after != images_.end()) best = &*after;
+    // The earlier neighbour wins ties: it was taken at or before the frame.
+    if (after != images_.begin() && (!best || t - std::prev(after)->time_s <= best->time_s - t)) best = &*std::prev(after);
+    if (best && std::abs(best->time_s - t) <= options_.max_time_difference_s) return best;
+    return nullptr;
+}
+
+bool LabelledImageSource::next(RGBDFrame& frame) {
+    if (!source_->next(frame)) return false;
+    // Callers reuse frames and the source does not touch labels: never leave the previous frame's.
+    frame.labels = Image<ClassId>();
+    frame.labels_path.clear();
+    const LabelImage* image = find(frame);
+    if (!image) {
+        ++without_labels_;
+        return true;
+    }
+    Image<ClassId> labels;
+    try {
+        labels = readLabelImage(image->path, options_.ignore_id);
+    } catch (const IoError& e) {
+        ++label_errors_;
+        throw IoError(e.file(), e.reason(), frame.index);
+    }
+    // The engine projects voxels into the label image through the colour camera rescaled to the label
+    // image's size: a different aspect ratio would mean another field of view (a crop), not a resolution.
+    const RGBDCalib& calib = source_->calib();
+    const Intrinsics& camera = calib.rgb.valid() ? calib.rgb : calib.depth;
+    if (camera.width > 0 && camera.height > 0) {
+        const double label_aspect = double(labels.width()) / double(labels.height());
+        const double camera_aspect = double(camera.width) / double(camera.height);
+        if (std::abs(label_aspect / camera_aspect - 1.0) > 0.01) {
+            ++label_errors_;
+            throw IoError(image->path,
+                          "label image is " + std::to_string(labels.width()) + "x" + std::to_string(labels.height()) +
+                              ", not the aspect ratio of the " + (calib.rgb.valid() ? "colour" : "depth") + " camera (" +
+                              std::to_string(camera.width) + "x" + std::to_string(camera.height) +
+                              "); any resolution of that aspect ratio (within 1%) is accepted",
+                          frame.index);
+        }
+    }
+    frame.labels = std::move(labels);
+    frame.labels_path = image->path;
+    ++with_labels_;
+    return true;
+}
+
+std::string LabelledImageSource::description() const {
+    std::string d = source_->description() + " + labels from " + options_.path + " (" + std::to_string(images_.size()) +
+                    (is_list_ ? " listed" : "") + " label images, matched by " + matchName(match_);
+    if (match_ == LabelStreamOptions::Match::Timestamp)
+        d += " within " + text::formatFloat(float(options_.max_time_difference_s)) + " s";
+    if (options_.ignore_id >= 0) d += "; class " + std::to_string(options_.ignore_id) + " = no label";
+    if (missing_listed_files_ > 0) d += "; " + std::to_string(missing_listed_files_) + " listed images not on disk skipped";
+    return d + ")";
+}
+
+}  // namespace voxfuse
