@@ -11,14 +11,12 @@ namespace voxfuse::cuda {
 namespace {
 
 template <class TVoxel>
-__global__ void integrateDenseKernel(TVoxel* voxels, PlainVoxelArray::Data index, Vec3i lo, Vec3i hi, float voxel_size,
-                                     IntegrationFrame frame) {
+__global__ void integrateDenseKernel(TVoxel* voxels, PlainVoxelArray::Data index, Vec3i lo, Vec3i hi, IntegrationFrame frame) {
     const int x = lo.x + int(blockIdx.x * blockDim.x + threadIdx.x);
     const int y = lo.y + int(blockIdx.y * blockDim.y + threadIdx.y);
     const int z = lo.z + int(blockIdx.z * blockDim.z + threadIdx.z);
     if (x >= hi.x || y >= hi.y || z >= hi.z) return;
-    const Vec3f p_world = toFloat(Vec3i{x, y, z} + index.offset) * voxel_size;
-    integrateVoxel(voxels[x + (long long)index.size.x * (y + (long long)index.size.y * z)], p_world, frame);
+    integrateVoxel(voxels[x + (long long)index.size.x * (y + (long long)index.size.y * z)], Vec3i{x, y, z} + index.offset, frame);
 }
 
 template <class TVoxel>
@@ -49,11 +47,17 @@ public:
             device_memory::copyHostToDevice(rgb_.device(), view.rgb.host(), view.rgb.pixelCount() * sizeof(Vec4u8));
             rgb = rgb_.device();
         }
-        const IntegrationFrame frame = makeIntegrationFrame(scene.params(), view, T_world_camera, depth_.device(), rgb);
+        const ClassId* labels = nullptr;
+        if (TVoxel::hasLabel && !view.labels.empty()) {
+            labels_.allocate(view.labels.pixelCount(), false, true);
+            device_memory::copyHostToDevice(labels_.device(), view.labels.host(), view.labels.pixelCount() * sizeof(ClassId));
+            labels = labels_.device();
+        }
+        const IntegrationFrame frame = makeIntegrationFrame(scene.params(), view, T_world_camera, depth_.device(), rgb, labels);
 
         const dim3 block(32, 4, 2);
         const dim3 grid(blocksFor(hi.x - lo.x, block.x), blocksFor(hi.y - lo.y, block.y), blocksFor(hi.z - lo.z, block.z));
-        integrateDenseKernel<<<grid, block>>>(scene.voxels().device(), index, lo, hi, scene.params().voxel_size_m, frame);
+        integrateDenseKernel<<<grid, block>>>(scene.voxels().device(), index, lo, hi, frame);
         VF_CUDA_CHECK_LAUNCH();
         VF_CUDA_CHECK(cudaDeviceSynchronize());
     }
@@ -74,6 +78,7 @@ private:
 
     MemoryBlock<float> depth_;
     MemoryBlock<Vec4u8> rgb_;
+    MemoryBlock<ClassId> labels_;
 };
 
 // The hash has no CUDA layer yet: the factory exists so that every pair links, and says so when used.

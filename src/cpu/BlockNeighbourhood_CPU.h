@@ -129,6 +129,7 @@ struct LocalVolume {
     bool observed[kLocalCount];
     Vec3u8 color[TVoxel::hasColor ? kLocalCount : 1];
     bool colored[TVoxel::hasColor ? kLocalCount : 1];
+    ClassId label[TVoxel::hasLabel ? kLocalCount : 1];  // kNoLabel where unobserved or without a class (w_label == 0)
     std::uint16_t observed_rows[kLocalSide * kLocalSide];
     std::uint16_t negative_rows[kLocalSide * kLocalSide];         // observed and SDF < 0
     std::uint16_t complete_cell_rows[kCellRowSide * kCellRowSide];  // all eight corners observed
@@ -156,6 +157,7 @@ struct LocalVolume {
                         colored[i] = observed[i] && v->w_color > 0;
                         color[i] = colored[i] ? v->clr : Vec3u8{0, 0, 0};
                     }
+                    if constexpr (TVoxel::hasLabel) label[i] = observed[i] && v->w_label > 0 ? v->label : kNoLabel;
                 }
                 observed_rows[rowIndex(y, z)] = observed_bits;
                 negative_rows[rowIndex(y, z)] = negative_bits;

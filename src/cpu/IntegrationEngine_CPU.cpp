@@ -20,7 +20,8 @@ public:
         Vec3i lo, hi;  // array coordinates (not offset)
         float far_m;
         if (!denseIntegrationBox(index, scene.params(), view, T_world_camera, lo, hi, far_m)) return;
-        const IntegrationFrame frame = makeIntegrationFrame(scene.params(), view, T_world_camera, view.depth.host(), view.rgb.host());
+        const IntegrationFrame frame = makeIntegrationFrame(scene.params(), view, T_world_camera, view.depth.host(), view.rgb.host(),
+                                                            view.labels.host());
         TVoxel* voxels = scene.voxels().host();
         const float voxel_size = scene.params().voxel_size_m;
         const int rows = (hi.y - lo.y) * (hi.z - lo.z);
@@ -36,10 +37,7 @@ public:
             if (!frustumRowRange(frame, row_origin, step, near_m, far_m, x_begin, x_end)) continue;
             x_begin = x_begin > lo.x ? x_begin : lo.x;
             x_end = x_end < hi.x ? x_end : hi.x;
-            for (int x = x_begin; x < x_end; ++x) {
-                const Vec3f p_world = toFloat(Vec3i{x, y, z} + index.offset) * voxel_size;
-                integrateVoxel(line[x], p_world, frame);
-            }
+            for (int x = x_begin; x < x_end; ++x) integrateVoxel(line[x], Vec3i{x, y, z} + index.offset, frame);
         }
     }
 
@@ -54,20 +52,17 @@ public:
         const VoxelBlockHash& hash = scene.index();
         if (!hash.visibleListIsFor(T_world_camera, view.calib.depth))
             throw Error("hash integration: the visible list is not for this view (run the allocation engine on it first)");
-        const IntegrationFrame frame = makeIntegrationFrame(scene.params(), view, T_world_camera, view.depth.host(), view.rgb.host());
+        const IntegrationFrame frame = makeIntegrationFrame(scene.params(), view, T_world_camera, view.depth.host(), view.rgb.host(),
+                                                            view.labels.host());
         TVoxel* voxels = scene.voxels().host();
         const int* visible = hash.visibleEntries();
         const int count = hash.visibleCount();
-        const float voxel_size = scene.params().voxel_size_m;
 #pragma omp parallel for schedule(dynamic, 8)
         for (int k = 0; k < count; ++k) {
             const HashEntry& entry = hash.entry(visible[k]);
             TVoxel* block = voxels + (long long)entry.ptr * kBlockVoxelCount;
             const Vec3i corner = Vec3i{entry.pos.x, entry.pos.y, entry.pos.z} * kBlockSide;
-            for (int i = 0; i < kBlockVoxelCount; ++i) {
-                const Vec3i p = corner + Vec3i{i & 7, (i >> 3) & 7, i >> 6};
-                integrateVoxel(block[i], toFloat(p) * voxel_size, frame);
-            }
+            for (int i = 0; i < kBlockVoxelCount; ++i) integrateVoxel(block[i], corner + Vec3i{i & 7, (i >> 3) & 7, i >> 6}, frame);
         }
     }
 

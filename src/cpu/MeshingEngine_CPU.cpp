@@ -39,6 +39,7 @@ using namespace meshing;
 struct ThreadLists {
     std::vector<Vec3f> positions, normals;
     std::vector<Vec3u8> colors;
+    std::vector<ClassId> labels;
     std::vector<std::uint16_t> edge_ids;       // per vertex, ascending within a block
     std::vector<std::uint16_t> triangle_refs;  // three per triangle
 };
@@ -60,6 +61,7 @@ struct SurfaceArrays {
     std::vector<Vec3f>& positions;
     std::vector<Vec3f>& normals;
     std::vector<Vec3u8>& colors;
+    std::vector<ClassId>& labels;
     std::vector<Vec3i>* triangles;  // nullptr: vertices only
 };
 
@@ -115,6 +117,7 @@ public:
         out.positions.resize(vertex_count);
         out.normals.resize(vertex_count);
         out.colors.resize(TVoxel::hasColor ? vertex_count : 0);
+        out.labels.resize(TVoxel::hasLabel ? vertex_count : 0);
         if (with_triangles) out.triangles->resize(first_triangle.back());
 
         int unresolved = 0;
@@ -131,6 +134,7 @@ public:
                 std::copy_n(src.positions.begin() + from, o.vertex_count, out.positions.begin() + to);
                 std::copy_n(src.normals.begin() + from, o.vertex_count, out.normals.begin() + to);
                 if constexpr (TVoxel::hasColor) std::copy_n(src.colors.begin() + from, o.vertex_count, out.colors.begin() + to);
+                if constexpr (TVoxel::hasLabel) std::copy_n(src.labels.begin() + from, o.vertex_count, out.labels.begin() + to);
                 if (lookup)
                     unresolved += resolveTriangles(i, outputs, lists, first_vertex, *lookup, out.triangles->data() + first_triangle[std::size_t(i)]);
             }
@@ -199,6 +203,7 @@ private:
                         out.positions.push_back(p * voxel_size_m_);
                         out.normals.push_back(vertexNormal(v, start, end, axis, t));
                         if constexpr (TVoxel::hasColor) out.colors.push_back(edgeColor(v, start, end, t));
+                        if constexpr (TVoxel::hasLabel) out.labels.push_back(edgeLabel(v, start, end, t));
                         out.edge_ids.push_back(std::uint16_t(edgeId(l, axis)));
                     }
                 }
@@ -222,6 +227,13 @@ private:
         else if (v.colored[start]) c = toFloat3(v.color[start]);
         else if (v.colored[end]) c = toFloat3(v.color[end]);
         return Vec3u8{std::uint8_t(c.x + 0.5f), std::uint8_t(c.y + 0.5f), std::uint8_t(c.z + 0.5f)};
+    }
+
+    // Classes cannot be interpolated: the vertex takes the class of the edge end nearer to it, or of
+    // the other end where the nearer one has none.
+    static ClassId edgeLabel(const LocalVolume<TVoxel>& v, int start, int end, float t) {
+        const int nearer = t < 0.5f ? start : end, farther = t < 0.5f ? end : start;
+        return v.label[nearer] != kNoLabel ? v.label[nearer] : v.label[farther];
     }
 
     // Marching cubes over the block's complete cells that have both signs (the others have no triangles).
@@ -296,11 +308,13 @@ class MeshingEngine_CPU<TVoxel, PlainVoxelArray> final : public MeshingEngine<TV
 public:
     void extractMesh(const Scene<TVoxel, PlainVoxelArray>& scene, Mesh& mesh) override {
         mesh.clear();
-        extract<TVoxel>(DenseBlocks<TVoxel>(scene), scene.params().voxel_size_m, {mesh.vertices, mesh.normals, mesh.colors, &mesh.triangles});
+        extract<TVoxel>(DenseBlocks<TVoxel>(scene), scene.params().voxel_size_m,
+                        {mesh.vertices, mesh.normals, mesh.colors, mesh.labels, &mesh.triangles});
     }
     void extractPointCloud(const Scene<TVoxel, PlainVoxelArray>& scene, PointCloud& cloud) override {
         cloud.clear();
-        extract<TVoxel>(DenseBlocks<TVoxel>(scene), scene.params().voxel_size_m, {cloud.points, cloud.normals, cloud.colors, nullptr});
+        extract<TVoxel>(DenseBlocks<TVoxel>(scene), scene.params().voxel_size_m,
+                        {cloud.points, cloud.normals, cloud.colors, cloud.labels, nullptr});
     }
 };
 
@@ -309,11 +323,13 @@ class MeshingEngine_CPU<TVoxel, VoxelBlockHash> final : public MeshingEngine<TVo
 public:
     void extractMesh(const Scene<TVoxel, VoxelBlockHash>& scene, Mesh& mesh) override {
         mesh.clear();
-        extract<TVoxel>(HashBlocks<TVoxel>(scene), scene.params().voxel_size_m, {mesh.vertices, mesh.normals, mesh.colors, &mesh.triangles});
+        extract<TVoxel>(HashBlocks<TVoxel>(scene), scene.params().voxel_size_m,
+                        {mesh.vertices, mesh.normals, mesh.colors, mesh.labels, &mesh.triangles});
     }
     void extractPointCloud(const Scene<TVoxel, VoxelBlockHash>& scene, PointCloud& cloud) override {
         cloud.clear();
-        extract<TVoxel>(HashBlocks<TVoxel>(scene), scene.params().voxel_size_m, {cloud.points, cloud.normals, cloud.colors, nullptr});
+        extract<TVoxel>(HashBlocks<TVoxel>(scene), scene.params().voxel_size_m,
+                        {cloud.points, cloud.normals, cloud.colors, cloud.labels, nullptr});
     }
 };
 

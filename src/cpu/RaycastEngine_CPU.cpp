@@ -21,7 +21,7 @@ namespace {
 template <class TVoxel, class TIndex>
 class RaycastEngine_CPU;
 
-// An RGBA image of a raycast; the voxels are read only for RenderMode::Color.
+// An RGBA image of a raycast; the voxels are read only for RenderMode::Color and RenderMode::Class.
 template <class TVoxel, class TIndexData>
 void renderRaycast(const TVoxel* voxels, const TIndexData& index, const SceneParams& params, const RenderState& rs, RenderMode mode,
                    Image<Vec4u8>& image) {
@@ -47,6 +47,12 @@ void renderRaycast(const TVoxel* voxels, const TIndexData& index, const ScenePar
             case RenderMode::Color:
                 if constexpr (TVoxel::hasColor)
                     out[i] = renderColor(readColorInterpolated(voxels, index, p * inv_voxel));
+                else
+                    out[i] = renderShaded(nrm, normalize(camera - p));
+                break;
+            case RenderMode::Class:
+                if constexpr (TVoxel::hasLabel)
+                    out[i] = renderClass(readLabelNearest(voxels, index, p * inv_voxel), nrm, normalize(camera - p));
                 else
                     out[i] = renderShaded(nrm, normalize(camera - p));
                 break;

@@ -8,7 +8,7 @@
 namespace voxfuse {
 
 IntegrationFrame makeIntegrationFrame(const SceneParams& params, const View& view, const Mat4f& T_world_camera,
-                                      const float* depth, const Vec4u8* rgb) {
+                                      const float* depth, const Vec4u8* rgb, const ClassId* labels) {
     IntegrationFrame f{};
     f.T_depth_world = rigidInverse(T_world_camera);
     f.depth_intrinsics = view.calib.depth;
@@ -17,17 +17,15 @@ IntegrationFrame makeIntegrationFrame(const SceneParams& params, const View& vie
     f.T_rgb_world = rigidInverse(view.calib.T_depth_rgb) * f.T_depth_world;
     f.rgb_intrinsics = view.calib.rgb;
     f.rgb = view.rgb.empty() ? nullptr : rgb;
-    if (f.rgb && view.rgb.size() != view.calib.rgb.size()) {
-        // Colour images whose size disagrees with the calibration are scaled into it.
-        const float sx = float(view.rgb.width()) / float(view.calib.rgb.width);
-        const float sy = float(view.rgb.height()) / float(view.calib.rgb.height);
-        f.rgb_intrinsics.fx *= sx;
-        f.rgb_intrinsics.cx = (f.rgb_intrinsics.cx + 0.5f) * sx - 0.5f;
-        f.rgb_intrinsics.fy *= sy;
-        f.rgb_intrinsics.cy = (f.rgb_intrinsics.cy + 0.5f) * sy - 0.5f;
-        f.rgb_intrinsics.width = view.rgb.width();
-        f.rgb_intrinsics.height = view.rgb.height();
-    }
+    // Colour and label images whose size disagrees with the calibration are scaled into it.
+    if (f.rgb && view.rgb.size() != view.calib.rgb.size()) f.rgb_intrinsics = view.calib.rgb.resized(view.rgb.width(), view.rgb.height());
+    f.labels = view.labels.empty() ? nullptr : labels;
+    const bool labels_from_rgb = view.calib.rgb.valid();
+    f.T_label_world = labels_from_rgb ? f.T_rgb_world : f.T_depth_world;
+    f.label_intrinsics = (labels_from_rgb ? view.calib.rgb : view.calib.depth).resized(view.labels.width(), view.labels.height());
+    f.label_update = params.label_update;
+    f.label_seed = std::uint32_t(view.frame_index);
+    f.voxel_size_m = params.voxel_size_m;
     f.mu_m = params.mu_m;
     f.max_weight = params.max_weight;
     f.min_depth_m = params.view_frustum_min_m;

@@ -2,6 +2,7 @@
 
 #include "voxfuse/engines/MainEngine.h"
 
+#include <cmath>
 #include <cstring>
 #include <type_traits>
 
@@ -40,6 +41,7 @@ public:
         low_level_->convertDepthToMetres(frame.depth_raw, view_.calib.disparity, view_.calib.depth.fx,
                                          settings_.scene.view_frustum_min_m, settings_.scene.view_frustum_max_m, view_.depth);
         copyColor(frame);
+        copyLabels(frame);
         view_.frame_index = frame.index;
         view_.timestamp_s = frame.timestamp_s;
         if (view_.depth.size() != view_.calib.depth.size())
@@ -47,6 +49,7 @@ public:
                                                 std::to_string(view_.depth.height()) + " but the calibration says " +
                                                 std::to_string(view_.calib.depth.width) + "x" + std::to_string(view_.calib.depth.height),
                           frame.index);
+        if (!view_.labels.empty()) checkLabelGeometry(frame);
         result.stages.push_back({"depth", t.elapsedMs()});
 
         t = Timer();
@@ -136,6 +139,28 @@ private:
         std::memcpy(static_cast<void*>(view_.rgb.host()), frame.rgb.host(), frame.rgb.pixelCount() * sizeof(Vec4u8));
     }
 
+    // Only the semantic voxel types use labels; the others ignore them (and the copy).
+    void copyLabels(const RGBDFrame& frame) {
+        if (!TVoxel::hasLabel || frame.labels.empty()) {
+            view_.labels = Image<ClassId>();
+            return;
+        }
+        view_.labels.resize(frame.labels.size());
+        std::memcpy(static_cast<void*>(view_.labels.host()), frame.labels.host(), frame.labels.pixelCount() * sizeof(ClassId));
+    }
+
+    // Label images may have any resolution, but must show the colour camera's field of view.
+    void checkLabelGeometry(const RGBDFrame& frame) const {
+        const Intrinsics& camera = view_.calib.rgb.valid() ? view_.calib.rgb : view_.calib.depth;
+        const double label_aspect = double(view_.labels.width()) / double(view_.labels.height());
+        const double camera_aspect = double(camera.width) / double(camera.height);
+        if (std::abs(label_aspect / camera_aspect - 1.0) > 0.01)
+            throw IoError(frame.labels_path, "label image is " + std::to_string(view_.labels.width()) + "x" +
+                                                 std::to_string(view_.labels.height()) + ", not the colour camera's aspect ratio (" +
+                                                 std::to_string(camera.width) + "x" + std::to_string(camera.height) + ")",
+                          frame.index);
+    }
+
     MainEngineSettings settings_;
     Scene<TVoxel, TIndex> scene_;
     std::unique_ptr<LowLevelEngine> low_level_;
@@ -181,6 +206,8 @@ std::unique_ptr<MainEngine> MainEngine::create(const MainEngineSettings& s, cons
         case VoxelType::F: return createForVoxel<VoxelF>(s, calib);
         case VoxelType::SRgb: return createForVoxel<VoxelSRgb>(s, calib);
         case VoxelType::FRgb: return createForVoxel<VoxelFRgb>(s, calib);
+        case VoxelType::SLabel: return createForVoxel<VoxelSLabel>(s, calib);
+        case VoxelType::SRgbLabel: return createForVoxel<VoxelSRgbLabel>(s, calib);
     }
     throw ConfigError("unknown voxel type");
 }
@@ -190,7 +217,9 @@ VoxelType parseVoxelType(const std::string& name) {
     if (name == "f") return VoxelType::F;
     if (name == "s_rgb") return VoxelType::SRgb;
     if (name == "f_rgb") return VoxelType::FRgb;
-    throw ConfigError("unknown voxel type '" + name + "' (expected s, f, s_rgb or f_rgb)");
+    if (name == "s_label") return VoxelType::SLabel;
+    if (name == "s_rgb_label") return VoxelType::SRgbLabel;
+    throw ConfigError("unknown voxel type '" + name + "' (expected s, f, s_rgb, f_rgb, s_label or s_rgb_label)");
 }
 
 const char* toString(VoxelType type) {
@@ -199,9 +228,17 @@ const char* toString(VoxelType type) {
         case VoxelType::F: return VoxelF::name;
         case VoxelType::SRgb: return VoxelSRgb::name;
         case VoxelType::FRgb: return VoxelFRgb::name;
+        case VoxelType::SLabel: return VoxelSLabel::name;
+        case VoxelType::SRgbLabel: return VoxelSRgbLabel::name;
     }
     return "?";
 }
+
+bool voxelTypeHasColor(VoxelType type) {
+    return type == VoxelType::SRgb || type == VoxelType::FRgb || type == VoxelType::SRgbLabel;
+}
+
+bool voxelTypeHasLabels(VoxelType type) { return type == VoxelType::SLabel || type == VoxelType::SRgbLabel; }
 
 IndexType parseIndexType(const std::string& name) {
     if (name == "dense") return IndexType::Dense;

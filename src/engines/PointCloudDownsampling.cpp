@@ -25,6 +25,23 @@ bool cellBefore(const BinnedPoint& a, const BinnedPoint& b) {
     return a.point < b.point;  // a total order: the sums below add in input order
 }
 
+// The most frequent class of the points [first, last), which it reorders; kNoLabel counts only when
+// there is nothing else, and the smallest class wins a tie, so the points' order does not matter.
+ClassId majorityLabel(BinnedPoint* first, BinnedPoint* last, const std::vector<ClassId>& labels) {
+    auto label = [&labels](const BinnedPoint& b) { return labels[b.point]; };
+    std::sort(first, last, [&label](const BinnedPoint& a, const BinnedPoint& b) { return label(a) < label(b); });  // kNoLabel last
+    ClassId best = kNoLabel;
+    std::ptrdiff_t best_count = 0;
+    for (BinnedPoint *begin = first, *end = first; begin != last && label(*begin) != kNoLabel; begin = end) {
+        while (end != last && label(*end) == label(*begin)) ++end;
+        if (end - begin > best_count) {  // strictly more: of equal counts the first, smallest class stays
+            best = label(*begin);
+            best_count = end - begin;
+        }
+    }
+    return best;
+}
+
 }  // namespace
 
 PointCloud downsampleVoxelGrid(const PointCloud& cloud, float cell_m) {
@@ -32,6 +49,7 @@ PointCloud downsampleVoxelGrid(const PointCloud& cloud, float cell_m) {
     const std::size_t n = cloud.points.size();
     if (cloud.hasNormals() && cloud.normals.size() != n) throw Error("downsampling: the cloud has " + std::to_string(cloud.normals.size()) + " normals for " + std::to_string(n) + " points");
     if (cloud.hasColors() && cloud.colors.size() != n) throw Error("downsampling: the cloud has " + std::to_string(cloud.colors.size()) + " colours for " + std::to_string(n) + " points");
+    if (cloud.hasLabels() && cloud.labels.size() != n) throw Error("downsampling: the cloud has " + std::to_string(cloud.labels.size()) + " labels for " + std::to_string(n) + " points");
     if (n > std::size_t(UINT32_MAX)) throw Error("downsampling: more than 2^32 points");
 
     // Cell of every finite point.
@@ -70,6 +88,7 @@ PointCloud downsampleVoxelGrid(const PointCloud& cloud, float cell_m) {
     out.points.resize(std::size_t(runs));
     if (cloud.hasNormals()) out.normals.resize(std::size_t(runs));
     if (cloud.hasColors()) out.colors.resize(std::size_t(runs));
+    if (cloud.hasLabels()) out.labels.resize(std::size_t(runs));
 #pragma omp parallel for schedule(static)
     for (long long r = 0; r < runs; ++r) {
         const std::size_t begin = run_starts[std::size_t(r)], end = run_starts[std::size_t(r) + 1];
@@ -88,6 +107,8 @@ PointCloud downsampleVoxelGrid(const PointCloud& cloud, float cell_m) {
         if (cloud.hasColors())
             out.colors[std::size_t(r)] = Vec3u8{std::uint8_t(std::lround(sum_c[0] / count)), std::uint8_t(std::lround(sum_c[1] / count)),
                                                 std::uint8_t(std::lround(sum_c[2] / count))};
+        // Last: it reorders the run (the sums above needed input order).
+        if (cloud.hasLabels()) out.labels[std::size_t(r)] = majorityLabel(binned.data() + begin, binned.data() + end, cloud.labels);
     }
     return out;
 }

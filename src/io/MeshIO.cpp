@@ -74,15 +74,17 @@ private:
     std::string buffer_;
 };
 
-void checkVertexAttributes(const std::string& path, std::size_t vertices, std::size_t normals, std::size_t colors) {
+void checkVertexAttributes(const std::string& path, std::size_t vertices, std::size_t normals, std::size_t colors, std::size_t labels) {
     if (normals != 0 && normals != vertices)
         throw IoError(path, "inconsistent data: " + std::to_string(normals) + " normals for " + std::to_string(vertices) + " vertices");
     if (colors != 0 && colors != vertices)
         throw IoError(path, "inconsistent data: " + std::to_string(colors) + " colours for " + std::to_string(vertices) + " vertices");
+    if (labels != 0 && labels != vertices)
+        throw IoError(path, "inconsistent data: " + std::to_string(labels) + " labels for " + std::to_string(vertices) + " vertices");
 }
 
 void checkMesh(const std::string& path, const Mesh& mesh) {
-    checkVertexAttributes(path, mesh.vertices.size(), mesh.normals.size(), mesh.colors.size());
+    checkVertexAttributes(path, mesh.vertices.size(), mesh.normals.size(), mesh.colors.size(), mesh.labels.size());
     const long long n = (long long)mesh.vertices.size();
     for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
         for (int k = 0; k < 3; ++k)
@@ -91,18 +93,22 @@ void checkMesh(const std::string& path, const Mesh& mesh) {
                                         std::to_string(mesh.triangles[t][k]) + " of " + std::to_string(n));
 }
 
-std::string plyVertexHeader(std::size_t count, bool normals, bool colors) {
+// The label property has ScanNet's name and type (its *_vh_clean_2.labels.ply files), which their tools read.
+std::string plyVertexHeader(std::size_t count, bool normals, bool colors, bool labels) {
     std::string h = "element vertex " + std::to_string(count) + "\nproperty float x\nproperty float y\nproperty float z\n";
     if (normals) h += "property float nx\nproperty float ny\nproperty float nz\n";
     if (colors) h += "property uchar red\nproperty uchar green\nproperty uchar blue\n";
+    if (labels) h += "property ushort label\n";
     return h;
 }
 
-void writePlyVertices(BinaryFile& file, const std::vector<Vec3f>& points, const std::vector<Vec3f>& normals, const std::vector<Vec3u8>& colors) {
+void writePlyVertices(BinaryFile& file, const std::vector<Vec3f>& points, const std::vector<Vec3f>& normals, const std::vector<Vec3u8>& colors,
+                      const std::vector<ClassId>& labels) {
     for (std::size_t i = 0; i < points.size(); ++i) {
         file.vec3(points[i]);
         if (!normals.empty()) file.vec3(normals[i]);
         if (!colors.empty()) file.color(colors[i]);
+        if (!labels.empty()) file.u16(labels[i]);
     }
 }
 
@@ -134,9 +140,9 @@ void writeMeshPly(const std::string& path, const Mesh& mesh) {
     checkMesh(path, mesh);
     BinaryFile file(path);
     file.text("ply\nformat binary_little_endian 1.0\ncomment written by VoxFuse\n" +
-              plyVertexHeader(mesh.vertices.size(), mesh.hasNormals(), mesh.hasColors()) + "element face " +
+              plyVertexHeader(mesh.vertices.size(), mesh.hasNormals(), mesh.hasColors(), mesh.hasLabels()) + "element face " +
               std::to_string(mesh.triangles.size()) + "\nproperty list uchar int vertex_indices\nend_header\n");
-    writePlyVertices(file, mesh.vertices, mesh.normals, mesh.colors);
+    writePlyVertices(file, mesh.vertices, mesh.normals, mesh.colors, mesh.labels);
     for (const Vec3i& t : mesh.triangles) {
         file.u8(3);
         for (int k = 0; k < 3; ++k) file.i32(t[k]);
@@ -145,11 +151,11 @@ void writeMeshPly(const std::string& path, const Mesh& mesh) {
 }
 
 void writePointCloudPly(const std::string& path, const PointCloud& cloud) {
-    checkVertexAttributes(path, cloud.points.size(), cloud.normals.size(), cloud.colors.size());
+    checkVertexAttributes(path, cloud.points.size(), cloud.normals.size(), cloud.colors.size(), cloud.labels.size());
     BinaryFile file(path);
     file.text("ply\nformat binary_little_endian 1.0\ncomment written by VoxFuse\n" +
-              plyVertexHeader(cloud.points.size(), cloud.hasNormals(), cloud.hasColors()) + "end_header\n");
-    writePlyVertices(file, cloud.points, cloud.normals, cloud.colors);
+              plyVertexHeader(cloud.points.size(), cloud.hasNormals(), cloud.hasColors(), cloud.hasLabels()) + "end_header\n");
+    writePlyVertices(file, cloud.points, cloud.normals, cloud.colors, cloud.labels);
     file.finish();
 }
 

@@ -1,5 +1,6 @@
 // CPU and CUDA integration call the same integrateVoxel(): on the same frames they must produce the
-// same voxels. Skips visibly when no GPU is usable.
+// same voxels, classes included (their random numbers hash the voxel position and the frame).
+// Skips visibly when no GPU is usable.
 
 #include <gtest/gtest.h>
 
@@ -12,7 +13,7 @@ namespace {
 
 template <class TVoxel>
 class IntegrationCudaParityTest : public ::testing::Test {};
-using VoxelTypes = ::testing::Types<VoxelS, VoxelF, VoxelSRgb, VoxelFRgb>;
+using VoxelTypes = ::testing::Types<VoxelS, VoxelF, VoxelSRgb, VoxelFRgb, VoxelSLabel, VoxelSRgbLabel>;
 TYPED_TEST_SUITE(IntegrationCudaParityTest, VoxelTypes);
 
 TYPED_TEST(IntegrationCudaParityTest, CpuAndCudaGiveTheSameVoxels) {
@@ -32,7 +33,14 @@ TYPED_TEST(IntegrationCudaParityTest, CpuAndCudaGiveTheSameVoxels) {
     const Intrinsics intr = test::kinectIntrinsics(320, 240);
     for (int k = 0; k < 4; ++k) {
         const Mat4f pose = test::lookAt({0.9f - 0.2f * k, -0.7f + 0.3f * k, 0.8f}, {0.2f, 0.f, 0.1f});
-        const View view = test::renderView(world, intr, pose);
+        View view = test::renderView(world, intr, pose);
+        view.frame_index = k;
+        if constexpr (TVoxel::hasLabel) {
+            // Four classes in quadrants of the image, so that neighbouring voxels see different classes.
+            view.labels.resize(Vec2i{intr.width / 2, intr.height / 2});
+            for (int v = 0; v < view.labels.height(); ++v)
+                for (int u = 0; u < view.labels.width(); ++u) view.labels.at(u, v) = ClassId(1 + (u * 4 / view.labels.width() + k) % 4);
+        }
         cpu_engine->integrate(on_cpu, view, pose);
         gpu_engine->integrate(on_gpu, view, pose);
     }
@@ -43,9 +51,16 @@ TYPED_TEST(IntegrationCudaParityTest, CpuAndCudaGiveTheSameVoxels) {
     for (std::size_t i = 0; i < on_cpu.voxels().size(); ++i) {
         const TVoxel a = on_cpu.voxels().host()[i], b = on_gpu.voxels().host()[i];
         observed += a.w_depth > 0;
-        if (a.w_depth != b.w_depth || std::fabs(TVoxel::sdfToFloat(a.sdf) - TVoxel::sdfToFloat(b.sdf)) > 1e-3f) ++mismatched;
+        bool same = a.w_depth == b.w_depth && std::fabs(TVoxel::sdfToFloat(a.sdf) - TVoxel::sdfToFloat(b.sdf)) <= 1e-3f;
+        if constexpr (TVoxel::hasLabel) same = same && a.w_label == b.w_label && (a.w_label == 0 || a.label == b.label);
+        mismatched += !same;
     }
     EXPECT_GT(observed, 10000);
+    if constexpr (TVoxel::hasLabel) {
+        long long labelled = 0;
+        for (std::size_t i = 0; i < on_cpu.voxels().size(); ++i) labelled += on_cpu.voxels().host()[i].w_label > 0;
+        EXPECT_GT(labelled, 1000) << "the label path ran";
+    }
     EXPECT_LE(mismatched, observed / 1000) << mismatched << " of " << observed << " observed voxels differ";
 
     gpu_engine->resetScene(on_gpu);

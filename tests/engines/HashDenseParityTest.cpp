@@ -31,6 +31,7 @@ template <class TVoxel>
 bool sameVoxel(const TVoxel& a, const TVoxel& b) {
     bool same = a.sdf == b.sdf && a.w_depth == b.w_depth;
     if constexpr (TVoxel::hasColor) same = same && a.w_color == b.w_color && a.clr == b.clr;
+    if constexpr (TVoxel::hasLabel) same = same && a.w_label == b.w_label && a.label == b.label;
     return same;
 }
 
@@ -63,18 +64,17 @@ protected:
             const HashEntry& e = h.entry(h.visibleEntries()[k]);
             visible.insert({e.pos.x, e.pos.y, e.pos.z});
         }
-        const IntegrationFrame frame = makeIntegrationFrame(params(), view, pose, view.depth.host(), view.rgb.host());
+        const IntegrationFrame frame = makeIntegrationFrame(params(), view, pose, view.depth.host(), view.rgb.host(), view.labels.host());
         int uncovered = 0;
         TVoxel* ref = dense_visible_only_.voxels().host();
         forEachDenseVoxel([&](Vec3i p, std::size_t i) {
-            const Vec3f p_world = toFloat(p) * params().voxel_size_m;
             const bool in_visible_block = visible.count({p.x >> 3, p.y >> 3, p.z >> 3}) > 0;
             if (in_visible_block) {
-                integrateVoxel(ref[i], p_world, frame);
+                integrateVoxel(ref[i], p, frame);
                 return;
             }
             TVoxel probe = TVoxel::initial();
-            const float eta = integrateVoxel(probe, p_world, frame);
+            const float eta = integrateVoxel(probe, p, frame);
             uncovered += eta >= -params().mu_m && eta < params().mu_m;
         });
         return uncovered;
@@ -100,7 +100,7 @@ protected:
     std::unique_ptr<IntegrationEngine<TVoxel, PlainVoxelArray>> dense_integration_ = cpu::makeIntegrationEngine<TVoxel, PlainVoxelArray>();
 };
 
-using VoxelTypes = ::testing::Types<VoxelS, VoxelF, VoxelSRgb, VoxelFRgb>;
+using VoxelTypes = ::testing::Types<VoxelS, VoxelF, VoxelSRgb, VoxelFRgb, VoxelSLabel, VoxelSRgbLabel>;
 TYPED_TEST_SUITE(HashDenseParityTest, VoxelTypes);
 
 std::vector<Mat4f> cameraPath() {

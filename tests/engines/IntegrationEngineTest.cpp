@@ -12,7 +12,7 @@ namespace {
 
 template <class TVoxel>
 class IntegrationEngineTest : public ::testing::Test {};
-using VoxelTypes = ::testing::Types<VoxelS, VoxelF, VoxelSRgb, VoxelFRgb>;
+using VoxelTypes = ::testing::Types<VoxelS, VoxelF, VoxelSRgb, VoxelFRgb, VoxelSLabel, VoxelSRgbLabel>;
 TYPED_TEST_SUITE(IntegrationEngineTest, VoxelTypes);
 
 SceneParams smallSceneParams() {
@@ -148,13 +148,12 @@ TEST(IntegrationBoxTest, RowClippingLosesNoUpdate) {
 
     // Brute force: every voxel, no clipping.
     Scene<VoxelF, PlainVoxelArray> brute(params, PlainVoxelArray({-60, -60, -20}, {140, 120, 80}), Device::CPU);
-    const IntegrationFrame frame = makeIntegrationFrame(params, view, pose, view.depth.host(), view.rgb.host());
+    const IntegrationFrame frame = makeIntegrationFrame(params, view, pose, view.depth.host(), view.rgb.host(), view.labels.host());
     const PlainVoxelArray::Data idx = brute.index().data();
     for (int z = 0; z < idx.size.z; ++z)
         for (int y = 0; y < idx.size.y; ++y)
             for (int x = 0; x < idx.size.x; ++x)
-                integrateVoxel(brute.voxels().host()[x + idx.size.x * (y + idx.size.y * z)],
-                               toFloat(Vec3i{x, y, z} + idx.offset) * params.voxel_size_m, frame);
+                integrateVoxel(brute.voxels().host()[x + idx.size.x * (y + idx.size.y * z)], Vec3i{x, y, z} + idx.offset, frame);
     int updated = 0;
     for (std::size_t i = 0; i < brute.voxels().size(); ++i) {
         ASSERT_EQ(brute.voxels().host()[i].w_depth, clipped.voxels().host()[i].w_depth) << "voxel " << i;

@@ -65,7 +65,8 @@ TEST_P(MainEngineVoxelTest, RaycastReproducesTheLastFrameDepth) {
     EXPECT_GT(lit, int(image.pixelCount() / 4)) << "a free viewpoint sees the fused surfaces";
 }
 
-INSTANTIATE_TEST_SUITE_P(AllVoxelTypes, MainEngineVoxelTest, ::testing::Values(VoxelType::S, VoxelType::F, VoxelType::SRgb, VoxelType::FRgb),
+INSTANTIATE_TEST_SUITE_P(AllVoxelTypes, MainEngineVoxelTest,
+                         ::testing::Values(VoxelType::S, VoxelType::F, VoxelType::SRgb, VoxelType::FRgb, VoxelType::SLabel, VoxelType::SRgbLabel),
                          [](const auto& info) { return std::string(toString(info.param)); });
 
 TEST(MainEngineTest, RejectsBadSettingsWithClearErrors) {

@@ -216,9 +216,10 @@ int duplicatePositions(const Mesh& mesh) {
 }
 
 // Every structural property a mesh must have, whatever the scene.
-void expectWellFormed(const Mesh& mesh, bool has_colors) {
+void expectWellFormed(const Mesh& mesh, bool has_colors, bool has_labels = false) {
     ASSERT_EQ(mesh.normals.size(), mesh.vertices.size());
     EXPECT_EQ(mesh.colors.size(), has_colors ? mesh.vertices.size() : 0u);
+    EXPECT_EQ(mesh.labels.size(), has_labels ? mesh.vertices.size() : 0u);
     for (const Vec3i& t : mesh.triangles)
         for (int k = 0; k < 3; ++k) ASSERT_TRUE(t[k] >= 0 && t[k] < int(mesh.vertices.size()));
     for (const Vec3f& n : mesh.normals) EXPECT_NEAR(length(n), 1.f, 1e-4f);
@@ -254,10 +255,12 @@ VoxelBlockHashSettings smallHash() {
     return s;
 }
 
-// What a filled voxel holds: its SDF (in units of mu, clamped to [-1, 1]) and whether it was observed.
+// What a filled voxel holds: its SDF (in units of mu, clamped to [-1, 1]), whether it was observed, and
+// its class for voxel types with labels (kNoLabel: w_label = 0).
 struct VoxelValue {
     float sdf = 1.f;
     bool observed = false;
+    ClassId label = kNoLabel;
 };
 using Field = std::function<VoxelValue(Vec3i voxel)>;
 
@@ -270,6 +273,10 @@ TVoxel makeVoxel(const VoxelValue& value, Vec3i p) {
     if constexpr (TVoxel::hasColor) {
         v.w_color = 1;
         v.clr = Vec3u8{std::uint8_t(p.x & 255), std::uint8_t(p.y & 255), std::uint8_t(p.z & 255)};
+    }
+    if constexpr (TVoxel::hasLabel) {
+        v.w_label = value.label == kNoLabel ? 0 : 1;
+        v.label = value.label;
     }
     return v;
 }
@@ -332,12 +339,12 @@ VoxelValue boxSdf(Vec3i p) { return {boxDistance(toFloat(p) * kVoxel) / testPara
 
 template <class TVoxel>
 class MeshingEngineTest : public ::testing::Test {};
-using VoxelTypes = ::testing::Types<VoxelS, VoxelF, VoxelSRgb, VoxelFRgb>;
+using VoxelTypes = ::testing::Types<VoxelS, VoxelF, VoxelSRgb, VoxelFRgb, VoxelSLabel, VoxelSRgbLabel>;
 TYPED_TEST_SUITE(MeshingEngineTest, VoxelTypes);
 
 // Vertices within max_error_voxels of the sphere; 99% of the normals within normal_error_deg of radial.
-void expectClosedSphere(const Mesh& mesh, bool has_colors, float max_error_voxels, float normal_error_deg) {
-    expectWellFormed(mesh, has_colors);
+void expectClosedSphere(const Mesh& mesh, bool has_colors, float max_error_voxels, float normal_error_deg, bool has_labels = false) {
+    expectWellFormed(mesh, has_colors, has_labels);
     ASSERT_GT(mesh.triangles.size(), 5000u);
     const Topology t = topologyOf(mesh);
     EXPECT_TRUE(t.closedAndOriented()) << t.open_edges << " open, " << t.overused_edges << " overused, " << t.misoriented_edges
@@ -362,12 +369,12 @@ TYPED_TEST(MeshingEngineTest, AnalyticSphereIsClosedAndWithinHalfAVoxel) {
     Scene<TVoxel, PlainVoxelArray> dense(testParams(), PlainVoxelArray({-30, -30, -30}, {60, 60, 60}), Device::CPU);
     fillDense(dense, sphereSdf);
     const Mesh dense_mesh = meshOf(dense);
-    expectClosedSphere(dense_mesh, TVoxel::hasColor, 0.5f, 1.f);
+    expectClosedSphere(dense_mesh, TVoxel::hasColor, 0.5f, 1.f, TVoxel::hasLabel);
 
     Scene<TVoxel, VoxelBlockHash> hash(testParams(), VoxelBlockHash(smallHash()), Device::CPU);
     fillHash(hash, {-30, -30, -30}, {30, 30, 30}, sphereSdf);
     const Mesh hash_mesh = meshOf(hash);
-    expectClosedSphere(hash_mesh, TVoxel::hasColor, 0.5f, 1.f);
+    expectClosedSphere(hash_mesh, TVoxel::hasColor, 0.5f, 1.f, TVoxel::hasLabel);
     EXPECT_EQ(hash_mesh.vertices.size(), dense_mesh.vertices.size());
     EXPECT_EQ(hash_mesh.triangles.size(), dense_mesh.triangles.size());
 
@@ -385,6 +392,10 @@ TYPED_TEST(MeshingEngineTest, AnalyticSphereIsClosedAndWithinHalfAVoxel) {
         }
         EXPECT_GT(checked, 1000);
         EXPECT_EQ(wrong, 0) << "vertex colours interpolate the voxel colours along the edge";
+    }
+    // No voxel has a class (w_label = 0): no vertex has one.
+    if constexpr (TVoxel::hasLabel) {
+        EXPECT_EQ(std::count(hash_mesh.labels.begin(), hash_mesh.labels.end(), kNoLabel), std::ptrdiff_t(hash_mesh.labels.size()));
     }
 }
 
@@ -423,6 +434,100 @@ TEST(MeshingEngine, AnalyticBoxIsClosedAndWithinHalfAVoxel) {
         EXPECT_GT(flat, 1000);
         EXPECT_EQ(aligned, flat);
     }
+}
+
+// ================================ Classes ================================
+
+constexpr ClassId kLeftClass = 3, kRightClass = 7;
+
+VoxelValue sphereWithClassedHalves(Vec3i p) {
+    VoxelValue v = sphereSdf(p);
+    v.label = p.x < 0 ? kLeftClass : kRightClass;
+    return v;
+}
+
+// The same halves, but every fifth voxel along x + 2y + 3z has no class (two neighbours never both
+// lack one), nor has any voxel above z = 15.
+ClassId classWithGaps(Vec3i p) {
+    if (p.z > 15 || ((p.x + 2 * p.y + 3 * p.z) % 5 + 5) % 5 == 0) return kNoLabel;
+    return p.x < 0 ? kLeftClass : kRightClass;
+}
+
+VoxelValue sphereWithClassGaps(Vec3i p) {
+    VoxelValue v = sphereSdf(p);
+    v.label = classWithGaps(p);
+    return v;
+}
+
+// Position -> class, to compare outputs whose vertices come in different orders.
+std::map<std::tuple<float, float, float>, ClassId> classByPosition(const std::vector<Vec3f>& points, const std::vector<ClassId>& labels) {
+    std::map<std::tuple<float, float, float>, ClassId> classes;
+    for (std::size_t i = 0; i < points.size(); ++i) classes[{points[i].x, points[i].y, points[i].z}] = labels[i];
+    return classes;
+}
+
+TEST(MeshingEngine, SphereHalvesKeepTheirVoxelsClasses) {
+    Scene<VoxelSLabel, PlainVoxelArray> dense(testParams(), PlainVoxelArray({-30, -30, -30}, {60, 60, 60}), Device::CPU);
+    fillDense(dense, sphereWithClassedHalves);
+    Scene<VoxelSLabel, VoxelBlockHash> hash(testParams(), VoxelBlockHash(smallHash()), Device::CPU);
+    fillHash(hash, {-30, -30, -30}, {30, 30, 30}, sphereWithClassedHalves);
+    const Mesh dense_mesh = meshOf(dense), hash_mesh = meshOf(hash);
+    expectClosedSphere(dense_mesh, false, 0.5f, 1.f, true);
+    expectWellFormed(hash_mesh, false, true);
+
+    int checked = 0, wrong = 0;
+    for (std::size_t i = 0; i < hash_mesh.vertices.size(); ++i) {
+        const float x_voxels = hash_mesh.vertices[i].x / kVoxel;
+        if (std::fabs(x_voxels) <= 1.f) continue;
+        ++checked;
+        wrong += hash_mesh.labels[i] != (x_voxels < 0.f ? kLeftClass : kRightClass);
+    }
+    EXPECT_GT(checked, 3000);
+    EXPECT_EQ(wrong, 0) << "vertices away from x = 0 have the class of their side";
+    EXPECT_EQ(std::count(hash_mesh.labels.begin(), hash_mesh.labels.end(), kNoLabel), 0);
+    EXPECT_TRUE(classByPosition(dense_mesh.vertices, dense_mesh.labels) == classByPosition(hash_mesh.vertices, hash_mesh.labels))
+        << "the dense and the hash mesh give every vertex the same class";
+
+    // The point cloud is the mesh's vertices, classes included, in the same order.
+    PointCloud dense_cloud, hash_cloud;
+    makeMeshingEngine<VoxelSLabel, PlainVoxelArray>(Device::CPU)->extractPointCloud(dense, dense_cloud);
+    makeMeshingEngine<VoxelSLabel, VoxelBlockHash>(Device::CPU)->extractPointCloud(hash, hash_cloud);
+    EXPECT_EQ(dense_cloud.points, dense_mesh.vertices);
+    EXPECT_EQ(dense_cloud.labels, dense_mesh.labels);
+    EXPECT_EQ(hash_cloud.points, hash_mesh.vertices);
+    EXPECT_EQ(hash_cloud.labels, hash_mesh.labels);
+}
+
+// A vertex takes the class of the edge end nearer to it, or the other end's where that one has none.
+TEST(MeshingEngine, VertexClassIsTheNearerEndsElseTheFarther) {
+    Scene<VoxelSRgbLabel, VoxelBlockHash> hash(testParams(), VoxelBlockHash(smallHash()), Device::CPU);
+    fillHash(hash, {-30, -30, -30}, {30, 30, 30}, sphereWithClassGaps);
+    const Mesh mesh = meshOf(hash);
+    expectClosedSphere(mesh, true, 0.5f, 1.f, true);
+    int checked = 0, from_farther = 0, without_class = 0, wrong = 0;
+    for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
+        // The vertex's edge: the axis along which it is off the grid (by 1e-3 voxel at least).
+        const Vec3f g = mesh.vertices[i] / kVoxel;
+        int axis = 0;
+        for (int a = 1; a < 3; ++a)
+            if (std::fabs(g[a] - std::round(g[a])) > std::fabs(g[axis] - std::round(g[axis]))) axis = a;
+        Vec3i start{int(std::lround(g.x)), int(std::lround(g.y)), int(std::lround(g.z))};
+        start[axis] = int(std::floor(g[axis]));
+        const float t = g[axis] - float(start[axis]);
+        if (std::fabs(t - 0.5f) < 1e-3f) continue;  // too close to call after rounding
+        Vec3i end = start;
+        ++end[axis];
+        const ClassId nearer = classWithGaps(t < 0.5f ? start : end), farther = classWithGaps(t < 0.5f ? end : start);
+        const ClassId expected = nearer != kNoLabel ? nearer : farther;
+        ++checked;
+        from_farther += nearer == kNoLabel && farther != kNoLabel;
+        without_class += expected == kNoLabel;
+        wrong += mesh.labels[i] != expected;
+    }
+    EXPECT_GT(checked, int(mesh.vertices.size()) * 9 / 10);
+    EXPECT_GT(from_farther, 300) << "the test must reach the fallback to the farther end";
+    EXPECT_GT(without_class, 300) << "and vertices without any class";
+    EXPECT_EQ(wrong, 0);
 }
 
 // ================================ Fused surfaces ================================
@@ -578,8 +683,8 @@ TEST(MeshingEngine, NoSurfaceBetweenObservedAndUnobservedSpace) {
 }
 
 TEST(MeshingEngine, ResultDoesNotDependOnTheThreadCount) {
-    Scene<VoxelSRgb, VoxelBlockHash> hash(testParams(), VoxelBlockHash(smallHash()), Device::CPU);
-    fillHash(hash, {-30, -30, -30}, {30, 30, 30}, sphereSdf);
+    Scene<VoxelSRgbLabel, VoxelBlockHash> hash(testParams(), VoxelBlockHash(smallHash()), Device::CPU);
+    fillHash(hash, {-30, -30, -30}, {30, 30, 30}, sphereWithClassGaps);
     const int threads = omp_get_max_threads();
     omp_set_num_threads(1);
     const Mesh one = meshOf(hash);
@@ -591,6 +696,7 @@ TEST(MeshingEngine, ResultDoesNotDependOnTheThreadCount) {
     for (std::size_t i = 0; i < one.vertices.size(); ++i) {
         ASSERT_EQ(one.vertices[i], many.vertices[i]);
         ASSERT_EQ(one.colors[i], many.colors[i]);
+        ASSERT_EQ(one.labels[i], many.labels[i]);
     }
     for (std::size_t i = 0; i < one.triangles.size(); ++i) ASSERT_EQ(one.triangles[i], many.triangles[i]);
 }

@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <vector>
@@ -160,6 +161,40 @@ TEST(PointCloudDownsampling, RejectsBadCellsAndInconsistentClouds) {
     PointCloud bad = handMadeCloud();
     bad.normals.pop_back();
     EXPECT_THROW(downsampleVoxelGrid(bad, 0.1f), Error);
+}
+
+// A cell's class is its points' most frequent one; kNoLabel counts only when no point has a class, and
+// the smallest class wins a tie.
+TEST(PointCloudDownsampling, CellsTakeTheMajorityClass) {
+    PointCloud in;
+    auto add = [&in](Vec3f p, ClassId label) {
+        in.points.push_back(p);
+        in.labels.push_back(label);
+    };
+    // Cell (0, 0, 0): 5 twice, 2 once, no class three times -> 5.
+    for (ClassId c : {kNoLabel, ClassId(5), kNoLabel, ClassId(2), ClassId(5), kNoLabel}) add({0.05f, 0.05f, 0.05f}, c);
+    // Cell (1, 0, 0): 9 and 4 twice each, in that order -> the smaller, 4.
+    for (ClassId c : {ClassId(9), ClassId(4), ClassId(9), ClassId(4)}) add({0.15f, 0.05f, 0.05f}, c);
+    // Cell (2, 0, 0): no class at all -> none.
+    for (int k = 0; k < 2; ++k) add({0.25f, 0.05f, 0.05f}, kNoLabel);
+    // Cell (3, 0, 0): a single point.
+    add({0.35f, 0.05f, 0.05f}, 11);
+    // Cell (4, 0, 0): 0 is a class like any other; 0, 65534 and 8 once each -> 0.
+    for (ClassId c : {ClassId(65534), ClassId(8), ClassId(0)}) add({0.45f, 0.05f, 0.05f}, c);
+    const PointCloud out = downsampleVoxelGrid(in, 0.1f);
+    ASSERT_EQ(out.size(), 5u);
+    EXPECT_EQ(out.labels, (std::vector<ClassId>{5, 4, kNoLabel, 11, 0}));
+    EXPECT_FALSE(out.hasColors());
+
+    // The order of the points does not matter.
+    PointCloud reversed = in;
+    std::reverse(reversed.points.begin(), reversed.points.end());
+    std::reverse(reversed.labels.begin(), reversed.labels.end());
+    EXPECT_EQ(downsampleVoxelGrid(reversed, 0.1f).labels, out.labels);
+
+    EXPECT_TRUE(downsampleVoxelGrid(handMadeCloud(), 0.1f).labels.empty()) << "no labels in, none out";
+    in.labels.pop_back();
+    EXPECT_THROW(downsampleVoxelGrid(in, 0.1f), Error);
 }
 
 // On an extracted surface: fewer points, none farther from the sphere than half a cell.

@@ -36,6 +36,7 @@ struct PlyContents {
     std::vector<std::string> header;  // lines up to and including end_header
     std::vector<Vec3f> points, normals;
     std::vector<Vec3u8> colors;
+    std::vector<std::uint16_t> labels;
     std::vector<Vec3i> faces;
     std::size_t trailing_bytes = 0;
 };
@@ -53,7 +54,7 @@ PlyContents readPly(const std::string& path) {
     PlyContents c;
     std::size_t at = 0;
     std::size_t vertex_count = 0, face_count = 0;
-    bool has_normals = false, has_colors = false;
+    bool has_normals = false, has_colors = false, has_labels = false;
     while (at < bytes.size()) {
         const std::size_t end = bytes.find('\n', at);
         EXPECT_NE(end, std::string::npos);
@@ -68,15 +69,17 @@ PlyContents readPly(const std::string& path) {
         if (first == "element" && second == "face") words >> face_count;
         if (line == "property float nx") has_normals = true;
         if (line == "property uchar red") has_colors = true;
+        if (line == "property ushort label") has_labels = true;
         if (line == "end_header") break;
     }
-    const std::size_t vertex_bytes = 12 + (has_normals ? 12 : 0) + (has_colors ? 3 : 0);
+    const std::size_t vertex_bytes = 12 + (has_normals ? 12 : 0) + (has_colors ? 3 : 0) + (has_labels ? 2 : 0);
     EXPECT_GE(bytes.size(), at + vertex_count * vertex_bytes + face_count * 13);
     if (bytes.size() < at + vertex_count * vertex_bytes + face_count * 13) return c;
     for (std::size_t i = 0; i < vertex_count; ++i) {
         c.points.push_back({take<float>(bytes, at), take<float>(bytes, at), take<float>(bytes, at)});
         if (has_normals) c.normals.push_back({take<float>(bytes, at), take<float>(bytes, at), take<float>(bytes, at)});
         if (has_colors) c.colors.push_back({take<std::uint8_t>(bytes, at), take<std::uint8_t>(bytes, at), take<std::uint8_t>(bytes, at)});
+        if (has_labels) c.labels.push_back(take<std::uint16_t>(bytes, at));
     }
     for (std::size_t i = 0; i < face_count; ++i) {
         EXPECT_EQ(take<std::uint8_t>(bytes, at), 3);
@@ -138,6 +141,67 @@ TEST(MeshIO, PointCloudPlyHasVerticesOnly) {
     EXPECT_EQ(c.normals, cloud.normals);
     EXPECT_EQ(c.colors, cloud.colors);
     EXPECT_EQ(c.trailing_bytes, 0u);
+}
+
+// Classes as ScanNet's labelled meshes store them: "property ushort label" after the colours.
+TEST(MeshIO, PlyWithLabelsHasAUshortLabelAfterTheColours) {
+    ScratchDir dir;
+    Mesh m = tetrahedron(true, true);
+    m.labels = {3, 0, kNoLabel, 0x1234};  // 0x1234 tells the byte order
+    writeMesh(dir.file("labelled.ply"), m);
+    const PlyContents c = readPly(dir.file("labelled.ply"));
+    const std::vector<std::string> expected_properties = {"property uchar red", "property uchar green", "property uchar blue",
+                                                          "property ushort label", "element face 4"};
+    const std::vector<std::string> properties(c.header.end() - 2 - std::ptrdiff_t(expected_properties.size()), c.header.end() - 2);
+    EXPECT_EQ(properties, expected_properties);
+    EXPECT_EQ(c.points, m.vertices);
+    EXPECT_EQ(c.normals, m.normals);
+    EXPECT_EQ(c.colors, m.colors);
+    EXPECT_EQ(c.labels, m.labels);
+    EXPECT_EQ(c.faces, m.triangles);
+    EXPECT_EQ(c.trailing_bytes, 0u);
+    const std::string bytes = readBytes(dir.file("labelled.ply"));
+    const std::size_t last_label = bytes.find("end_header\n") + 11 + 3 * 29 + 27;  // vertex 3's label: 27 bytes into its 29
+    EXPECT_EQ(std::uint8_t(bytes[last_label]), 0x34) << "little-endian";
+    EXPECT_EQ(std::uint8_t(bytes[last_label + 1]), 0x12);
+
+    // A cloud without normals or colours: positions and labels only.
+    PointCloud cloud;
+    cloud.points = {{0.5f, -1.25f, 2.f}, {3.f, 4.f, 5.f}, {6.f, 7.f, 8.f}};
+    cloud.labels = {7, kNoLabel, 40};
+    writePointCloudPly(dir.file("labelled_cloud.ply"), cloud);
+    const PlyContents cc = readPly(dir.file("labelled_cloud.ply"));
+    const std::vector<std::string> expected_cloud = {"element vertex 3", "property float x", "property float y", "property float z",
+                                                     "property ushort label", "end_header"};
+    const std::vector<std::string> cloud_properties(cc.header.end() - std::ptrdiff_t(expected_cloud.size()), cc.header.end());
+    EXPECT_EQ(cloud_properties, expected_cloud);
+    EXPECT_EQ(cc.points, cloud.points);
+    EXPECT_EQ(cc.labels, cloud.labels);
+    EXPECT_EQ(cc.trailing_bytes, 0u);
+
+    // Without labels, no label property.
+    writeMeshPly(dir.file("unlabelled.ply"), tetrahedron(true, true));
+    for (const std::string& line : readPly(dir.file("unlabelled.ply")).header) EXPECT_EQ(line.find("label"), std::string::npos);
+}
+
+TEST(MeshIO, ObjAndStlIgnoreLabelsAndBadLabelCountsAreRefused) {
+    ScratchDir dir;
+    Mesh labelled = tetrahedron(true, true);
+    labelled.labels = {1, 2, 3, 4};
+    writeMeshObj(dir.file("labelled.obj"), labelled);
+    writeMeshObj(dir.file("plain.obj"), tetrahedron(true, true));
+    EXPECT_EQ(readBytes(dir.file("labelled.obj")), readBytes(dir.file("plain.obj")));
+    writeMeshStl(dir.file("labelled.stl"), labelled);
+    writeMeshStl(dir.file("plain.stl"), tetrahedron(true, true));
+    EXPECT_EQ(readBytes(dir.file("labelled.stl")), readBytes(dir.file("plain.stl")));
+
+    labelled.labels.pop_back();
+    EXPECT_THROW(writeMeshPly(dir.file("bad.ply"), labelled), IoError);
+    EXPECT_FALSE(std::filesystem::exists(dir.file("bad.ply")));
+    PointCloud cloud;
+    cloud.points = {{0.f, 0.f, 0.f}};
+    cloud.labels = {1, 2};
+    EXPECT_THROW(writePointCloudPly(dir.file("bad_cloud.ply"), cloud), IoError);
 }
 
 std::vector<std::string> lines(const std::string& text) {

@@ -14,7 +14,11 @@
     MACRO(VoxelF, PlainVoxelArray)         \
     MACRO(VoxelSRgb, PlainVoxelArray)      \
     MACRO(VoxelFRgb, PlainVoxelArray)      \
+    MACRO(VoxelSLabel, PlainVoxelArray)    \
+    MACRO(VoxelSRgbLabel, PlainVoxelArray) \
     MACRO(VoxelS, VoxelBlockHash)          \
     MACRO(VoxelF, VoxelBlockHash)          \
     MACRO(VoxelSRgb, VoxelBlockHash)       \
-    MACRO(VoxelFRgb, VoxelBlockHash)
+    MACRO(VoxelFRgb, VoxelBlockHash)       \
+    MACRO(VoxelSLabel, VoxelBlockHash)     \
+    MACRO(VoxelSRgbLabel, VoxelBlockHash)

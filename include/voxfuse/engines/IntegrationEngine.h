@@ -24,9 +24,10 @@ public:
 
 // ---- Host-side logic shared by the device layers ----
 
-// The per-frame constants of integrateVoxel(); `depth` and `rgb` point to where the loop reads them.
+// The per-frame constants of integrateVoxel(); `depth`, `rgb` and `labels` point to where the loop
+// reads them (host or device copies of the view's images).
 IntegrationFrame makeIntegrationFrame(const SceneParams& params, const View& view, const Mat4f& T_world_camera,
-                                      const float* depth, const Vec4u8* rgb);
+                                      const float* depth, const Vec4u8* rgb, const ClassId* labels);
 
 // Voxels closer to the camera than this are never updated (their projection is ill-conditioned).
 constexpr float kIntegrationNearM = 0.01f;

@@ -41,8 +41,10 @@ struct MainEngineSettings {
     TrackerSettings tracker;
 };
 
-VoxelType parseVoxelType(const std::string& name);  // "s", "f", "s_rgb", "f_rgb"; ConfigError otherwise
+VoxelType parseVoxelType(const std::string& name);  // "s", "f", "s_rgb", "f_rgb", "s_label", "s_rgb_label"; ConfigError otherwise
 const char* toString(VoxelType type);
+bool voxelTypeHasColor(VoxelType type);
+bool voxelTypeHasLabels(VoxelType type);
 IndexType parseIndexType(const std::string& name);  // "dense" or "hash"; ConfigError otherwise
 const char* toString(IndexType type);
 

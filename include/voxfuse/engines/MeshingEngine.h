@@ -12,6 +12,10 @@
 // - Normals: the SDF gradient (central differences of the voxels, one-sided beside unobserved ones) at
 //   the edge's two ends, interpolated to the vertex and normalised; they point to free space.
 // - Colours (voxel types with colour): the two ends' colours interpolated the same way.
+// - Classes (voxel types with labels; mesh.labels / cloud.labels, empty otherwise): classes are not
+//   interpolated. A vertex takes the class of the edge end nearer to it (the start where the crossing
+//   is below the edge's middle) if that voxel has one (w_label > 0), else the other end's, else
+//   kNoLabel.
 // - Triangles wind counter-clockwise seen from free space. Their order, and the vertices', depends on
 //   the scene only, not on the number of threads.
 // Memory: proportional to the surface, about twice the final mesh while it is assembled.
@@ -32,8 +36,8 @@ public:
     virtual ~MeshingEngine() = default;
     // Replaces `mesh` with the scene's surface. Reads the host copy of the voxels.
     virtual void extractMesh(const Scene<TVoxel, TIndex>& scene, Mesh& mesh) = 0;
-    // Replaces `cloud` with the vertices of extractMesh() (points, normals, colours) without building
-    // the triangles: one point per zero-crossing voxel edge.
+    // Replaces `cloud` with the vertices of extractMesh() (points, normals, colours, classes) without
+    // building the triangles: one point per zero-crossing voxel edge.
     virtual void extractPointCloud(const Scene<TVoxel, TIndex>& scene, PointCloud& cloud) = 0;
 };
 

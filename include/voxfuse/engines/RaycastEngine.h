@@ -14,7 +14,8 @@ enum class RenderMode {
     Shaded,   // Lambertian, light at the camera
     Color,    // fused voxel colours (grey shading for voxel types without colour)
     Normals,  // world normal mapped to RGB
-    Depth     // distance along the optical axis, colour-mapped
+    Depth,    // distance along the optical axis, colour-mapped
+    Class     // semantic class colours, shaded (grey shading for voxel types without labels)
 };
 
 template <class TVoxel, class TIndex>

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "voxfuse/core/Math.h"
+#include "voxfuse/objects/ClassLabel.h"
 
 namespace voxfuse {
 
@@ -13,20 +14,23 @@ struct Mesh {
     std::vector<Vec3f> vertices;   // world coordinates (m); no two are equal
     std::vector<Vec3f> normals;    // one unit normal per vertex pointing to free space, or empty
     std::vector<Vec3u8> colors;    // one RGB colour per vertex, or empty (voxel types without colour)
+    std::vector<ClassId> labels;   // one semantic class per vertex (kNoLabel: none), or empty (voxel types without labels)
     std::vector<Vec3i> triangles;  // vertex indices, counter-clockwise seen from free space
 
     bool hasNormals() const { return !normals.empty(); }
     bool hasColors() const { return !colors.empty(); }
+    bool hasLabels() const { return !labels.empty(); }
     void clear() {
         vertices.clear();
         normals.clear();
         colors.clear();
+        labels.clear();
         triangles.clear();
     }
     // Bytes held by the arrays (their sizes, not their capacities).
     std::size_t bytes() const {
         return vertices.size() * sizeof(Vec3f) + normals.size() * sizeof(Vec3f) + colors.size() * sizeof(Vec3u8) +
-               triangles.size() * sizeof(Vec3i);
+               labels.size() * sizeof(ClassId) + triangles.size() * sizeof(Vec3i);
     }
 };
 

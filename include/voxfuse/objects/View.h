@@ -4,6 +4,7 @@
 #include <cstdint>
 
 #include "voxfuse/core/Image.h"
+#include "voxfuse/objects/ClassLabel.h"
 #include "voxfuse/objects/RGBDCalib.h"
 
 namespace voxfuse {
@@ -12,6 +13,8 @@ struct View {
     RGBDCalib calib;
     Image<float> depth;           // metres; 0 = no measurement (depth camera resolution)
     Image<Vec4u8> rgb;            // RGBA, colour camera resolution (may be empty)
+    Image<ClassId> labels;        // class per pixel (kNoLabel: none), colour camera geometry at its own
+                                  // resolution; empty when the frame has no labels
     int frame_index = -1;
     double timestamp_s = 0.0;
 };

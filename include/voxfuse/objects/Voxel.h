@@ -1,20 +1,23 @@
 #pragma once
-// The four voxel types. Each stores a truncated signed distance (normalised to [-1, 1] by the
-// truncation band mu) and its weight; the *Rgb types add a colour and its weight. The short types
-// quantise the SDF to int16 (half the memory of float; step 1/32767 of mu).
+// The voxel types. Each stores a truncated signed distance (normalised to [-1, 1] by the truncation
+// band mu) and its weight; the *Rgb types add a colour and its weight, the *Label types a semantic
+// class and its weight (shared/LabelFusion.h). The short types quantise the SDF to int16 (half the
+// memory of float; step 1/32767 of mu).
 
 #include <cmath>
 #include <cstdint>
 
 #include "voxfuse/core/Math.h"
+#include "voxfuse/objects/ClassLabel.h"
 
 namespace voxfuse {
 
 // The run-time names used on the command line and in settings files.
-enum class VoxelType { S, F, SRgb, FRgb };
+enum class VoxelType { S, F, SRgb, FRgb, SLabel, SRgbLabel };
 
 struct VoxelS {
     static constexpr bool hasColor = false;
+    static constexpr bool hasLabel = false;
     static constexpr const char* name = "s";
     std::int16_t sdf;
     std::uint8_t w_depth;
@@ -26,6 +29,7 @@ struct VoxelS {
 
 struct VoxelF {
     static constexpr bool hasColor = false;
+    static constexpr bool hasLabel = false;
     static constexpr const char* name = "f";
     float sdf;
     std::uint8_t w_depth;
@@ -37,6 +41,7 @@ struct VoxelF {
 
 struct VoxelSRgb {
     static constexpr bool hasColor = true;
+    static constexpr bool hasLabel = false;
     static constexpr const char* name = "s_rgb";
     std::int16_t sdf;
     std::uint8_t w_depth;
@@ -50,6 +55,7 @@ struct VoxelSRgb {
 
 struct VoxelFRgb {
     static constexpr bool hasColor = true;
+    static constexpr bool hasLabel = false;
     static constexpr const char* name = "f_rgb";
     float sdf;
     std::uint8_t w_depth;
@@ -60,5 +66,39 @@ struct VoxelFRgb {
     VF_HOST_DEVICE static float sdfFromFloat(float f) { return f; }
     VF_HOST_DEVICE static VoxelFRgb initial() { return {1.f, 0, 0, {0, 0, 0}}; }
 };
+
+// The semantic types: short SDF, without and with colour (6 and 10 bytes). `label` is meaningful
+// only where w_label > 0.
+struct VoxelSLabel {
+    static constexpr bool hasColor = false;
+    static constexpr bool hasLabel = true;
+    static constexpr const char* name = "s_label";
+    std::int16_t sdf;
+    ClassId label;
+    std::uint8_t w_depth;
+    std::uint8_t w_label;
+
+    VF_HOST_DEVICE static float sdfToFloat(std::int16_t v) { return float(v) * (1.f / 32767.f); }
+    VF_HOST_DEVICE static std::int16_t sdfFromFloat(float f) { return std::int16_t(rintf(f * 32767.f)); }
+    VF_HOST_DEVICE static VoxelSLabel initial() { return {32767, kNoLabel, 0, 0}; }
+};
+
+struct VoxelSRgbLabel {
+    static constexpr bool hasColor = true;
+    static constexpr bool hasLabel = true;
+    static constexpr const char* name = "s_rgb_label";
+    std::int16_t sdf;
+    ClassId label;
+    std::uint8_t w_depth;
+    std::uint8_t w_color;
+    std::uint8_t w_label;
+    Vec3u8 clr;
+
+    VF_HOST_DEVICE static float sdfToFloat(std::int16_t v) { return float(v) * (1.f / 32767.f); }
+    VF_HOST_DEVICE static std::int16_t sdfFromFloat(float f) { return std::int16_t(rintf(f * 32767.f)); }
+    VF_HOST_DEVICE static VoxelSRgbLabel initial() { return {32767, kNoLabel, 0, 0, 0, {0, 0, 0}}; }
+};
+
+static_assert(sizeof(VoxelSLabel) == 6 && sizeof(VoxelSRgbLabel) == 10, "semantic voxels stay packed");
 
 }  // namespace voxfuse

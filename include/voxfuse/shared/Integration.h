@@ -4,6 +4,7 @@
 
 #include "voxfuse/core/Math.h"
 #include "voxfuse/objects/Intrinsics.h"
+#include "voxfuse/shared/LabelFusion.h"
 
 namespace voxfuse {
 
@@ -15,6 +16,12 @@ struct IntegrationFrame {
     Mat4f T_rgb_world;        // world -> colour camera
     Intrinsics rgb_intrinsics;
     const Vec4u8* rgb;        // nullptr when there is no colour
+    const ClassId* labels;    // class per pixel of the label image; nullptr when none
+    Mat4f T_label_world;          // world -> the camera that saw the labels (colour, or depth without colour)
+    Intrinsics label_intrinsics;  // that camera at the label image's resolution
+    LabelUpdate label_update;
+    std::uint32_t label_seed;     // differs per frame: see labelRandom()
+    float voxel_size_m;
     float mu_m;
     int max_weight;
     float min_depth_m, max_depth_m;  // depth samples outside are ignored
@@ -61,11 +68,13 @@ VF_HOST_DEVICE inline bool frustumRowRange(const IntegrationFrame& f, Vec3f row_
     return x_begin < x_end;
 }
 
-// Updates `voxel` (centre at p_world) with the frame. Returns eta, the measured depth minus the voxel's
-// depth along the optical axis, or a large negative number when the voxel gets no update.
+// Updates `voxel` (grid position `pos`, centre at pos * voxel size) with the frame. Returns eta, the
+// measured depth minus the voxel's depth along the optical axis, or a large negative number when the
+// voxel gets no update.
 template <class TVoxel>
-VF_HOST_DEVICE inline float integrateVoxel(TVoxel& voxel, Vec3f p_world, const IntegrationFrame& f) {
+VF_HOST_DEVICE inline float integrateVoxel(TVoxel& voxel, Vec3i pos, const IntegrationFrame& f) {
     const float kNoUpdate = -1e30f;
+    const Vec3f p_world = toFloat(pos) * f.voxel_size_m;
     const Vec3f p_cam = transformPoint(f.T_depth_world, p_world);
     if (p_cam.z < f.near_m) return kNoUpdate;
     const Vec2f px = f.depth_intrinsics.project(p_cam);
@@ -98,6 +107,21 @@ VF_HOST_DEVICE inline float integrateVoxel(TVoxel& voxel, Vec3f p_world, const I
                     voxel.clr[ch] = (unsigned char)(fusedc + 0.5f);
                 }
                 voxel.w_color = (unsigned char)(old_wc + 1 < f.max_weight ? old_wc + 1 : f.max_weight);
+            }
+        }
+    }
+    if constexpr (TVoxel::hasLabel) {
+        // Classes belong to the surface too; the class is the label image's pixel nearest to the voxel.
+        if (f.labels != nullptr && eta < 0.5f * f.mu_m && eta > -0.5f * f.mu_m) {
+            const Vec3f p_label = transformPoint(f.T_label_world, p_world);
+            if (p_label.z > 0.f) {
+                const Vec2f q = f.label_intrinsics.project(p_label);
+                const int lu = int(floorf(q.x + 0.5f)), lv = int(floorf(q.y + 0.5f));
+                if (lu >= 0 && lv >= 0 && lu < f.label_intrinsics.width && lv < f.label_intrinsics.height) {
+                    const ClassId observed = f.labels[lu + lv * f.label_intrinsics.width];
+                    if (observed != kNoLabel)
+                        fuseLabel(voxel.label, voxel.w_label, observed, f.label_update, f.max_weight, labelRandom(pos, f.label_seed));
+                }
             }
         }
     }

@@ -2,6 +2,7 @@
 // Turning one raycast pixel into a display colour.
 
 #include "voxfuse/core/Math.h"
+#include "voxfuse/objects/ClassLabel.h"
 #include "voxfuse/shared/Raycast.h"
 
 namespace voxfuse {
@@ -20,6 +21,31 @@ VF_HOST_DEVICE inline Vec4u8 renderNormal(Vec3f n) {
 VF_HOST_DEVICE inline Vec4u8 renderColor(Vec3f rgb) {
     return {(unsigned char)clampValue(rgb.x, 0.f, 255.f), (unsigned char)clampValue(rgb.y, 0.f, 255.f),
             (unsigned char)clampValue(rgb.z, 0.f, 255.f), 255};
+}
+
+// A distinct, stable colour per class id: hues a golden-ratio step apart, so that neighbouring ids
+// differ strongly; kNoLabel is grey.
+VF_HOST_DEVICE inline Vec3f classColor(ClassId id) {
+    if (id == kNoLabel) return {150.f, 150.f, 150.f};
+    const float h = 6.f * (float(id) * 0.61803398875f - floorf(float(id) * 0.61803398875f));
+    const float s = (id & 1) ? 0.55f : 0.8f, v = 0.95f;  // alternate saturation: more separable pairs
+    const int sector = int(h);
+    const float f = h - float(sector), p = v * (1.f - s), q = v * (1.f - s * f), t = v * (1.f - s * (1.f - f));
+    Vec3f rgb;
+    switch (sector % 6) {
+        case 0: rgb = {v, t, p}; break;
+        case 1: rgb = {q, v, p}; break;
+        case 2: rgb = {p, v, t}; break;
+        case 3: rgb = {p, q, v}; break;
+        case 4: rgb = {t, p, v}; break;
+        default: rgb = {v, p, q}; break;
+    }
+    return rgb * 255.f;
+}
+
+// The class colour, shaded so that the shape stays readable.
+VF_HOST_DEVICE inline Vec4u8 renderClass(ClassId id, Vec3f normal, Vec3f to_camera_unit) {
+    return renderColor(classColor(id) * (float(shadeIntensity(normal, to_camera_unit)) / 255.f));
 }
 
 // A perceptually ordered blue-to-yellow map (a cheap approximation of viridis) of depth / max_depth.

@@ -4,6 +4,7 @@
 // index that does.
 
 #include "voxfuse/core/Math.h"
+#include "voxfuse/objects/ClassLabel.h"
 #include "voxfuse/objects/PlainVoxelArray.h"
 #include "voxfuse/shared/HashAccess.h"  // readVoxel() for VoxelBlockHash
 
@@ -71,6 +72,28 @@ VF_HOST_DEVICE inline Vec3f readColorInterpolated(const TVoxel* voxels, const TI
         weight_sum += w;
     }
     return weight_sum > 0.f ? sum / weight_sum : Vec3f{0.f, 0.f, 0.f};
+}
+
+// Class at `p` (grid units): the label of the nearest labelled corner of the cell around p, or
+// kNoLabel when none of the eight is labelled. Class ids are never interpolated.
+template <class TVoxel, class TIndexData>
+VF_HOST_DEVICE inline ClassId readLabelNearest(const TVoxel* voxels, const TIndexData& index, Vec3f p) {
+    const Vec3i base{int(floorf(p.x)), int(floorf(p.y)), int(floorf(p.z))};
+    ClassId best = kNoLabel;
+    float best_d2 = 1e30f;
+    for (int k = 0; k < 8; ++k) {
+        const Vec3i c = base + Vec3i{k & 1, (k >> 1) & 1, k >> 2};
+        bool found;
+        const TVoxel v = readVoxel(voxels, index, c, found);
+        if (!found || v.w_label == 0) continue;
+        const Vec3f d = toFloat(c) - p;
+        const float d2 = dot(d, d);
+        if (d2 < best_d2) {
+            best_d2 = d2;
+            best = v.label;
+        }
+    }
+    return best;
 }
 
 // Outward surface normal (direction of increasing SDF) from central differences, one voxel apart.
