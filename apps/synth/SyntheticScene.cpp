@@ -1,6 +1,7 @@
 #include "SyntheticScene.h"
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstdlib>
@@ -355,50 +356,69 @@ int SyntheticScene::add(const Primitive& primitive) {
 }
 
 int SyntheticScene::addPlane(const Eigen::Vector3f& point, const Eigen::Vector3f& normal,
-                             const Texture& texture) {
-    return addRectangle(point, normal, kInf, kInf, texture);
+                             const Texture& texture, std::uint16_t classId) {
+    return addRectangle(point, normal, kInf, kInf, texture, classId);
 }
 
 int SyntheticScene::addRectangle(const Eigen::Vector3f& center, const Eigen::Vector3f& normal,
-                                 float halfWidth, float halfHeight, const Texture& texture) {
+                                 float halfWidth, float halfHeight, const Texture& texture,
+                                 std::uint16_t classId) {
     Primitive prim;
     prim.kind = PrimitiveKind::Rectangle;
     prim.size = Eigen::Vector3f(halfWidth, halfHeight, 0.0f);
     prim.translation = center;
     prim.rotation = rotationFromNormal(normal);
     prim.texture = texture;
+    prim.classId = classId;
     return add(prim);
 }
 
 int SyntheticScene::addBox(const Eigen::Vector3f& center, const Eigen::Quaternionf& rotation,
-                           const Eigen::Vector3f& halfExtents, const Texture& texture) {
+                           const Eigen::Vector3f& halfExtents, const Texture& texture,
+                           std::uint16_t classId) {
     Primitive prim;
     prim.kind = PrimitiveKind::Box;
     prim.size = halfExtents;
     prim.translation = center;
     prim.rotation = rotation;
     prim.texture = texture;
+    prim.classId = classId;
     return add(prim);
 }
 
-int SyntheticScene::addSphere(const Eigen::Vector3f& center, float radius, const Texture& texture) {
+int SyntheticScene::addSphere(const Eigen::Vector3f& center, float radius, const Texture& texture,
+                              std::uint16_t classId) {
     Primitive prim;
     prim.kind = PrimitiveKind::Sphere;
     prim.size = Eigen::Vector3f(radius, 0.0f, 0.0f);
     prim.translation = center;
     prim.texture = texture;
+    prim.classId = classId;
     return add(prim);
 }
 
 int SyntheticScene::addCylinder(const Eigen::Vector3f& center, const Eigen::Quaternionf& rotation,
-                                float radius, float halfHeight, const Texture& texture) {
+                                float radius, float halfHeight, const Texture& texture,
+                                std::uint16_t classId) {
     Primitive prim;
     prim.kind = PrimitiveKind::Cylinder;
     prim.size = Eigen::Vector3f(radius, halfHeight, 0.0f);
     prim.translation = center;
     prim.rotation = rotation;
     prim.texture = texture;
+    prim.classId = classId;
     return add(prim);
+}
+
+void SyntheticScene::addClass(std::uint16_t id, const std::string& name) {
+    if (id == kUnlabelled) throw std::invalid_argument("scene: class id 0 means unlabelled");
+    if (name.empty() || std::any_of(name.begin(), name.end(),
+                                    [](unsigned char c) { return std::isspace(c) != 0; }))
+        throw std::invalid_argument("scene: class name '" + name + "' is not one word");
+    const auto at = std::lower_bound(classes_.begin(), classes_.end(), id,
+                                     [](const SemanticClass& c, std::uint16_t v) { return c.id < v; });
+    if (at != classes_.end() && at->id == id) at->name = name;
+    else classes_.insert(at, SemanticClass{id, name});
 }
 
 bool SyntheticScene::intersect(const Eigen::Vector3f& origin, const Eigen::Vector3f& dir,
@@ -483,6 +503,7 @@ RenderedFrame SyntheticScene::render(const PinholeCamera& camera,
     frame.depth.assign(count, 0.0f);
     frame.cosIncidence.assign(count, 0.0f);
     frame.rgb.assign(count, Eigen::Vector3f::Zero());
+    frame.label.assign(count, kUnlabelled);
     const Eigen::Matrix3f R = T_world_camera.linear();
     const Eigen::Vector3f origin = T_world_camera.translation();
     const int n = std::max(colourSamples, 1);
@@ -497,6 +518,7 @@ RenderedFrame SyntheticScene::render(const PinholeCamera& camera,
             if (intersect(origin, dir, hit)) {
                 frame.depth[idx] = hit.t;
                 frame.cosIncidence[idx] = std::abs(hit.normal.dot(dir)) / dir.norm();
+                frame.label[idx] = primitives_[hit.primitive].classId;
             }
             Eigen::Vector3f colour = Eigen::Vector3f::Zero();
             for (int sy = 0; sy < n; ++sy) {
@@ -518,22 +540,37 @@ RenderedFrame SyntheticScene::render(const PinholeCamera& camera,
 
 SyntheticScene SyntheticScene::defaultRoom() {
     using V = Eigen::Vector3f;
+    namespace rc = room_class;
     SyntheticScene scene;
     const float hx = 2.5f, hy = 2.0f, height = 2.7f;
+    scene.addClass(rc::kFloor, "floor");
+    scene.addClass(rc::kWall, "wall");
+    scene.addClass(rc::kCeiling, "ceiling");
+    scene.addClass(rc::kTable, "table");
+    scene.addClass(rc::kBall, "ball");
+    scene.addClass(rc::kCylinder, "cylinder");
+    scene.addClass(rc::kBox, "box");
+    scene.addClass(rc::kPoster, "poster");
 
     // Room shell, all normals pointing inwards.
     scene.addRectangle(V(0, 0, 0), V(0, 0, 1), hx, hy,
-                       makeTexture(TextureKind::Checker, V(0.78f, 0.72f, 0.62f), V(0.45f, 0.38f, 0.30f), 0.5f));
+                       makeTexture(TextureKind::Checker, V(0.78f, 0.72f, 0.62f), V(0.45f, 0.38f, 0.30f), 0.5f),
+                       rc::kFloor);
     scene.addRectangle(V(0, 0, height), V(0, 0, -1), hx, hy,
-                       makeTexture(TextureKind::Noise, V(0.92f, 0.92f, 0.90f), V(0.75f, 0.75f, 0.72f), 0.4f, 11));
+                       makeTexture(TextureKind::Noise, V(0.92f, 0.92f, 0.90f), V(0.75f, 0.75f, 0.72f), 0.4f, 11),
+                       rc::kCeiling);
     scene.addRectangle(V(hx, 0, height / 2), V(-1, 0, 0), hy, height / 2,
-                       makeTexture(TextureKind::Noise, V(0.85f, 0.80f, 0.68f), V(0.60f, 0.55f, 0.45f), 0.25f, 12));
+                       makeTexture(TextureKind::Noise, V(0.85f, 0.80f, 0.68f), V(0.60f, 0.55f, 0.45f), 0.25f, 12),
+                       rc::kWall);
     scene.addRectangle(V(-hx, 0, height / 2), V(1, 0, 0), hy, height / 2,
-                       makeTexture(TextureKind::Noise, V(0.70f, 0.80f, 0.85f), V(0.45f, 0.55f, 0.62f), 0.25f, 13));
+                       makeTexture(TextureKind::Noise, V(0.70f, 0.80f, 0.85f), V(0.45f, 0.55f, 0.62f), 0.25f, 13),
+                       rc::kWall);
     scene.addRectangle(V(0, hy, height / 2), V(0, -1, 0), hx, height / 2,
-                       makeTexture(TextureKind::Stripes, V(0.80f, 0.84f, 0.74f), V(0.62f, 0.70f, 0.56f), 0.15f));
+                       makeTexture(TextureKind::Stripes, V(0.80f, 0.84f, 0.74f), V(0.62f, 0.70f, 0.56f), 0.15f),
+                       rc::kWall);
     scene.addRectangle(V(0, -hy, height / 2), V(0, 1, 0), hx, height / 2,
-                       makeTexture(TextureKind::Noise, V(0.88f, 0.75f, 0.75f), V(0.62f, 0.48f, 0.50f), 0.25f, 14));
+                       makeTexture(TextureKind::Noise, V(0.88f, 0.75f, 0.75f), V(0.62f, 0.48f, 0.50f), 0.25f, 14),
+                       rc::kWall);
 
     // Posters: 2 cm deep frames on every wall, so any view has strong texture.
     const Texture posterBase = makeTexture(TextureKind::Poster, V(0.85f, 0.15f, 0.10f), V(0.10f, 0.30f, 0.80f), 0.1f);
@@ -547,37 +584,45 @@ SyntheticScene SyntheticScene::defaultRoom() {
     for (const PosterSpec& p : posters) {
         Texture tex = posterBase;
         tex.seed = p.seed;
-        scene.addBox(p.center, rotationFromNormal(p.normal), V(p.halfW, p.halfH, 0.01f), tex);
+        scene.addBox(p.center, rotationFromNormal(p.normal), V(p.halfW, p.halfH, 0.01f), tex, rc::kPoster);
     }
 
     // Table: wooden top on four legs.
     const V tableCenter(0.15f, 0.1f, 0.73f);
     const V tableHalf(0.55f, 0.35f, 0.02f);
     scene.addBox(tableCenter, yaw(0), tableHalf,
-                 makeTexture(TextureKind::Wood, V(0.62f, 0.42f, 0.22f), V(0.38f, 0.22f, 0.10f), 0.04f, 31));
+                 makeTexture(TextureKind::Wood, V(0.62f, 0.42f, 0.22f), V(0.38f, 0.22f, 0.10f), 0.04f, 31),
+                 rc::kTable);
     for (float sx : {-1.0f, 1.0f})
         for (float sy : {-1.0f, 1.0f})
             scene.addBox(V(tableCenter.x() + sx * (tableHalf.x() - 0.06f),
                            tableCenter.y() + sy * (tableHalf.y() - 0.06f), 0.355f),
                          yaw(0), V(0.025f, 0.025f, 0.355f),
-                         makeTexture(TextureKind::Solid, V(0.25f, 0.18f, 0.12f), V::Zero(), 1.0f));
+                         makeTexture(TextureKind::Solid, V(0.25f, 0.18f, 0.12f), V::Zero(), 1.0f),
+                         rc::kTable);
     const float tableTop = tableCenter.z() + tableHalf.z();
 
     // Objects on the table.
     scene.addBox(V(-0.05f, 0.2f, tableTop + 0.1f), yaw(30), V(0.1f, 0.1f, 0.1f),
-                 makeTexture(TextureKind::Checker, V(0.90f, 0.20f, 0.15f), V(0.95f, 0.95f, 0.90f), 0.05f));
+                 makeTexture(TextureKind::Checker, V(0.90f, 0.20f, 0.15f), V(0.95f, 0.95f, 0.90f), 0.05f),
+                 rc::kBox);
     scene.addSphere(V(0.45f, 0.25f, tableTop + 0.11f), 0.11f,
-                    makeTexture(TextureKind::Noise, V(0.15f, 0.30f, 0.85f), V(0.70f, 0.85f, 1.00f), 0.05f, 41));
+                    makeTexture(TextureKind::Noise, V(0.15f, 0.30f, 0.85f), V(0.70f, 0.85f, 1.00f), 0.05f, 41),
+                    rc::kBall);
     scene.addBox(V(0.35f, -0.1f, tableTop + 0.03f), yaw(-15), V(0.12f, 0.08f, 0.03f),
-                 makeTexture(TextureKind::Stripes, V(0.95f, 0.80f, 0.10f), V(0.20f, 0.20f, 0.25f), 0.02f));
+                 makeTexture(TextureKind::Stripes, V(0.95f, 0.80f, 0.10f), V(0.20f, 0.20f, 0.25f), 0.02f),
+                 rc::kBox);
 
     // Objects on the floor.
     scene.addBox(V(-0.75f, -0.55f, 0.2f), yaw(25), V(0.25f, 0.2f, 0.2f),
-                 makeTexture(TextureKind::Stripes, V(0.20f, 0.60f, 0.30f), V(0.90f, 0.90f, 0.80f), 0.06f));
+                 makeTexture(TextureKind::Stripes, V(0.20f, 0.60f, 0.30f), V(0.90f, 0.90f, 0.80f), 0.06f),
+                 rc::kBox);
     scene.addSphere(V(0.8f, -0.6f, 0.18f), 0.18f,
-                    makeTexture(TextureKind::Checker, V(0.95f, 0.55f, 0.10f), V(0.15f, 0.15f, 0.20f), 0.07f));
+                    makeTexture(TextureKind::Checker, V(0.95f, 0.55f, 0.10f), V(0.15f, 0.15f, 0.20f), 0.07f),
+                    rc::kBall);
     scene.addCylinder(V(-0.6f, 0.7f, 0.35f), yaw(0), 0.12f, 0.35f,
-                      makeTexture(TextureKind::Wood, V(0.75f, 0.55f, 0.35f), V(0.45f, 0.28f, 0.15f), 0.03f, 51));
+                      makeTexture(TextureKind::Wood, V(0.75f, 0.55f, 0.35f), V(0.45f, 0.28f, 0.15f), 0.03f, 51),
+                      rc::kCylinder);
 
     scene.addLight({V(0.8f, 0.5f, 2.5f), 2.5f});
     scene.addLight({V(-1.2f, -0.8f, 2.5f), 1.8f});
@@ -588,31 +633,42 @@ SyntheticScene SyntheticScene::defaultRoom() {
 SyntheticScene SyntheticScene::singlePlane(const Eigen::Vector3f& point,
                                            const Eigen::Vector3f& normal) {
     SyntheticScene scene;
+    scene.addClass(room_class::kFloor, "floor");  // whatever its orientation
     scene.addPlane(point, normal,
                    makeTexture(TextureKind::Checker, Eigen::Vector3f(0.8f, 0.8f, 0.8f),
-                               Eigen::Vector3f(0.2f, 0.2f, 0.2f), 0.1f));
+                               Eigen::Vector3f(0.2f, 0.2f, 0.2f), 0.1f),
+                   room_class::kFloor);
     scene.addLight({point + 2.0f * normal.normalized(), 2.0f});
     return scene;
 }
 
 SyntheticScene SyntheticScene::singleSphere(const Eigen::Vector3f& center, float radius) {
     SyntheticScene scene;
+    scene.addClass(room_class::kBall, "ball");
     scene.addSphere(center, radius,
                     makeTexture(TextureKind::Checker, Eigen::Vector3f(0.9f, 0.3f, 0.2f),
-                                Eigen::Vector3f(0.9f, 0.9f, 0.9f), radius / 3.0f));
+                                Eigen::Vector3f(0.9f, 0.9f, 0.9f), radius / 3.0f),
+                    room_class::kBall);
     scene.addLight({center + Eigen::Vector3f(1.0f, -1.0f, 2.0f), 2.0f});
     return scene;
 }
 
 SyntheticScene SyntheticScene::boxAndSphere() {
     using V = Eigen::Vector3f;
+    namespace rc = room_class;
     SyntheticScene scene;
+    scene.addClass(rc::kFloor, "floor");
+    scene.addClass(rc::kBall, "ball");
+    scene.addClass(rc::kBox, "box");
     scene.addPlane(V::Zero(), V::UnitZ(),
-                   makeTexture(TextureKind::Checker, V(0.8f, 0.75f, 0.7f), V(0.4f, 0.35f, 0.3f), 0.25f));
+                   makeTexture(TextureKind::Checker, V(0.8f, 0.75f, 0.7f), V(0.4f, 0.35f, 0.3f), 0.25f),
+                   rc::kFloor);
     scene.addBox(V(0, 0, 0.2f), Eigen::Quaternionf::Identity(), V(0.2f, 0.2f, 0.2f),
-                 makeTexture(TextureKind::Stripes, V(0.2f, 0.6f, 0.3f), V(0.9f, 0.9f, 0.8f), 0.05f));
+                 makeTexture(TextureKind::Stripes, V(0.2f, 0.6f, 0.3f), V(0.9f, 0.9f, 0.8f), 0.05f),
+                 rc::kBox);
     scene.addSphere(V(0.6f, 0, 0.15f), 0.15f,
-                    makeTexture(TextureKind::Noise, V(0.15f, 0.3f, 0.85f), V(0.7f, 0.85f, 1.0f), 0.05f, 7));
+                    makeTexture(TextureKind::Noise, V(0.15f, 0.3f, 0.85f), V(0.7f, 0.85f, 1.0f), 0.05f, 7),
+                    rc::kBall);
     scene.addLight({V(0.5f, -0.5f, 2.0f), 2.5f});
     return scene;
 }
@@ -627,7 +683,8 @@ void SyntheticScene::write(const std::string& path) const {
            "# (x right, y down, z forward); poses elsewhere are camera-to-world.\n"
            "# ambient <a>\n"
            "# light <x y z> <intensity at 1 m>\n"
-           "# <type> <size...> pose <tx ty tz qx qy qz qw> texture <kind> <rA gA bA> <rB gB bB> <scale> <seed>\n"
+           "# class <id> <name>   (semantic class: id >= 1, as label images store it; 0 = unlabelled)\n"
+           "# <type> <size...> pose <tx ty tz qx qy qz qw> texture <kind> <rA gA bA> <rB gB bB> <scale> <seed> class <id>\n"
            "#   rectangle <half_x half_y>   (local z = 0, normal local +z; inf = infinite plane)\n"
            "#   box <half_x half_y half_z>\n"
            "#   sphere <radius>\n"
@@ -636,6 +693,7 @@ void SyntheticScene::write(const std::string& path) const {
     out << "ambient " << formatFloat(ambient_) << "\n";
     for (const PointLight& light : lights_)
         out << "light " << formatVector(light.position) << " " << formatFloat(light.intensity) << "\n";
+    for (const SemanticClass& c : classes_) out << "class " << c.id << " " << c.name << "\n";
     for (const Primitive& p : primitives_) {
         out << primitiveName(p.kind);
         for (int i = 0; i < sizeParameterCount(p.kind); ++i) out << " " << formatFloat(p.size[i]);
@@ -644,7 +702,8 @@ void SyntheticScene::write(const std::string& path) const {
             << formatFloat(p.rotation.w());
         const Texture& t = p.texture;
         out << " texture " << textureName(t.kind) << " " << formatVector(t.colorA) << " "
-            << formatVector(t.colorB) << " " << formatFloat(t.scale) << " " << t.seed << "\n";
+            << formatVector(t.colorB) << " " << formatFloat(t.scale) << " " << t.seed << " class "
+            << p.classId << "\n";
     }
     if (!out) throw std::runtime_error("scene: error writing " + path);
 }
@@ -684,6 +743,15 @@ SyntheticScene SyntheticScene::read(const std::string& path) {
         const auto expect = [&](const char* keyword) {
             if (word() != keyword) throw fail(std::string("expected '") + keyword + "'");
         };
+        const auto classId = [&]() {
+            const std::string& w = word();
+            char* end = nullptr;
+            const unsigned long value = std::strtoul(w.c_str(), &end, 10);
+            if (end == w.c_str() || *end != '\0' || !std::isdigit(static_cast<unsigned char>(w[0])) ||
+                value > 0xFFFFul)
+                throw fail("bad class id '" + w + "'");
+            return static_cast<std::uint16_t>(value);
+        };
 
         const std::string& type = words[0];
         if (type == "ambient") {
@@ -693,6 +761,11 @@ SyntheticScene SyntheticScene::read(const std::string& path) {
             light.position = vec3();
             light.intensity = number();
             scene.addLight(light);
+        } else if (type == "class") {
+            const std::uint16_t id = classId();
+            const std::string& name = word();
+            if (id == kUnlabelled) throw fail("class id 0 means unlabelled");
+            scene.addClass(id, name);
         } else {
             Primitive prim;
             if (type == "rectangle") prim.kind = PrimitiveKind::Rectangle;
@@ -712,6 +785,11 @@ SyntheticScene SyntheticScene::read(const std::string& path) {
             prim.texture.colorB = vec3();
             prim.texture.scale = number();
             prim.texture.seed = static_cast<std::uint32_t>(std::stoul(word()));
+            if (next < words.size()) {  // older files end after the texture
+                expect("class");
+                prim.classId = classId();
+            }
+            if (next < words.size()) throw fail("unexpected '" + words[next] + "'");
             scene.add(prim);
         }
     }

@@ -37,6 +37,25 @@ struct Texture {
 
 enum class PrimitiveKind { Rectangle, Box, Sphere, Cylinder };
 
+// Semantic class of a primitive, as label images store it per pixel; 0 means
+// unlabelled (also: no surface). The built-in scenes use these ids.
+constexpr std::uint16_t kUnlabelled = 0;
+namespace room_class {
+constexpr std::uint16_t kFloor = 1;
+constexpr std::uint16_t kWall = 2;
+constexpr std::uint16_t kCeiling = 3;
+constexpr std::uint16_t kTable = 4;   // top and legs
+constexpr std::uint16_t kBall = 5;    // spheres
+constexpr std::uint16_t kCylinder = 6;
+constexpr std::uint16_t kBox = 7;     // boxes standing on the floor or the table
+constexpr std::uint16_t kPoster = 8;  // the framed posters on the walls
+}  // namespace room_class
+
+struct SemanticClass {
+    std::uint16_t id = kUnlabelled;
+    std::string name;  // one word
+};
+
 // One surface, defined in its local frame and placed by world_from_local.
 //   Rectangle: lies in local z = 0, half extents (size.x, size.y), may be
 //              infinite (a plane); its normal is local +z.
@@ -49,6 +68,7 @@ struct Primitive {
     Eigen::Vector3f translation = Eigen::Vector3f::Zero();
     Eigen::Quaternionf rotation = Eigen::Quaternionf::Identity();
     Texture texture;
+    std::uint16_t classId = kUnlabelled;
 };
 
 struct PointLight {
@@ -76,21 +96,30 @@ struct RenderedFrame {
     std::vector<float> depth;         // z along the optical axis (m), 0 = no surface
     std::vector<float> cosIncidence;  // |cos| of the angle between viewing ray and normal
     std::vector<Eigen::Vector3f> rgb; // display RGB in [0, 1] (gamma applied), noise-free
+    std::vector<std::uint16_t> label; // class of the primitive hit by the depth ray
+                                      // (pixel centre), 0 = no surface; noise-free
 };
 
 class SyntheticScene {
 public:
     int add(const Primitive& primitive);
     int addPlane(const Eigen::Vector3f& point, const Eigen::Vector3f& normal,
-                 const Texture& texture = {});
+                 const Texture& texture = {}, std::uint16_t classId = kUnlabelled);
     int addRectangle(const Eigen::Vector3f& center, const Eigen::Vector3f& normal,
-                     float halfWidth, float halfHeight, const Texture& texture = {});
+                     float halfWidth, float halfHeight, const Texture& texture = {},
+                     std::uint16_t classId = kUnlabelled);
     int addBox(const Eigen::Vector3f& center, const Eigen::Quaternionf& rotation,
-               const Eigen::Vector3f& halfExtents, const Texture& texture = {});
-    int addSphere(const Eigen::Vector3f& center, float radius, const Texture& texture = {});
+               const Eigen::Vector3f& halfExtents, const Texture& texture = {},
+               std::uint16_t classId = kUnlabelled);
+    int addSphere(const Eigen::Vector3f& center, float radius, const Texture& texture = {},
+                  std::uint16_t classId = kUnlabelled);
     int addCylinder(const Eigen::Vector3f& center, const Eigen::Quaternionf& rotation,
-                    float radius, float halfHeight, const Texture& texture = {});
+                    float radius, float halfHeight, const Texture& texture = {},
+                    std::uint16_t classId = kUnlabelled);
     void addLight(const PointLight& light) { lights_.push_back(light); }
+    // Names a semantic class (id >= 1, name one word); replaces an earlier
+    // name of the same id. Throws std::invalid_argument otherwise.
+    void addClass(std::uint16_t id, const std::string& name);
     void setAmbient(float ambient) { ambient_ = ambient; }
 
     // Nearest hit with t > 1e-5 (in units of |dir|). Returns false on a miss.
@@ -106,13 +135,14 @@ public:
     // Lambertian shading (ambient + point lights with shadows) of a hit point,
     // in linear RGB.
     Eigen::Vector3f shade(const Eigen::Vector3f& point, const Hit& hit) const;
-    // Renders exact depth, incidence and colour; colour uses
+    // Renders exact depth, incidence, class labels and colour; colour uses
     // colourSamples x colourSamples samples per pixel against aliasing.
     RenderedFrame render(const PinholeCamera& camera, const Eigen::Isometry3f& T_world_camera,
                          int colourSamples = 2) const;
 
     const std::vector<Primitive>& primitives() const { return primitives_; }
     const std::vector<PointLight>& lights() const { return lights_; }
+    const std::vector<SemanticClass>& classes() const { return classes_; }  // sorted by id
     float ambient() const { return ambient_; }
 
     // The project's default data set: a 5 x 4 x 2.7 m room with a table,
@@ -124,7 +154,8 @@ public:
     // z = 0, and a sphere of radius 0.15 at (0.6, 0, 0.15).
     static SyntheticScene boxAndSphere();
 
-    // scene.txt: one primitive / light per line, world coordinates in metres.
+    // scene.txt: one primitive / light / class per line, world coordinates in
+    // metres. Primitive lines without a class (older files) read as unlabelled.
     void write(const std::string& path) const;
     static SyntheticScene read(const std::string& path);  // throws std::runtime_error
 
@@ -136,6 +167,7 @@ private:
     std::vector<Primitive> primitives_;
     std::vector<Placement> placements_;
     std::vector<PointLight> lights_;
+    std::vector<SemanticClass> classes_;
     float ambient_ = 0.25f;
 };
 

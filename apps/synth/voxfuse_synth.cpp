@@ -1,5 +1,6 @@
 // voxfuse_synth: renders the synthetic room as an RGB-D sequence with exact
-// ground truth, in the TUM RGB-D layout or as InfiniTAM-style PPM/PGM files.
+// ground truth, in the TUM RGB-D layout or as InfiniTAM-style PPM/PGM files;
+// in the TUM layout also with exact per-pixel semantic class images.
 #include "CameraPath.h"
 #include "KinectDepthModel.h"
 #include "SyntheticScene.h"
@@ -35,6 +36,7 @@ struct Options {
     int jpegQuality = 90;
     std::uint32_t seed = 1;
     bool noNoise = false;
+    bool noLabels = false;
     int colourSamples = 2;
 };
 
@@ -130,19 +132,42 @@ void writeTumHeader(std::ofstream& out, const std::string& what, const std::stri
     out << "# " << what << "\n# file: 'voxfuse synthetic_room (voxfuse_synth)'\n# " << columns << "\n";
 }
 
+// classes.txt: "id name" per semantic class of the scene, as the label images use them.
+void writeClasses(const fs::path& path, const SyntheticScene& scene) {
+    std::ofstream out = openText(path);
+    out << "# semantic classes of the label images (labels/*.png, one class id per pixel)\n"
+           "# file: 'voxfuse synthetic_room (voxfuse_synth)'\n"
+           "# id name   (0 = unlabelled: no surface)\n";
+    for (const SemanticClass& c : scene.classes()) out << c.id << " " << c.name << "\n";
+}
+
+// Label PNGs are 8-bit: every class a primitive uses must fit.
+void checkClassesFitLabelImages(const SyntheticScene& scene) {
+    for (const Primitive& p : scene.primitives())
+        if (p.classId > 255)
+            throw std::runtime_error("class id " + std::to_string(p.classId) +
+                                     " does not fit the 8-bit label images (--no-labels skips them)");
+}
+
 int run(const Options& opt) {
     const fs::path out(opt.outDir);
     const bool tum = opt.format == "tum";
+    const bool labels = tum && !opt.noLabels;
     fs::create_directories(out);
     if (tum) {
         fs::create_directories(out / "rgb");
         fs::create_directories(out / "depth");
     }
+    if (labels) fs::create_directories(out / "labels");
 
     // Render from the scene as read back from scene.txt, so the file is the
     // complete and exact description of what was rendered.
     SyntheticScene::defaultRoom().write((out / "scene.txt").string());
     const SyntheticScene scene = SyntheticScene::read((out / "scene.txt").string());
+    if (labels) {
+        checkClassesFitLabelImages(scene);
+        writeClasses(out / "classes.txt", scene);
+    }
 
     const PinholeCamera camera = PinholeCamera::kinectV1(opt.width, opt.height);
     const CameraPath path;
@@ -160,13 +185,17 @@ int run(const Options& opt) {
     std::ofstream groundTruth = openText(out / "groundtruth.txt");
     writeTumHeader(groundTruth, "ground truth trajectory (camera-to-world, exact)",
                    "timestamp tx ty tz qx qy qz qw");
-    std::ofstream rgbList, depthList, associations;
+    std::ofstream rgbList, depthList, associations, labelList;
     if (tum) {
         rgbList = openText(out / "rgb.txt");
         depthList = openText(out / "depth.txt");
         associations = openText(out / "associations.txt");
         writeTumHeader(rgbList, "color images", "timestamp filename");
         writeTumHeader(depthList, "depth maps", "timestamp filename");
+    }
+    if (labels) {
+        labelList = openText(out / "labels.txt");
+        writeTumHeader(labelList, "semantic labels (class ids, see classes.txt)", "timestamp filename");
     }
 
     const std::string rgbExt = opt.rgbFormat == "png" ? ".png" : ".jpg";
@@ -202,6 +231,16 @@ int run(const Options& opt) {
             rgbList << name << " rgb/" << name << rgbExt << "\n";
             depthList << name << " depth/" << name << ".png\n";
             associations << name << " rgb/" << name << rgbExt << " " << name << " depth/" << name << ".png\n";
+            if (labels) {
+                // Exact: the class at each pixel's centre ray, the one that gave the depth.
+                cv::Mat labelImage(opt.height, opt.width, CV_8UC1);
+                for (int v = 0; v < opt.height; ++v)
+                    for (int u = 0; u < opt.width; ++u)
+                        labelImage.at<std::uint8_t>(v, u) = static_cast<std::uint8_t>(
+                            frame.label[static_cast<std::size_t>(v) * opt.width + u]);
+                writeImage(out / "labels" / (name + ".png"), labelImage, depthPngParams);
+                labelList << name << " labels/" << name << ".png\n";
+            }
         } else {
             char base[32];
             std::snprintf(base, sizeof(base), "%04i", i);
@@ -237,6 +276,8 @@ int main(int argc, char** argv) {
         ->check(CLI::Range(1, 4));
     app.add_flag("--no-noise", opt.noNoise,
                  "Exact depth (only the file's own quantisation) and noise-free colour");
+    app.add_flag("--no-labels", opt.noLabels,
+                 "No semantic label images (TUM layout: labels/*.png, labels.txt, classes.txt)");
     CLI11_PARSE(app, argc, argv);
     try {
         return run(opt);

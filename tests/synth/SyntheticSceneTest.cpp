@@ -1,9 +1,12 @@
-// Tests of the synthetic data generator: exact ray casting and distances, the
-// Kinect depth model's noise and holes, the camera path, and the tool's
-// Kinect-raw PGM output against the exact geometry.
+// Tests of the synthetic data generator: exact ray casting and distances,
+// semantic class labels, the Kinect depth model's noise and holes, the camera
+// path, and the tool's Kinect-raw PGM output and label images against the
+// exact geometry.
 #include "CameraPath.h"
 #include "KinectDepthModel.h"
 #include "SyntheticScene.h"
+
+#include "voxfuse/io/ImageIO.h"
 
 #include <gtest/gtest.h>
 
@@ -12,8 +15,11 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <random>
+#include <set>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -155,11 +161,135 @@ TEST(SyntheticScene, SceneFileRoundTripIsExact) {
         EXPECT_EQ(a.primitive, b.primitive);
         EXPECT_EQ(a.albedo_rgb, b.albedo_rgb);
     }
+    for (std::size_t i = 0; i < room.primitives().size(); ++i)
+        EXPECT_EQ(back.primitives()[i].classId, room.primitives()[i].classId) << "primitive " << i;
+    ASSERT_EQ(back.classes().size(), room.classes().size());
+    for (std::size_t i = 0; i < room.classes().size(); ++i) {
+        EXPECT_EQ(back.classes()[i].id, room.classes()[i].id);
+        EXPECT_EQ(back.classes()[i].name, room.classes()[i].name);
+    }
     const SyntheticScene plane = SyntheticScene::singlePlane(Vector3f::Zero(), Vector3f::UnitZ());
     plane.write(path);  // infinite extents survive as "inf"
     Hit hit;
     EXPECT_TRUE(SyntheticScene::read(path).intersect(Vector3f(1e3f, 0, 1), -Vector3f::UnitZ(), hit));
     std::remove(path.c_str());
+}
+
+TEST(SyntheticScene, SceneFileClassesAreOptionalAndChecked) {
+    const std::string path = ::testing::TempDir() + "voxfuse_synth_scene_classes.txt";
+    const auto readText = [&](const std::string& text) {
+        std::ofstream(path) << text;
+        return SyntheticScene::read(path);
+    };
+    const std::string sphere = "sphere 0.5 pose 0 0 3 0 0 0 1 texture solid 0.5 0.5 0.5 0 0 0 1 0";
+    // Files written before labels existed: the primitive is unlabelled.
+    const SyntheticScene old = readText(sphere + "\n");
+    ASSERT_EQ(old.primitives().size(), 1u);
+    EXPECT_EQ(old.primitives()[0].classId, kUnlabelled);
+    EXPECT_TRUE(old.classes().empty());
+
+    const SyntheticScene labelled = readText("class 9 vase\nclass 300 lamp\n" + sphere + " class 300\n");
+    EXPECT_EQ(labelled.primitives()[0].classId, 300);
+    ASSERT_EQ(labelled.classes().size(), 2u);
+    EXPECT_EQ(labelled.classes()[0].id, 9);
+    EXPECT_EQ(labelled.classes()[1].name, "lamp");
+
+    EXPECT_THROW(readText(sphere + " class\n"), std::runtime_error);
+    EXPECT_THROW(readText(sphere + " class -1\n"), std::runtime_error);
+    EXPECT_THROW(readText(sphere + " class 65536\n"), std::runtime_error);
+    EXPECT_THROW(readText(sphere + " klass 2\n"), std::runtime_error);
+    EXPECT_THROW(readText(sphere + " class 2 extra\n"), std::runtime_error);
+    EXPECT_THROW(readText("class 0 nothing\n"), std::runtime_error);
+    EXPECT_THROW(readText("class 4\n"), std::runtime_error);
+    std::remove(path.c_str());
+}
+
+TEST(SyntheticScene, DefaultRoomGivesEveryPrimitiveANamedClass) {
+    const SyntheticScene room = SyntheticScene::defaultRoom();
+    std::map<std::uint16_t, std::string> names;
+    for (const SemanticClass& c : room.classes()) {
+        EXPECT_GE(c.id, 1);
+        EXPECT_TRUE(names.emplace(c.id, c.name).second) << "class " << c.id << " named twice";
+    }
+    const std::map<std::uint16_t, std::string> expected{
+        {room_class::kFloor, "floor"}, {room_class::kWall, "wall"},     {room_class::kCeiling, "ceiling"},
+        {room_class::kTable, "table"}, {room_class::kBall, "ball"},     {room_class::kCylinder, "cylinder"},
+        {room_class::kBox, "box"},     {room_class::kPoster, "poster"}};
+    EXPECT_EQ(names, expected);
+
+    std::set<std::uint16_t> used;
+    for (const Primitive& p : room.primitives()) {
+        EXPECT_TRUE(names.count(p.classId)) << "class " << p.classId << " has no name";
+        EXPECT_LE(p.classId, 255) << "label images are 8-bit";
+        used.insert(p.classId);
+        if (p.kind == PrimitiveKind::Sphere) EXPECT_EQ(p.classId, room_class::kBall);
+        if (p.kind == PrimitiveKind::Cylinder) EXPECT_EQ(p.classId, room_class::kCylinder);
+    }
+    EXPECT_EQ(used.size(), names.size()) << "every class is used";
+
+    // Spot checks by geometry: straight down onto the floor, up to the
+    // ceiling, sideways onto a wall, down onto the table top.
+    Hit hit;
+    const auto classAlong = [&](const Vector3f& origin, const Vector3f& dir) {
+        EXPECT_TRUE(room.intersect(origin, dir, hit));
+        return room.primitives()[hit.primitive].classId;
+    };
+    EXPECT_EQ(classAlong(Vector3f(1.8f, 1.5f, 1.5f), -Vector3f::UnitZ()), room_class::kFloor);
+    EXPECT_EQ(classAlong(Vector3f(1.8f, 1.5f, 1.5f), Vector3f::UnitZ()), room_class::kCeiling);
+    EXPECT_EQ(classAlong(Vector3f(1.8f, 1.5f, 2.2f), Vector3f::UnitX()), room_class::kWall);
+    EXPECT_EQ(classAlong(Vector3f(0.6f, 0.35f, 1.5f), -Vector3f::UnitZ()), room_class::kTable);
+    EXPECT_EQ(classAlong(Vector3f(2.0f, 0.3f, 1.2f), Vector3f::UnitX()), room_class::kPoster);
+}
+
+TEST(SyntheticScene, RenderedLabelIsTheClassOfThePrimitiveTheExactRayHits) {
+    const SyntheticScene room = SyntheticScene::defaultRoom();
+    const CameraPath path;
+    const PinholeCamera camera = PinholeCamera::kinectV1(160, 120);
+    std::set<std::uint16_t> seen;
+    for (int i : {0, 50, 99}) {
+        const Eigen::Isometry3f pose = path.pose(i);
+        const RenderedFrame frame = room.render(camera, pose, 1);
+        ASSERT_EQ(frame.label.size(), frame.depth.size());
+        for (int v = 0; v < camera.height; ++v)
+            for (int u = 0; u < camera.width; ++u) {
+                const std::size_t idx = static_cast<std::size_t>(v) * camera.width + u;
+                const Vector3f dir = pose.linear() * camera.ray(static_cast<float>(u), static_cast<float>(v));
+                Hit hit;
+                ASSERT_TRUE(room.intersect(pose.translation(), dir, hit)) << "the room is closed";
+                ASSERT_EQ(frame.label[idx], room.primitives()[hit.primitive].classId)
+                    << "frame " << i << " pixel " << u << "," << v;
+                // Aligned with depth: the label comes from the ray that gave the depth.
+                ASSERT_EQ(frame.depth[idx], hit.t);
+                ASSERT_GT(frame.label[idx], kUnlabelled) << "surface without a class at " << u << "," << v;
+                seen.insert(frame.label[idx]);
+            }
+    }
+    EXPECT_GE(seen.size(), 6u) << "the views see most classes";
+}
+
+TEST(SyntheticScene, PixelsWithoutASurfaceAreUnlabelled) {
+    const SyntheticScene scene = SyntheticScene::singleSphere(Vector3f(0, 0, 3), 0.5f);
+    const PinholeCamera camera = PinholeCamera::kinectV1(64, 48);
+    const RenderedFrame frame = scene.render(camera, Eigen::Isometry3f::Identity(), 1);
+    int empty = 0, ball = 0;
+    for (std::size_t i = 0; i < frame.depth.size(); ++i) {
+        if (frame.depth[i] == 0.0f) {
+            EXPECT_EQ(frame.label[i], kUnlabelled) << "pixel " << i;
+            ++empty;
+        } else {
+            EXPECT_EQ(frame.label[i], room_class::kBall) << "pixel " << i;
+            ++ball;
+        }
+    }
+    EXPECT_GT(empty, 0);
+    EXPECT_GT(ball, 0);
+    // An unlabelled primitive renders as 0 too, though it has depth.
+    SyntheticScene plain;
+    plain.addSphere(Vector3f(0, 0, 3), 0.5f);
+    const RenderedFrame unlabelled = plain.render(camera, Eigen::Isometry3f::Identity(), 1);
+    EXPECT_EQ(std::count(unlabelled.label.begin(), unlabelled.label.end(), kUnlabelled),
+              static_cast<std::ptrdiff_t>(unlabelled.label.size()));
+    EXPECT_EQ(unlabelled.depth, frame.depth);
 }
 
 TEST(KinectDepthModel, NoiseGrowsWithSquaredDepth) {
@@ -375,15 +505,127 @@ void checkPpmOutput(bool noise) {
     fs::remove_all(dir);
 }
 
+// "timestamp filename" lines of a TUM list, '#' lines skipped.
+std::vector<std::pair<std::string, std::string>> readTumList(const fs::path& path) {
+    std::ifstream in(path);
+    EXPECT_TRUE(in.good()) << path;
+    std::vector<std::pair<std::string, std::string>> entries;
+    for (std::string line; std::getline(in, line);) {
+        if (line.empty() || line[0] == '#') continue;
+        std::istringstream s(line);
+        std::string timestamp, file, extra;
+        s >> timestamp >> file;
+        EXPECT_FALSE(file.empty()) << line;
+        EXPECT_FALSE(s >> extra) << line;
+        entries.emplace_back(timestamp, file);
+    }
+    return entries;
+}
+
+// Bit depth and colour type from a PNG's IHDR chunk (colour type 0: greyscale).
+void readPngFormat(const fs::path& path, int& bitDepth, int& colourType) {
+    std::ifstream in(path, std::ios::binary);
+    unsigned char header[26] = {};
+    in.read(reinterpret_cast<char*>(header), sizeof(header));
+    ASSERT_TRUE(in.good()) << path;
+    ASSERT_EQ(std::string(reinterpret_cast<char*>(header) + 12, 4), "IHDR") << path;
+    bitDepth = header[24];
+    colourType = header[25];
+}
+
 }  // namespace
 
 TEST(VoxfuseSynthTool, ExactPpmDepthConvertsBackWithinHalfAStep) { checkPpmOutput(false); }
 TEST(VoxfuseSynthTool, NoisyPpmDepthStaysNearTheTruth) { checkPpmOutput(true); }
+
+// TUM layout: labels/<timestamp>.png, labels.txt and classes.txt exist and
+// parse, and every label pixel is the class of the exact render, 0 nowhere
+// a depth was measured.
+TEST(VoxfuseSynthTool, TumLabelImagesAreTheExactClasses) {
+    const fs::path dir = fs::path(::testing::TempDir()) / "voxfuse_synth_tum_labels";
+    fs::remove_all(dir);
+    const std::string command = std::string("\"") + VOXFUSE_SYNTH_EXE + "\" --out \"" + dir.string() +
+                                "\" --frames 2 --width 160 --height 120 --colour-samples 1 > /dev/null";
+    ASSERT_EQ(std::system(command.c_str()), 0) << command;
+
+    const SyntheticScene scene = SyntheticScene::read((dir / "scene.txt").string());
+    std::ifstream classesFile(dir / "classes.txt");
+    ASSERT_TRUE(classesFile.good());
+    std::vector<SemanticClass> classes;
+    for (std::string line; std::getline(classesFile, line);) {
+        if (line.empty() || line[0] == '#') continue;
+        std::istringstream s(line);
+        SemanticClass c;
+        std::string extra;
+        ASSERT_TRUE(s >> c.id >> c.name) << line;
+        EXPECT_FALSE(s >> extra) << line;
+        classes.push_back(c);
+    }
+    ASSERT_EQ(classes.size(), scene.classes().size());
+    ASSERT_EQ(classes.size(), SyntheticScene::defaultRoom().classes().size());
+    for (std::size_t i = 0; i < classes.size(); ++i) {
+        EXPECT_EQ(classes[i].id, scene.classes()[i].id);
+        EXPECT_EQ(classes[i].name, scene.classes()[i].name);
+    }
+
+    const auto rgb = readTumList(dir / "rgb.txt");
+    const auto depth = readTumList(dir / "depth.txt");
+    const auto labels = readTumList(dir / "labels.txt");
+    ASSERT_EQ(labels.size(), 2u);
+    ASSERT_EQ(rgb.size(), labels.size());
+    const std::vector<Eigen::Isometry3f> poses = readGroundTruth(dir / "groundtruth.txt");
+    ASSERT_EQ(poses.size(), labels.size());
+    const PinholeCamera camera = PinholeCamera::kinectV1(160, 120);
+    for (std::size_t f = 0; f < labels.size(); ++f) {
+        EXPECT_EQ(labels[f].first, rgb[f].first);
+        EXPECT_EQ(labels[f].second, "labels/" + labels[f].first + ".png");
+        const fs::path labelPath = dir / labels[f].second;
+        ASSERT_TRUE(fs::exists(labelPath)) << labelPath;
+        int bitDepth = 0, colourType = -1;
+        readPngFormat(labelPath, bitDepth, colourType);
+        EXPECT_EQ(bitDepth, 8);
+        EXPECT_EQ(colourType, 0) << "single-channel greyscale";
+
+        const voxfuse::Image<voxfuse::Vec4u8> image = voxfuse::readColorImage(labelPath.string());
+        const voxfuse::Image<std::uint16_t> depthImage = voxfuse::readDepthPNG((dir / depth[f].second).string());
+        ASSERT_EQ(image.width(), camera.width);
+        ASSERT_EQ(image.height(), camera.height);
+        const RenderedFrame truth = scene.render(camera, poses[f], 1);
+        int measured = 0;
+        for (int v = 0; v < camera.height; ++v)
+            for (int u = 0; u < camera.width; ++u) {
+                const voxfuse::Vec4u8 p = image.at(u, v);
+                ASSERT_TRUE(p.x == p.y && p.y == p.z) << "greyscale";
+                ASSERT_EQ(p.x, truth.label[static_cast<std::size_t>(v) * camera.width + u])
+                    << "frame " << f << " pixel " << u << "," << v;
+                if (depthImage.at(u, v) > 0) {
+                    ++measured;
+                    ASSERT_GT(p.x, 0) << "depth without a label at " << u << "," << v;
+                }
+            }
+        EXPECT_GT(measured, camera.width * camera.height / 2);
+    }
+
+    // --no-labels leaves them out.
+    fs::remove_all(dir);
+    ASSERT_EQ(std::system((std::string("\"") + VOXFUSE_SYNTH_EXE + "\" --out \"" + dir.string() +
+                           "\" --frames 1 --width 80 --height 60 --colour-samples 1 --no-labels > /dev/null")
+                              .c_str()),
+              0);
+    EXPECT_TRUE(fs::exists(dir / "depth.txt"));
+    EXPECT_FALSE(fs::exists(dir / "labels"));
+    EXPECT_FALSE(fs::exists(dir / "labels.txt"));
+    EXPECT_FALSE(fs::exists(dir / "classes.txt"));
+    fs::remove_all(dir);
+}
 #else
 TEST(VoxfuseSynthTool, ExactPpmDepthConvertsBackWithinHalfAStep) {
     GTEST_SKIP() << "VOXFUSE_SYNTH_EXE (path of voxfuse_synth) not defined for this test binary";
 }
 TEST(VoxfuseSynthTool, NoisyPpmDepthStaysNearTheTruth) {
+    GTEST_SKIP() << "VOXFUSE_SYNTH_EXE (path of voxfuse_synth) not defined for this test binary";
+}
+TEST(VoxfuseSynthTool, TumLabelImagesAreTheExactClasses) {
     GTEST_SKIP() << "VOXFUSE_SYNTH_EXE (path of voxfuse_synth) not defined for this test binary";
 }
 #endif
