@@ -98,6 +98,7 @@ void writeSummaryJson(const std::string& path, const RunRecord& run) {
     j.value("frames_without_pose", run.frames_without_pose);
     j.value("frames_unreadable", run.frames_unreadable);
     j.value("frames_dropped", run.frames_dropped);
+    if (run.has_labels) j.value("frames_with_labels", run.frames_with_labels);
     j.value("poses", run.tracked ? "tracked" : "groundtruth");
     j.value("tracking_poor_frames", countQuality(run, TrackingQuality::Poor));
     j.value("tracking_failed_frames", countQuality(run, TrackingQuality::Failed));
@@ -129,6 +130,8 @@ void writeSummaryJson(const std::string& path, const RunRecord& run) {
     j.value("max_weight", run.settings.scene.max_weight);
     j.value("min_depth_m", double(run.settings.scene.view_frustum_min_m));
     j.value("max_depth_m", double(run.settings.scene.view_frustum_max_m));
+    if (voxelTypeHasLabels(run.settings.voxel_type))
+        j.value("label_update", run.settings.scene.label_update == LabelUpdate::Vote ? "vote" : "probabilistic");
     if (run.tracked) {
         j.value("tracker", toString(run.settings.tracker.kind));
         std::string levels;
@@ -168,6 +171,11 @@ std::string summaryText(const RunRecord& run, const std::string& out_dir) {
         } else {
             s << "RPE n/a (sequence shorter than its 1 s step)\n";
         }
+    }
+    if (run.has_labels) {
+        std::snprintf(line, sizeof line, "  labels       %d of %zu frames had a label image (%s update)\n", run.frames_with_labels,
+                      run.frames.size(), run.settings.scene.label_update == LabelUpdate::Vote ? "vote" : "probabilistic");
+        s << line;
     }
     std::snprintf(line, sizeof line, "  volume       %s voxels, %s index, %.1f mm voxels, mu %.1f mm, %.0f MB\n",
                   toString(run.settings.voxel_type), toString(run.settings.index_type), 1000.0 * run.settings.scene.voxel_size_m,

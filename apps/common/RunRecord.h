@@ -24,6 +24,8 @@ struct RunRecord {
     int frames_without_pose = 0;      // skipped: --poses groundtruth but no ground truth for the frame
     int frames_unreadable = 0;        // skipped: the source could not read them
     int frames_dropped = 0;           // live input: dropped by the reader thread while the engine lagged
+    bool has_labels = false;          // a label image stream was attached
+    int frames_with_labels = 0;       // frames a label image was found for
     double wall_s = 0.0;
     double peak_rss_mb = 0.0;
     double scene_mb = 0.0;

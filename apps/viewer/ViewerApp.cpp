@@ -19,7 +19,7 @@ namespace {
 
 constexpr float kBackgroundGrey = 0.15f;  // window behind the panels: tells the panels' edges from black model background
 
-constexpr const char* kKeysLine = "n next | space run | 1-4 mode | drag/wheel view | c camera | m mesh | p shot | r reset | q quit";
+constexpr const char* kKeysLine = "n next | space run | 1-5 mode | drag/wheel view | c camera | m mesh | p shot | r reset | q quit";
 
 const char* modeName(RenderMode mode) {
     switch (mode) {
@@ -27,6 +27,7 @@ const char* modeName(RenderMode mode) {
     case RenderMode::Color: return "colour";
     case RenderMode::Normals: return "normals";
     case RenderMode::Depth: return "depth";
+    case RenderMode::Class: return "class";
     }
     return "?";
 }
@@ -190,7 +191,8 @@ void ViewerApp::onKey(int key, int action, int /*mods*/) {
     case GLFW_KEY_2: setMode(RenderMode::Color); break;
     case GLFW_KEY_3: setMode(RenderMode::Normals); break;
     case GLFW_KEY_4: setMode(RenderMode::Depth); break;
-    case GLFW_KEY_TAB: setMode(RenderMode((int(mode_) + 1) % 4)); break;
+    case GLFW_KEY_5: setMode(RenderMode::Class); break;
+    case GLFW_KEY_TAB: setMode(RenderMode((int(mode_) + 1) % 5)); break;
     case GLFW_KEY_C:
         free_view_.stop();
         model_dirty_ = true;

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <iostream>
 
+#include "LabelInput.h"
 #include "ViewerApp.h"
 #include "voxfuse/core/Error.h"
 
@@ -19,13 +20,14 @@ using namespace voxfuse;
 namespace {
 
 constexpr const char* kKeyHelp =
-    "keys: n next frame | space run/pause | 1-4 shaded/colour/normals/depth (Tab cycles) | left-drag orbit, wheel zoom,\n"
+    "keys: n next frame | space run/pause | 1-5 shaded/colour/normals/depth/class (Tab cycles) | left-drag orbit, wheel zoom,\n"
     "      c back to the camera | m save mesh | p screenshot | r reset the map | q/Esc quit\n";
 
 struct Options {
     std::string source;
     SourceOptions source_options;
-    std::string voxel = "s_rgb";
+    std::string voxel;  // "" = s_rgb, or s_rgb_label with --labels
+    app::LabelInputOptions labels;
     std::string index = "hash";
     std::string device = "cpu";
     std::string poses = "track";
@@ -56,10 +58,10 @@ int run(Options& o) {
     if (o.source.empty() && o.source_options.rgb_pattern.empty()) o.source = defaultSource();
     if (!o.size.empty()) parseWindowSize(o.size, o.viewer);
     std::unique_ptr<ImageSource> source = openImageSource(o.source, o.source_options);
+    MainEngineSettings& s = o.engine;
+    app::attachLabelInput(source, o.source, o.labels, o.voxel, "s_rgb", s, "voxfuse_viewer");
     std::cerr << "voxfuse_viewer: " << source->description() << "\n";
 
-    MainEngineSettings& s = o.engine;
-    s.voxel_type = parseVoxelType(o.voxel);
     s.index_type = parseIndexType(o.index);
     s.device = o.device == "cuda" ? Device::CUDA : Device::CPU;
     std::unique_ptr<MainEngine> engine = MainEngine::create(s, source->calib());
@@ -81,7 +83,9 @@ int main(int argc, char** argv) {
     cli.add_option("--rgb", o.source_options.rgb_pattern, "PPM colour file pattern, e.g. frames/%04i.ppm");
     cli.add_option("--depth", o.source_options.depth_pattern, "16-bit PGM depth file pattern, e.g. frames/%04i.pgm");
     cli.add_option("--calib", o.source_options.calib_path, "InfiniTAM calib.txt (overrides the source's own)");
-    cli.add_option("--voxel", o.voxel, "voxel type")->capture_default_str()->check(CLI::IsMember({"s", "f", "s_rgb", "f_rgb"}));
+    cli.add_option("--voxel", o.voxel, "voxel type (default s_rgb; s_rgb_label with --labels)")
+        ->check(CLI::IsMember({"s", "f", "s_rgb", "f_rgb", "s_label", "s_rgb_label"}));
+    app::addLabelOptions(cli, o.labels);
     cli.add_option("--index", o.index, "voxel index")->capture_default_str()->check(CLI::IsMember({"dense", "hash"}));
     cli.add_option("--voxel-size", o.engine.scene.voxel_size_m, "voxel edge in metres")->capture_default_str()->check(CLI::PositiveNumber);
     cli.add_option("--device", o.device, "where the engines run")->capture_default_str()->check(CLI::IsMember({"cpu", "cuda"}));

@@ -10,6 +10,7 @@
 #include <iterator>
 #include <iostream>
 
+#include "LabelInput.h"
 #include "ResourceUsage.h"
 #include "RunRecord.h"
 #include "SequenceRunner.h"
@@ -17,6 +18,7 @@
 #include "voxfuse/core/Timer.h"
 #include "voxfuse/engines/MainEngine.h"
 #include "voxfuse/eval/TrajectoryError.h"
+#include "voxfuse/engines/MeshLabels.h"
 #include "voxfuse/engines/PointCloudDownsampling.h"
 #include "voxfuse/io/ImageIO.h"
 #include "voxfuse/io/MeshIO.h"
@@ -40,7 +42,7 @@ struct CliOptions {
     std::string out_dir = "voxfuse_out";
     int max_frames = 0;  // 0 = all
     int render_every = 25;
-    std::string voxel = "s_rgb";
+    std::string voxel;                    // "" = s_rgb, or s_rgb_label with --labels
     std::string index = "hash";
     std::string device = "cpu";
     std::string poses = "track";
@@ -53,6 +55,9 @@ struct CliOptions {
     bool write_cloud = false;             // DIR/cloud.ply at the end
     float cloud_voxel_m = 0.f;            // downsample the cloud to one point per cell of this size
     float occupancy_res_m = 0.f;          // > 0: an OctoMap with cells of this size -> DIR/occupancy.bt
+    app::LabelInputOptions labels;
+    bool mesh_per_class = false;          // DIR/mesh_class_<id>.ply for each class of the mesh
+    std::vector<int> exclude_classes;     // dropped from the mesh and the cloud (e.g. people from a static map)
     std::string tracker;                  // overrides of the tracker settings, applied in this order:
     std::string tracker_config;           //   the settings file, then the single options
     std::string tracker_levels;
@@ -111,20 +116,37 @@ TrackerSettings trackerSettings(const CliOptions& o) {
     return parseTrackerSettings(text, name);
 }
 
+std::vector<ClassId> excludedClasses(const CliOptions& o) { return std::vector<ClassId>(o.exclude_classes.begin(), o.exclude_classes.end()); }
+
 void writeMapOutputs(MainEngine& engine, const CliOptions& o) {
-    if (o.write_mesh || !o.mesh_path.empty()) {
+    const bool with_classes = voxelTypeHasLabels(engine.settings().voxel_type);
+    if ((o.mesh_per_class || !o.exclude_classes.empty()) && !with_classes)
+        throw ConfigError("--mesh-per-class and --exclude-classes need a voxel type with classes (s_label, s_rgb_label)");
+    if (o.write_mesh || !o.mesh_path.empty() || o.mesh_per_class) {
         const std::string path = o.mesh_path.empty() ? (fs::path(o.out_dir) / "mesh.ply").string() : o.mesh_path;
         const Timer t;
         Mesh mesh;
         engine.extractMesh(mesh);
-        writeMesh(path, mesh);
-        std::cerr << "voxfuse: mesh " << mesh.vertices.size() << " vertices, " << mesh.triangles.size() << " triangles in "
-                  << int(t.elapsedMs()) << " ms -> " << path << "\n";
+        if (!o.exclude_classes.empty()) mesh = selectClasses(mesh, excludedClasses(o), ClassSelection::Exclude);
+        if (o.write_mesh || !o.mesh_path.empty()) {
+            writeMesh(path, mesh);
+            std::cerr << "voxfuse: mesh " << mesh.vertices.size() << " vertices, " << mesh.triangles.size() << " triangles in "
+                      << int(t.elapsedMs()) << " ms -> " << path << "\n";
+        }
+        if (o.mesh_per_class) {
+            for (const ClassMesh& part : splitByClass(mesh)) {
+                const std::string name = part.label == kNoLabel ? "mesh_unlabelled.ply" : "mesh_class_" + std::to_string(part.label) + ".ply";
+                writeMesh((fs::path(o.out_dir) / name).string(), part.mesh);
+                std::cerr << "voxfuse: class " << (part.label == kNoLabel ? std::string("none") : std::to_string(part.label)) << ": "
+                          << part.mesh.triangles.size() << " triangles -> " << (fs::path(o.out_dir) / name).string() << "\n";
+            }
+        }
     }
     if (o.write_cloud || o.cloud_voxel_m > 0.f) {
         const std::string path = (fs::path(o.out_dir) / "cloud.ply").string();
         PointCloud cloud;
         engine.extractPointCloud(cloud);
+        if (!o.exclude_classes.empty()) cloud = selectClasses(cloud, excludedClasses(o), ClassSelection::Exclude);
         const std::size_t surface_points = cloud.points.size();
         if (o.cloud_voxel_m > 0.f) cloud = downsampleVoxelGrid(cloud, o.cloud_voxel_m);
         writePointCloudPly(path, cloud);
@@ -132,11 +154,17 @@ void writeMapOutputs(MainEngine& engine, const CliOptions& o) {
     }
 }
 
-void saveRender(MainEngine& engine, RenderMode mode, const std::string& out_dir, int frame_index) {
+// render_XXXXXX.png, and render_class_XXXXXX.png for voxel types with classes.
+void saveRenders(MainEngine& engine, const std::string& out_dir, int frame_index) {
+    const VoxelType type = engine.settings().voxel_type;
     Image<Vec4u8> image;
-    engine.renderLast(mode, image);
     char name[64];
+    engine.renderLast(voxelTypeHasColor(type) ? RenderMode::Color : RenderMode::Shaded, image);
     std::snprintf(name, sizeof name, "render_%06d.png", frame_index);
+    writePNG((fs::path(out_dir) / name).string(), image);
+    if (!voxelTypeHasLabels(type)) return;
+    engine.renderLast(RenderMode::Class, image);
+    std::snprintf(name, sizeof name, "render_class_%06d.png", frame_index);
     writePNG((fs::path(out_dir) / name).string(), image);
 }
 
@@ -154,6 +182,9 @@ int run(CliOptions& o) {
         if (o.source.empty() && o.source_options.rgb_pattern.empty()) o.source = defaultSource();
         source = openImageSource(o.source, o.source_options);
     }
+    MainEngineSettings& s = o.engine;
+    // Label images are decoded on the reader thread too: the stream goes inside it.
+    LabelledImageSource* labels = app::attachLabelInput(source, o.source, o.labels, o.voxel, "s_rgb", s, "voxfuse");
     // Live cameras always get the reader thread, so that the engine never makes the driver wait.
     ThreadedImageSource* threaded = nullptr;
     if (o.threaded || source->isLive()) {
@@ -163,8 +194,6 @@ int run(CliOptions& o) {
     }
     std::cerr << "voxfuse: " << source->description() << "\n";
 
-    MainEngineSettings& s = o.engine;
-    s.voxel_type = parseVoxelType(o.voxel);
     s.index_type = parseIndexType(o.index);
     s.device = o.device == "cuda" ? Device::CUDA : Device::CPU;
     s.dense_size = {o.dense_size[0], o.dense_size[1], o.dense_size[2]};
@@ -173,10 +202,10 @@ int run(CliOptions& o) {
 
     std::unique_ptr<MainEngine> engine = MainEngine::create(s, source->calib());
     fs::create_directories(o.out_dir);
-    const RenderMode render_mode = (s.voxel_type == VoxelType::SRgb || s.voxel_type == VoxelType::FRgb) ? RenderMode::Color : RenderMode::Shaded;
 
     app::RunRecord record;
     record.source = source->description();
+    record.has_labels = labels != nullptr;
     record.settings = s;
     record.tracked = o.poses == "track";
     app::SequenceRunner runner(*source, *engine, record.tracked ? app::PoseSource::Tracker : app::PoseSource::GroundTruth, record);
@@ -194,18 +223,20 @@ int run(CliOptions& o) {
     int last_rendered = -1;
     while ((o.max_frames <= 0 || int(record.frames.size()) < o.max_frames) && runner.step()) {
         const FrameResult& fr = runner.lastRecord().result;
+        record.frames_with_labels += !runner.frame().labels.empty();
         if (occupancy && fr.fused) occupancy->submit(engine->view().depth, engine->view().calib.depth, fr.T_world_camera);
         if (o.render_every > 0 && int(record.frames.size() - 1) % o.render_every == 0) {
-            saveRender(*engine, render_mode, o.out_dir, runner.frame().index);
+            saveRenders(*engine, o.out_dir, runner.frame().index);
             last_rendered = runner.frame().index;
         }
         progress.update(int(record.frames.size()), double(record.frames.size()) / (wall.elapsedMs() / 1000.0));
     }
     record.wall_s = wall.elapsedMs() / 1000.0;
     if (threaded) record.frames_dropped = int(threaded->droppedFrames());
+
     progress.finish();
     if (record.frames.empty()) throw ConfigError("no frame could be processed from " + source->description());
-    if (last_rendered != record.frames.back().index) saveRender(*engine, render_mode, o.out_dir, record.frames.back().index);
+    if (last_rendered != record.frames.back().index) saveRenders(*engine, o.out_dir, record.frames.back().index);
 
     record.peak_rss_mb = app::peakRssMb();
     record.scene_mb = double(engine->sceneBytes()) / (1024.0 * 1024.0);
@@ -255,7 +286,8 @@ int main(int argc, char** argv) {
     cli.add_option("--max-weight", o.engine.scene.max_weight, "cap on the per-voxel weight")->capture_default_str()->check(CLI::Range(1, 255));
     cli.add_option("--min-depth", o.engine.scene.view_frustum_min_m, "ignore depth below (m)")->capture_default_str();
     cli.add_option("--max-depth", o.engine.scene.view_frustum_max_m, "ignore depth beyond (m)")->capture_default_str();
-    cli.add_option("--voxel", o.voxel, "voxel type")->capture_default_str()->check(CLI::IsMember({"s", "f", "s_rgb", "f_rgb"}));
+    cli.add_option("--voxel", o.voxel, "voxel type (default s_rgb; s_rgb_label with --labels)")
+        ->check(CLI::IsMember({"s", "f", "s_rgb", "f_rgb", "s_label", "s_rgb_label"}));
     cli.add_option("--index", o.index, "voxel index")->capture_default_str()->check(CLI::IsMember({"dense", "hash"}));
     cli.add_option("--max-blocks", o.engine.hash.max_block_count, "hash: most 8^3 voxel blocks (memory grows on demand up to this)")
         ->capture_default_str()->check(CLI::PositiveNumber);
@@ -271,6 +303,10 @@ int main(int argc, char** argv) {
         ->check(CLI::NonNegativeNumber);
     cli.add_option("--occupancy", o.occupancy_res_m, "also build an OctoMap with RES-metre cells on a background thread -> DIR/occupancy.bt")
         ->check(CLI::PositiveNumber);
+    app::addLabelOptions(cli, o.labels);
+    cli.add_flag("--mesh-per-class", o.mesh_per_class, "also write one mesh per semantic class: DIR/mesh_class_<id>.ply");
+    cli.add_option("--exclude-classes", o.exclude_classes, "drop these classes from the mesh and the cloud (e.g. people from a static map)")
+        ->delimiter(',')->check(CLI::Range(0, 65535));
     cli.add_option("--poses", o.poses, "track the camera, or take the source's ground truth")
         ->capture_default_str()->check(CLI::IsMember({"track", "groundtruth"}));
     cli.add_option("--tracker", o.tracker, "icp | color | ren | rgbd (default: ren, ICP then a robust refinement)")
