@@ -1,4 +1,5 @@
-// voxfuse_bench: per-stage timings of the pipeline on a recorded sequence, as a table and as JSON.
+// voxfuse_bench: per-stage timings of the pipeline on a recorded sequence, as a table and as JSON, and
+// on request what the map outputs cost (meshing, point clouds, the occupancy map's thread).
 // Defaults to TUM fr3/teddy from ../shared/data when present, else the bundled synthetic sequence.
 
 #include <CLI/CLI.hpp>
@@ -10,6 +11,7 @@
 
 #include "JsonWriter.h"
 #include "LabelInput.h"
+#include "MapOutputBench.h"
 #include "ResourceUsage.h"
 #include "RunRecord.h"
 #include "SequenceRunner.h"
@@ -50,7 +52,11 @@ int main(int argc, char** argv) {
     CLI::App cli{"Per-stage timings of the VoxFuse pipeline on a sequence."};
     std::string source_path, json_path = "voxfuse_bench.json", voxel, index = "hash", poses = "track";
     app::LabelInputOptions labels;
-    int max_frames = 0, warmup = 3;
+    int max_frames = 0, warmup = 3, repeats = 3;
+    bool mesh = false, cloud = false;
+    float cloud_voxel_m = 0.f;
+    OccupancySettings occupancy_settings;
+    occupancy_settings.resolution_m = 0.f;  // off unless --occupancy
     MainEngineSettings s;
     cli.add_option("source", source_path, "sequence (default: ../shared/data/tum_fr3_teddy_200, else the bundled data)");
     cli.add_option("--frames", max_frames, "at most N frames (0 = all)");
@@ -63,6 +69,15 @@ int main(int argc, char** argv) {
     cli.add_option("--mu", s.scene.mu_m, "truncation band (m)")->capture_default_str();
     cli.add_option("--poses", poses, "track the camera, or use the source's ground truth")
         ->capture_default_str()->check(CLI::IsMember({"track", "groundtruth"}));
+    cli.add_flag("--mesh", mesh, "after the run, time marching cubes on the map (median of --repeats), its size and peak memory");
+    cli.add_flag("--cloud", cloud, "after the run, time the point cloud extraction");
+    cli.add_option("--cloud-voxel", cloud_voxel_m, "also time downsampling the cloud to cells of this size (m); implies --cloud")
+        ->check(CLI::PositiveNumber);
+    cli.add_option("--repeats", repeats, "runs of each map output timed")->capture_default_str()->check(CLI::Range(1, 100));
+    cli.add_option("--occupancy", occupancy_settings.resolution_m, "build an OctoMap with RES-metre cells beside the run; report its thread's throughput")
+        ->check(CLI::PositiveNumber);
+    cli.add_option("--occupancy-pixel-step", occupancy_settings.pixel_step, "occupancy: every Nth pixel in x and y")
+        ->capture_default_str()->check(CLI::PositiveNumber);
     cli.add_option("--json", json_path, "where to write the JSON report")->capture_default_str();
     CLI11_PARSE(cli, argc, argv);
 
@@ -72,6 +87,8 @@ int main(int argc, char** argv) {
         app::attachLabelInput(source, source_path, labels, voxel, "s", s, "voxfuse_bench");
         s.index_type = parseIndexType(index);
         auto engine = MainEngine::create(s, source->calib());
+        std::unique_ptr<OccupancyMapper> occupancy;
+        if (occupancy_settings.resolution_m > 0.f) occupancy = std::make_unique<OccupancyMapper>(occupancy_settings);
         app::RunRecord record;
         record.source = source->description();
         record.settings = s;
@@ -82,6 +99,8 @@ int main(int argc, char** argv) {
         std::map<std::string, std::vector<double>> level_samples;
         const Timer wall;
         while ((max_frames <= 0 || int(record.frames.size()) < max_frames) && runner.step()) {
+            const FrameResult& fr = runner.lastRecord().result;
+            if (occupancy && fr.fused) occupancy->submit(engine->view().depth, engine->view().calib.depth, fr.T_world_camera);
             if (!record.tracked || int(record.frames.size()) <= warmup) continue;
             const TrackerStats& ts = engine->trackerStats();
             for (std::size_t l = 0; l < ts.levels.size(); ++l) {
@@ -92,6 +111,7 @@ int main(int argc, char** argv) {
             }
         }
         record.wall_s = wall.elapsedMs() / 1000.0;
+        if (occupancy) occupancy->finish();
         record.peak_rss_mb = app::peakRssMb();
         record.scene_mb = double(engine->sceneBytes()) / (1024.0 * 1024.0);
         record.allocation = engine->allocationStats();
@@ -140,6 +160,18 @@ int main(int argc, char** argv) {
         std::printf("\n  engine frames/s (1000 / median total): %.1f\n  wall frames/s (incl. decoding): %.1f\n  peak RSS: %.0f MB, scene: %.0f MB\n",
                     engine_fps, app::framesPerSecond(record), record.peak_rss_mb, record.scene_mb);
 
+        app::MeshingBench meshing;
+        app::CloudBench cloud_bench;
+        if (mesh) {
+            meshing = app::benchMeshing(*engine, repeats);
+            app::printMeshing(meshing);
+        }
+        if (cloud || cloud_voxel_m > 0.f) {
+            cloud_bench = app::benchCloud(*engine, repeats, cloud_voxel_m);
+            app::printCloud(cloud_bench);
+        }
+        if (occupancy) app::printOccupancy(occupancy->stats(), occupancy->settings());
+
         std::ofstream out(json_path);
         if (!out) throw IoError(json_path, "cannot open for writing");
         app::JsonWriter j(out);
@@ -173,6 +205,9 @@ int main(int argc, char** argv) {
         j.value("scene_mb", record.scene_mb);
         j.value("blocks_allocated", record.allocation.blocks_allocated);
         j.value("allocation_failures", (long long)record.allocation.allocation_failures_total);
+        if (mesh) app::writeMeshingJson(j, meshing);
+        if (cloud || cloud_voxel_m > 0.f) app::writeCloudJson(j, cloud_bench);
+        if (occupancy) app::writeOccupancyJson(j, occupancy->stats(), occupancy->settings());
         j.endObject();
         std::printf("  JSON: %s\n", json_path.c_str());
         return 0;
