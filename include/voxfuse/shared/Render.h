@@ -23,12 +23,17 @@ VF_HOST_DEVICE inline Vec4u8 renderColor(Vec3f rgb) {
             (unsigned char)clampValue(rgb.z, 0.f, 255.f), 255};
 }
 
-// A distinct, stable colour per class id: hues a golden-ratio step apart, so that neighbouring ids
-// differ strongly; kNoLabel is grey.
+// A distinct, stable colour per class id; kNoLabel is grey. Ids 0-11 (where the common classes of
+// small label sets lie) take twelve hues 30 degrees apart: 0-5 the six 60 degrees apart, saturated,
+// 6-11 the six between them, paler and darker, so that hues 30 degrees apart never look alike.
+// Larger ids step the hue by the golden ratio, with saturation alternating with the id's parity.
 VF_HOST_DEVICE inline Vec3f classColor(ClassId id) {
     if (id == kNoLabel) return {150.f, 150.f, 150.f};
-    const float h = 6.f * (float(id) * 0.61803398875f - floorf(float(id) * 0.61803398875f));
-    const float s = (id & 1) ? 0.55f : 0.8f, v = 0.95f;  // alternate saturation: more separable pairs
+    constexpr unsigned char kFirstHues[12] = {0, 6, 2, 8, 4, 10, 1, 7, 3, 9, 5, 11};  // in 30-degree steps
+    const float turns = id < 12 ? float(kFirstHues[id]) / 12.f : float(id) * 0.61803398875f - floorf(float(id) * 0.61803398875f);
+    const float h = 6.f * turns;
+    const bool pale = id < 12 ? id >= 6 : (id & 1) != 0;
+    const float s = pale ? 0.5f : 0.85f, v = pale ? 0.85f : 0.95f;
     const int sector = int(h);
     const float f = h - float(sector), p = v * (1.f - s), q = v * (1.f - s * f), t = v * (1.f - s * (1.f - f));
     Vec3f rgb;
