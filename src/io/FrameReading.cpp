@@ -1,8 +1,11 @@
 #include "FrameReading.h"
 
 #include <cctype>
+#include <cmath>
 #include <filesystem>
+#include <fstream>
 
+#include "TextParsing.h"
 #include "voxfuse/core/Error.h"
 #include "voxfuse/io/ImageIO.h"
 
@@ -43,6 +46,33 @@ auto withFrame(int frame, Read read) -> decltype(read()) {
 bool fileExists(const std::string& path) {
     std::error_code ec;
     return std::filesystem::is_regular_file(path, ec);
+}
+
+std::vector<ListedImage> readTimestampedImageList(const std::string& list_path, int& missing) {
+    std::ifstream in(list_path);
+    if (!in) throw IoError(list_path, "cannot open the image list");
+    const std::filesystem::path folder = std::filesystem::path(list_path).parent_path();
+    std::vector<ListedImage> images;
+    std::string line;
+    int line_number = 0;
+    while (std::getline(in, line)) {
+        ++line_number;
+        if (text::isBlankOrComment(line)) continue;
+        const auto tokens = text::splitWhitespace(line);
+        if (tokens.size() != 2)
+            throw ParseError(list_path, line_number, "expected 'timestamp filename', got " + std::to_string(tokens.size()) + " fields");
+        double time = 0.0;
+        if (!text::parseDouble(tokens[0], time) || !std::isfinite(time))
+            throw ParseError(list_path, line_number, "not a timestamp: '" + std::string(tokens[0]) + "'");
+        const std::filesystem::path file{std::string(tokens[1])};
+        const std::string resolved = (file.is_absolute() ? file : folder / file).string();
+        if (fileExists(resolved))
+            images.push_back({time, resolved});
+        else
+            ++missing;
+    }
+    if (in.bad()) throw IoError(list_path, "read error in the image list");
+    return images;
 }
 
 Image<std::uint16_t> readDepth(const std::string& path, int frame, const Intrinsics& depth_camera) {

@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "voxfuse/core/Image.h"
 #include "voxfuse/objects/Intrinsics.h"
@@ -12,6 +13,17 @@ namespace voxfuse {
 namespace frame_reading {
 
 bool fileExists(const std::string& path);
+
+struct ListedImage {
+    double time_s;
+    std::string path;  // resolved against the list file's folder, unless absolute
+};
+
+// A list of images in the layout of TUM's rgb.txt: '#' comments and blank lines, else one
+// "timestamp filename" line per image. Images not on disk are left out and counted in `missing`, in
+// file order otherwise. Throws IoError when the list cannot be read, ParseError naming the line for a
+// malformed one.
+std::vector<ListedImage> readTimestampedImageList(const std::string& list_path, int& missing);
 
 // .pgm -> 16-bit big-endian PGM, anything else -> 16-bit single-channel PNG (or any format OpenCV
 // reads as such). The image must have the calibrated depth camera's size.

@@ -4,8 +4,8 @@
 #include <cctype>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 
+#include "FrameReading.h"
 #include "TextParsing.h"
 #include "voxfuse/core/Error.h"
 #include "voxfuse/io/ImageIO.h"
@@ -168,30 +168,8 @@ void LabelledImageSource::readFolder() {
 
 void LabelledImageSource::readList() {
     const std::string& path = options_.path;
-    std::ifstream in(path);
-    if (!in) throw IoError(path, "cannot open the label list");
-    const fs::path folder = fs::path(path).parent_path();
-    std::string line;
-    int line_number = 0;
-    while (std::getline(in, line)) {
-        ++line_number;
-        if (text::isBlankOrComment(line)) continue;
-        const auto tokens = text::splitWhitespace(line);
-        if (tokens.size() != 2)
-            throw ParseError(path, line_number,
-                             "expected 'timestamp filename', got " + std::to_string(tokens.size()) + " fields");
-        double time = 0.0;
-        if (!text::parseDouble(tokens[0], time) || !std::isfinite(time))
-            throw ParseError(path, line_number, "not a timestamp: '" + std::string(tokens[0]) + "'");
-        const fs::path file{std::string(tokens[1])};
-        const std::string resolved = (file.is_absolute() ? file : folder / file).string();
-        std::error_code ec;
-        if (fs::is_regular_file(resolved, ec))
-            images_.push_back({time, resolved});
-        else
-            ++missing_listed_files_;
-    }
-    if (in.bad()) throw IoError(path, "read error in the label list");
+    for (frame_reading::ListedImage& listed : frame_reading::readTimestampedImageList(path, missing_listed_files_))
+        images_.push_back({listed.time_s, std::move(listed.path)});
     if (images_.empty())
         throw IoError(path, missing_listed_files_ > 0 ? "none of the " + std::to_string(missing_listed_files_) +
                                                             " listed label images is on disk"

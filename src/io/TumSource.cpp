@@ -4,7 +4,6 @@
 #include <cctype>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 
 #include "FrameReading.h"
@@ -17,38 +16,6 @@ namespace voxfuse {
 namespace fs = std::filesystem;
 
 namespace {
-
-struct ListedImage {
-    double time_s;
-    std::string path;  // resolved against the folder
-};
-
-// Reads rgb.txt or depth.txt, keeping only images present on disk and counting the others.
-std::vector<ListedImage> readImageList(const fs::path& folder, const std::string& list_name, int& missing) {
-    const std::string path = (folder / list_name).string();
-    std::ifstream in(path);
-    if (!in) throw IoError(path, "cannot open image list");
-    std::vector<ListedImage> images;
-    std::string line;
-    int line_number = 0;
-    while (std::getline(in, line)) {
-        ++line_number;
-        if (text::isBlankOrComment(line)) continue;
-        const auto tokens = text::splitWhitespace(line);
-        if (tokens.size() != 2)
-            throw ParseError(path, line_number, "expected 'timestamp filename', got " + std::to_string(tokens.size()) + " fields");
-        double time = 0.0;
-        if (!text::parseDouble(tokens[0], time) || !std::isfinite(time))
-            throw ParseError(path, line_number, "not a timestamp: '" + std::string(tokens[0]) + "'");
-        const fs::path file{std::string(tokens[1])};
-        const std::string resolved = (file.is_absolute() ? file : folder / file).string();
-        if (frame_reading::fileExists(resolved))
-            images.push_back({time, resolved});
-        else
-            ++missing;
-    }
-    return images;
-}
 
 // "fr3" for ".../rgbd_dataset_freiburg3_teddy" or ".../tum_fr3_teddy_200", 0 when the name says nothing.
 int freiburgFromName(const fs::path& folder) {
@@ -109,9 +76,9 @@ void TumSource::chooseCalibration(const std::string& calib_path) {
 
 void TumSource::associate(const std::string& rgb_list, const std::string& depth_list) {
     const fs::path folder(folder_);
-    std::vector<ListedImage> rgb = readImageList(folder, rgb_list, missing_listed_files_);
-    const std::vector<ListedImage> depth = readImageList(folder, depth_list, missing_listed_files_);
-    std::stable_sort(rgb.begin(), rgb.end(), [](const ListedImage& a, const ListedImage& b) { return a.time_s < b.time_s; });
+    std::vector<frame_reading::ListedImage> rgb = frame_reading::readTimestampedImageList((folder / rgb_list).string(), missing_listed_files_);
+    const std::vector<frame_reading::ListedImage> depth = frame_reading::readTimestampedImageList((folder / depth_list).string(), missing_listed_files_);
+    std::stable_sort(rgb.begin(), rgb.end(), [](const frame_reading::ListedImage& a, const frame_reading::ListedImage& b) { return a.time_s < b.time_s; });
 
     struct Candidate {
         double difference_s;
@@ -121,7 +88,7 @@ void TumSource::associate(const std::string& rgb_list, const std::string& depth_
     for (std::size_t d = 0; d < depth.size(); ++d) {
         const double t = depth[d].time_s;
         auto it = std::lower_bound(rgb.begin(), rgb.end(), t - kMaxTimeDifference_s,
-                                   [](const ListedImage& image, double time) { return image.time_s < time; });
+                                   [](const frame_reading::ListedImage& image, double time) { return image.time_s < time; });
         for (; it != rgb.end() && it->time_s <= t + kMaxTimeDifference_s; ++it)
             candidates.push_back({std::abs(it->time_s - t), d, std::size_t(it - rgb.begin())});
     }
