@@ -34,6 +34,7 @@ public:
     void integrate(Scene<TVoxel, PlainVoxelArray>& scene, const View& view, const Mat4f& T_world_camera) override {
         requireDeviceScene(scene);
         const PlainVoxelArray::Data index = scene.index().data();
+        const std::uint32_t integration_number = scene.takeIntegrationNumber();
         Vec3i lo, hi;
         float far_m;
         if (!denseIntegrationBox(index, scene.params(), view, T_world_camera, lo, hi, far_m)) return;
@@ -53,7 +54,7 @@ public:
             device_memory::copyHostToDevice(labels_.device(), view.labels.host(), view.labels.pixelCount() * sizeof(ClassId));
             labels = labels_.device();
         }
-        const IntegrationFrame frame = makeIntegrationFrame(scene.params(), view, T_world_camera, depth_.device(), rgb, labels);
+        const IntegrationFrame frame = makeIntegrationFrame(scene.params(), view, T_world_camera, depth_.device(), rgb, labels, integration_number);
 
         const dim3 block(32, 4, 2);
         const dim3 grid(blocksFor(hi.x - lo.x, block.x), blocksFor(hi.y - lo.y, block.y), blocksFor(hi.z - lo.z, block.z));

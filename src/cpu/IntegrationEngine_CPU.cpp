@@ -17,11 +17,12 @@ class IntegrationEngine_CPU<TVoxel, PlainVoxelArray> final : public IntegrationE
 public:
     void integrate(Scene<TVoxel, PlainVoxelArray>& scene, const View& view, const Mat4f& T_world_camera) override {
         const PlainVoxelArray::Data index = scene.index().data();
+        const std::uint32_t integration_number = scene.takeIntegrationNumber();
         Vec3i lo, hi;  // array coordinates (not offset)
         float far_m;
         if (!denseIntegrationBox(index, scene.params(), view, T_world_camera, lo, hi, far_m)) return;
         const IntegrationFrame frame = makeIntegrationFrame(scene.params(), view, T_world_camera, view.depth.host(), view.rgb.host(),
-                                                            view.labels.host());
+                                                            view.labels.host(), integration_number);
         TVoxel* voxels = scene.voxels().host();
         const float voxel_size = scene.params().voxel_size_m;
         const int rows = (hi.y - lo.y) * (hi.z - lo.z);
@@ -53,7 +54,7 @@ public:
         if (!hash.visibleListIsFor(T_world_camera, view.calib.depth))
             throw Error("hash integration: the visible list is not for this view (run the allocation engine on it first)");
         const IntegrationFrame frame = makeIntegrationFrame(scene.params(), view, T_world_camera, view.depth.host(), view.rgb.host(),
-                                                            view.labels.host());
+                                                            view.labels.host(), scene.takeIntegrationNumber());
         TVoxel* voxels = scene.voxels().host();
         const int* visible = hash.visibleEntries();
         const int count = hash.visibleCount();

@@ -8,7 +8,8 @@
 namespace voxfuse {
 
 IntegrationFrame makeIntegrationFrame(const SceneParams& params, const View& view, const Mat4f& T_world_camera,
-                                      const float* depth, const Vec4u8* rgb, const ClassId* labels) {
+                                      const float* depth, const Vec4u8* rgb, const ClassId* labels,
+                                      std::uint32_t integration_number) {
     IntegrationFrame f{};
     f.T_depth_world = rigidInverse(T_world_camera);
     f.depth_intrinsics = view.calib.depth;
@@ -24,7 +25,7 @@ IntegrationFrame makeIntegrationFrame(const SceneParams& params, const View& vie
     f.T_label_world = labels_from_rgb ? f.T_rgb_world : f.T_depth_world;
     f.label_intrinsics = (labels_from_rgb ? view.calib.rgb : view.calib.depth).resized(view.labels.width(), view.labels.height());
     f.label_update = params.label_update;
-    f.label_seed = std::uint32_t(view.frame_index);
+    f.label_seed = integration_number;
     f.voxel_size_m = params.voxel_size_m;
     f.mu_m = params.mu_m;
     f.max_weight = params.max_weight;

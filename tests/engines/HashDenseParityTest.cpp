@@ -64,7 +64,8 @@ protected:
             const HashEntry& e = h.entry(h.visibleEntries()[k]);
             visible.insert({e.pos.x, e.pos.y, e.pos.z});
         }
-        const IntegrationFrame frame = makeIntegrationFrame(params(), view, pose, view.depth.host(), view.rgb.host(), view.labels.host());
+        const IntegrationFrame frame = makeIntegrationFrame(params(), view, pose, view.depth.host(), view.rgb.host(), view.labels.host(),
+                                                          dense_visible_only_.takeIntegrationNumber());
         int uncovered = 0;
         TVoxel* ref = dense_visible_only_.voxels().host();
         forEachDenseVoxel([&](Vec3i p, std::size_t i) {

@@ -148,7 +148,8 @@ TEST(IntegrationBoxTest, RowClippingLosesNoUpdate) {
 
     // Brute force: every voxel, no clipping.
     Scene<VoxelF, PlainVoxelArray> brute(params, PlainVoxelArray({-60, -60, -20}, {140, 120, 80}), Device::CPU);
-    const IntegrationFrame frame = makeIntegrationFrame(params, view, pose, view.depth.host(), view.rgb.host(), view.labels.host());
+    const IntegrationFrame frame = makeIntegrationFrame(params, view, pose, view.depth.host(), view.rgb.host(), view.labels.host(),
+                                                          brute.takeIntegrationNumber());
     const PlainVoxelArray::Data idx = brute.index().data();
     for (int z = 0; z < idx.size.z; ++z)
         for (int y = 0; y < idx.size.y; ++y)

@@ -25,9 +25,11 @@ public:
 // ---- Host-side logic shared by the device layers ----
 
 // The per-frame constants of integrateVoxel(); `depth`, `rgb` and `labels` point to where the loop
-// reads them (host or device copies of the view's images).
+// reads them (host or device copies of the view's images), `integration_number` is the scene's
+// Scene::takeIntegrationNumber() for this frame (the label fusion's seed).
 IntegrationFrame makeIntegrationFrame(const SceneParams& params, const View& view, const Mat4f& T_world_camera,
-                                      const float* depth, const Vec4u8* rgb, const ClassId* labels);
+                                      const float* depth, const Vec4u8* rgb, const ClassId* labels,
+                                      std::uint32_t integration_number);
 
 // Voxels closer to the camera than this are never updated (their projection is ill-conditioned).
 constexpr float kIntegrationNearM = 0.01f;

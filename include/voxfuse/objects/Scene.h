@@ -2,6 +2,7 @@
 // The map: voxel storage addressed through an index, plus the settings it was built with.
 
 #include <algorithm>
+#include <cstdint>
 #include <cstring>
 #include <utility>
 
@@ -31,6 +32,9 @@ public:
     const MemoryBlock<TVoxel>& voxels() const { return voxels_; }
     // Where the authoritative copy lives (engines of the other device must copy explicitly).
     Device location() const { return location_; }
+    // Each call of an integration engine takes the next number (from 0). Label fusion draws its random
+    // numbers from it: they differ from frame to frame whatever indices the caller gives its frames.
+    std::uint32_t takeIntegrationNumber() { return integrations_++; }
 
     // ---- Indexes whose storage grows (VoxelBlockHash); not instantiated for the others ----
 
@@ -68,6 +72,7 @@ private:
     TIndex index_;
     MemoryBlock<TVoxel> voxels_;
     Device location_;
+    std::uint32_t integrations_ = 0;
 };
 
 }  // namespace voxfuse

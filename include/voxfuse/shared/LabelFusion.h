@@ -6,13 +6,15 @@
 // observation of the same class adds one. An observation of another class:
 //  - Probabilistic (the report's rule, the default): the voxel takes the new class with probability
 //    w_new / (w_old + w_new), w_new = 1, and then starts counting again from 1; otherwise nothing
-//    changes. A voxel seen as class A for n_A frames in a row and then as B for n_B frames ends as A
-//    with probability n_A / (n_A + n_B) only: it follows the majority on average, not always.
+//    changes. A voxel seen as class A for n_A frames in a row and then as B for n_B frames keeps A
+//    with probability (n_A / (n_A + 1))^n_B: a long-held class is hard to dislodge, but a minority
+//    class seen last still wins some voxels (about 1 - e^-1 of them when n_B = n_A).
 //  - Vote: the weight drops by one (a majority vote, Boyer-Moore); at a tie the newer class wins.
-//    The class seen in most frames wins whenever it was seen in more than half of them, in any
-//    order, and the result needs no random numbers.
-// The random numbers are a hash of the voxel's grid position and the frame's seed, so a run gives
-// the same map every time and on every device.
+//    The class seen in more than half of a voxel's frames wins, in any order, as long as the count
+//    stays below max_weight (the count saturates there), and the result needs no random numbers.
+// The random numbers are a hash of the voxel's grid position and the scene's integration number, so
+// a run gives the same map every time and with any number of threads, and the CPU and CUDA layers
+// draw the same numbers.
 
 #include <cstdint>
 
