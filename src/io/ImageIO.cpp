@@ -295,10 +295,47 @@ void writeDepthPNG(const std::string& path, const Image<std::uint16_t>& depth) {
     writeWithOpenCV(path, wrapped);
 }
 
+namespace {
+
+// Class ids as the file stores them. OpenCV rescales what it reads in two cases that would change
+// ids silently, so those are read here: binary PGMs (OpenCV stretches maxval < 255 to 0..255) and
+// grey PNGs of 1, 2 or 4 bits (libpng expands them to 0..255: a 1-bit 1 becomes 255).
+cv::Mat readRawClassIds(const std::string& path) {
+    if (hasExtension(path, ".pgm")) {
+        const auto bytes = readWholeFile(path);
+        const NetpbmHeader h = NetpbmHeaderParser(path, bytes).parse('5', "binary PGM label image");
+        if (h.maxval < 1 || h.maxval > 65535) throw IoError(path, "maxval " + std::to_string(h.maxval) + " out of range (1..65535)");
+        const bool wide = h.maxval > 255;  // two bytes per sample, big-endian
+        requirePixelBytes(path, bytes, h, wide ? 2 : 1);
+        cv::Mat m(h.height, h.width, wide ? CV_16UC1 : CV_8UC1);
+        const unsigned char* src = bytes.data() + h.data_offset;
+        for (int y = 0; y < h.height; ++y)
+            for (int x = 0; x < h.width; ++x, src += wide ? 2 : 1) {
+                if (wide)
+                    m.at<std::uint16_t>(y, x) = std::uint16_t((src[0] << 8) | src[1]);
+                else
+                    m.at<std::uint8_t>(y, x) = src[0];
+            }
+        return m;
+    }
+    cv::Mat m = readWithOpenCV(path);
+    // PNG: signature, IHDR length and type, width, height, then bit depth (byte 24) and colour type (25).
+    std::ifstream in(path, std::ios::binary);
+    unsigned char head[26] = {};
+    const bool png = in.read(reinterpret_cast<char*>(head), sizeof head) &&
+                     std::memcmp(head, "\x89PNG\r\n\x1a\n", 8) == 0 && std::memcmp(head + 12, "IHDR", 4) == 0;
+    const int bits = head[24];
+    const bool grey = head[25] == 0;
+    if (png && grey && (bits == 1 || bits == 2 || bits == 4) && m.type() == CV_8UC1) m /= 255 / ((1 << bits) - 1);  // exact: 255, 85, 17
+    return m;
+}
+
+}  // namespace
+
 Image<ClassId> readLabelImage(const std::string& path, int ignore_id) {
     if (ignore_id < -1 || ignore_id > 65535)
         throw ConfigError("label ignore id " + std::to_string(ignore_id) + " out of range: expected -1 (none) or 0..65535");
-    const cv::Mat m = readWithOpenCV(path);
+    const cv::Mat m = readRawClassIds(path);
     const std::string requirement = "label images must be single-channel 8- or 16-bit class ids; ";
     // IMREAD_UNCHANGED expands palette PNGs to BGR, so their indices are lost: say what to do about it.
     if (m.channels() != 1)

@@ -1,5 +1,8 @@
 #include <gtest/gtest.h>
 
+#include <fstream>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <string>
 #include <vector>
 
@@ -253,6 +256,34 @@ TEST(ImageIO, LabelImageSixteenBitIdsAnd65535IsNoLabel) {
     EXPECT_EQ(labels.at(1, 0), kNoLabel);
     EXPECT_EQ(labels.at(2, 0), kNoLabel);  // the ignore id
     EXPECT_EQ(readLabelImage(path, -1).at(2, 0), 7);
+}
+
+TEST(ImageIO, LabelImagesKeepTheirIdsWhereDecodersWouldRescale) {
+    ScratchDir dir;
+    // A PGM whose maxval is the largest class: decoders stretch it to 0..255, the ids must stay.
+    const std::string pgm = dir.file("few_classes.pgm");
+    writeBytes(pgm, "P5\n3 1\n20\n" + bytesOf({0, 7, 20}));
+    const Image<ClassId> from_pgm = readLabelImage(pgm, -1);
+    EXPECT_EQ(from_pgm.at(1, 0), 7);
+    EXPECT_EQ(from_pgm.at(2, 0), 20);
+    // A 16-bit PGM (big-endian samples).
+    const std::string pgm16 = dir.file("many_classes.pgm");
+    writeBytes(pgm16, "P5\n2 1\n1000\n" + bytesOf({0x03, 0xE7, 0x00, 0x05}));
+    const Image<ClassId> from_pgm16 = readLabelImage(pgm16, -1);
+    EXPECT_EQ(from_pgm16.at(0, 0), 999);
+    EXPECT_EQ(from_pgm16.at(1, 0), 5);
+    // A 1-bit PNG, as binary masks are often saved: libpng expands 1 to 255.
+    const std::string mask = dir.file("mask.png");
+    cv::Mat bits(2, 8, CV_8UC1, cv::Scalar(0));
+    bits.at<std::uint8_t>(1, 3) = 1;
+    ASSERT_TRUE(cv::imwrite(mask, bits, {cv::IMWRITE_PNG_BILEVEL, 1}));
+    std::ifstream png(mask, std::ios::binary);
+    char head[26] = {};
+    png.read(head, sizeof head);
+    ASSERT_EQ(int(head[24]), 1) << "the test needs a 1-bit PNG";
+    const Image<ClassId> from_mask = readLabelImage(mask, 0);
+    EXPECT_EQ(from_mask.at(3, 1), 1);
+    EXPECT_EQ(from_mask.at(2, 1), kNoLabel);
 }
 
 TEST(ImageIO, LabelImageErrors) {
