@@ -66,10 +66,9 @@ std::vector<ListedImage> readTimestampedImageList(const std::string& list_path, 
             throw ParseError(list_path, line_number, "not a timestamp: '" + std::string(tokens[0]) + "'");
         const std::filesystem::path file{std::string(tokens[1])};
         const std::string resolved = (file.is_absolute() ? file : folder / file).string();
-        if (fileExists(resolved))
-            images.push_back({time, resolved});
-        else
-            ++missing;
+        const bool on_disk = fileExists(resolved);
+        images.push_back({time, resolved, on_disk});
+        missing += !on_disk;
     }
     if (in.bad()) throw IoError(list_path, "read error in the image list");
     return images;

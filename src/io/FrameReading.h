@@ -17,12 +17,13 @@ bool fileExists(const std::string& path);
 struct ListedImage {
     double time_s;
     std::string path;  // resolved against the list file's folder, unless absolute
+    bool on_disk;
 };
 
 // A list of images in the layout of TUM's rgb.txt: '#' comments and blank lines, else one
-// "timestamp filename" line per image. Images not on disk are left out and counted in `missing`, in
-// file order otherwise. Throws IoError when the list cannot be read, ParseError naming the line for a
-// malformed one.
+// "timestamp filename" line per image, in file order. Images not on disk are kept with on_disk false
+// (their place may matter) and counted in `missing`. Throws IoError when the list cannot be read,
+// ParseError naming the line for a malformed one.
 std::vector<ListedImage> readTimestampedImageList(const std::string& list_path, int& missing);
 
 // .pgm -> 16-bit big-endian PGM, anything else -> 16-bit single-channel PNG (or any format OpenCV

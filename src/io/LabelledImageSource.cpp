@@ -82,6 +82,32 @@ const char* matchName(LabelStreamOptions::Match match) {
     return match == LabelStreamOptions::Match::Timestamp ? "timestamp" : "frame index";
 }
 
+// The frame number in a label image's name: its last run of digits ("frame-000042" -> 42). Names
+// with a '.' (timestamps like "1305031102.175304") have none.
+bool lastNumber(const std::string& stem, long long& number) {
+    if (stem.find('.') != std::string::npos) return false;
+    std::size_t end = stem.size();
+    while (end > 0 && !isDigit(stem[end - 1])) --end;
+    std::size_t begin = end;
+    while (begin > 0 && isDigit(stem[begin - 1])) --begin;
+    if (begin == end || end - begin > 15) return false;  // none, or too long for a frame number
+    number = std::stoll(stem.substr(begin, end - begin));
+    return true;
+}
+
+// The numbers of the (sorted) images' names, when every name has one, they increase strictly in that
+// order, and they are dense enough to be frame numbers (spanning at most 4 per image plus 1000, not
+// e.g. nanosecond timestamps).
+bool frameNumbers(const std::vector<std::string>& stems, std::vector<long long>& numbers) {
+    numbers.clear();
+    for (const std::string& stem : stems) {
+        long long n = 0;
+        if (!lastNumber(stem, n) || (!numbers.empty() && n <= numbers.back())) return false;
+        numbers.push_back(n);
+    }
+    return !numbers.empty() && numbers.back() - numbers.front() <= 4 * (long long)numbers.size() + 1000;
+}
+
 }  // namespace
 
 LabelledImageSource::LabelledImageSource(std::unique_ptr<ImageSource> source, const LabelStreamOptions& options)
@@ -162,28 +188,47 @@ void LabelledImageSource::readFolder() {
             return a.stem != b.stem ? naturalLess(a.stem, b.stem) : a.path < b.path;
         });
     }
+    image_count_ = int(found.size());
+    std::vector<long long> numbers;
+    std::vector<std::string> stems;
+    for (const Found& f : found) stems.push_back(f.stem);
+    if (match_ == LabelStreamOptions::Match::Index && frameNumbers(stems, numbers)) {
+        images_.resize(std::size_t(numbers.back() - numbers.front() + 1));
+        for (std::size_t i = 0; i < found.size(); ++i)
+            images_[std::size_t(numbers[i] - numbers.front())] = {found[i].time_s, std::move(found[i].path)};
+        return;
+    }
     images_.reserve(found.size());
     for (Found& f : found) images_.push_back({f.time_s, std::move(f.path)});
 }
 
 void LabelledImageSource::readList() {
     const std::string& path = options_.path;
-    for (frame_reading::ListedImage& listed : frame_reading::readTimestampedImageList(path, missing_listed_files_))
-        images_.push_back({listed.time_s, std::move(listed.path)});
-    if (images_.empty())
+    match_ = options_.match == LabelStreamOptions::Match::Automatic ? LabelStreamOptions::Match::Timestamp : options_.match;
+    for (frame_reading::ListedImage& listed : frame_reading::readTimestampedImageList(path, missing_listed_files_)) {
+        // By index a missing file keeps its line's place, so that the frames after it keep theirs.
+        if (listed.on_disk)
+            images_.push_back({listed.time_s, std::move(listed.path)});
+        else if (match_ == LabelStreamOptions::Match::Index)
+            images_.push_back({listed.time_s, std::string()});
+        image_count_ += listed.on_disk;
+    }
+    if (image_count_ == 0)
         throw IoError(path, missing_listed_files_ > 0 ? "none of the " + std::to_string(missing_listed_files_) +
                                                             " listed label images is on disk"
                                                       : std::string("the label list names no images"));
-    match_ = options_.match == LabelStreamOptions::Match::Automatic ? LabelStreamOptions::Match::Timestamp : options_.match;
     if (match_ == LabelStreamOptions::Match::Timestamp)
         std::stable_sort(images_.begin(), images_.end(),
                          [](const LabelImage& a, const LabelImage& b) { return a.time_s < b.time_s; });
 }
 
 const LabelledImageSource::LabelImage* LabelledImageSource::find(const RGBDFrame& frame) const {
-    if (match_ == LabelStreamOptions::Match::Index)
-        return frame.index >= 0 && std::size_t(frame.index) < images_.size() ? &images_[std::size_t(frame.index)] : nullptr;
-    const double t = frame.timestamp_s;
+    if (match_ == LabelStreamOptions::Match::Index) {
+        if (frame.index < 0 || std::size_t(frame.index) >= images_.size()) return nullptr;
+        const LabelImage& image = images_[std::size_t(frame.index)];
+        return image.path.empty() ? nullptr : &image;
+    }
+    const double t = frame.rgb_timestamp_s >= 0.0 ? frame.rgb_timestamp_s : frame.timestamp_s;
     const auto after = std::lower_bound(images_.begin(), images_.end(), t,
                                         [](const LabelImage& image, double time) { return image.time_s < time; });
     const LabelImage* best = nullptr;
@@ -235,12 +280,14 @@ bool LabelledImageSource::next(RGBDFrame& frame) {
 }
 
 std::string LabelledImageSource::description() const {
-    std::string d = source_->description() + " + labels from " + options_.path + " (" + std::to_string(images_.size()) +
+    std::string d = source_->description() + " + labels from " + options_.path + " (" + std::to_string(image_count_) +
                     (is_list_ ? " listed" : "") + " label images, matched by " + matchName(match_);
+    if (match_ == LabelStreamOptions::Match::Index && int(images_.size()) > image_count_)
+        d += ", " + std::to_string(int(images_.size()) - image_count_) + " frames in between without one";
     if (match_ == LabelStreamOptions::Match::Timestamp)
         d += " within " + text::formatFloat(float(options_.max_time_difference_s)) + " s";
     if (options_.ignore_id >= 0) d += "; class " + std::to_string(options_.ignore_id) + " = no label";
-    if (missing_listed_files_ > 0) d += "; " + std::to_string(missing_listed_files_) + " listed images not on disk skipped";
+    if (missing_listed_files_ > 0) d += "; " + std::to_string(missing_listed_files_) + " listed images not on disk";
     return d + ")";
 }
 

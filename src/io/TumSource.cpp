@@ -76,9 +76,16 @@ void TumSource::chooseCalibration(const std::string& calib_path) {
 
 void TumSource::associate(const std::string& rgb_list, const std::string& depth_list) {
     const fs::path folder(folder_);
-    std::vector<frame_reading::ListedImage> rgb = frame_reading::readTimestampedImageList((folder / rgb_list).string(), missing_listed_files_);
-    const std::vector<frame_reading::ListedImage> depth = frame_reading::readTimestampedImageList((folder / depth_list).string(), missing_listed_files_);
-    std::stable_sort(rgb.begin(), rgb.end(), [](const frame_reading::ListedImage& a, const frame_reading::ListedImage& b) { return a.time_s < b.time_s; });
+    using frame_reading::ListedImage;
+    // Only the images on disk take part (the others are counted in missing_listed_files_).
+    auto listedOnDisk = [&](const std::string& list) {
+        std::vector<ListedImage> images = frame_reading::readTimestampedImageList((folder / list).string(), missing_listed_files_);
+        images.erase(std::remove_if(images.begin(), images.end(), [](const ListedImage& i) { return !i.on_disk; }), images.end());
+        return images;
+    };
+    std::vector<ListedImage> rgb = listedOnDisk(rgb_list);
+    const std::vector<ListedImage> depth = listedOnDisk(depth_list);
+    std::stable_sort(rgb.begin(), rgb.end(), [](const ListedImage& a, const ListedImage& b) { return a.time_s < b.time_s; });
 
     struct Candidate {
         double difference_s;
@@ -88,7 +95,7 @@ void TumSource::associate(const std::string& rgb_list, const std::string& depth_
     for (std::size_t d = 0; d < depth.size(); ++d) {
         const double t = depth[d].time_s;
         auto it = std::lower_bound(rgb.begin(), rgb.end(), t - kMaxTimeDifference_s,
-                                   [](const frame_reading::ListedImage& image, double time) { return image.time_s < time; });
+                                   [](const ListedImage& image, double time) { return image.time_s < time; });
         for (; it != rgb.end() && it->time_s <= t + kMaxTimeDifference_s; ++it)
             candidates.push_back({std::abs(it->time_s - t), d, std::size_t(it - rgb.begin())});
     }
@@ -107,7 +114,8 @@ void TumSource::associate(const std::string& rgb_list, const std::string& depth_
             ++dropped_depth_frames_;
             continue;
         }
-        pairs_.push_back({depth[d].time_s, depth[d].path, rgb[std::size_t(rgb_for_depth[d])].path});
+        const ListedImage& paired_rgb = rgb[std::size_t(rgb_for_depth[d])];
+        pairs_.push_back({depth[d].time_s, paired_rgb.time_s, depth[d].path, paired_rgb.path});
     }
 }
 
@@ -121,6 +129,7 @@ bool TumSource::next(RGBDFrame& frame) {
     frame.rgb = std::move(rgb);
     frame.index = index;
     frame.timestamp_s = pair.depth_time_s;
+    frame.rgb_timestamp_s = pair.rgb_time_s;
     frame.depth_path = pair.depth_path;
     frame.T_world_camera_gt = Mat4f::identity();
     frame.has_ground_truth = interpolatePose(ground_truth_, pair.depth_time_s, kMaxTimeDifference_s, frame.T_world_camera_gt);

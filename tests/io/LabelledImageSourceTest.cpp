@@ -22,6 +22,7 @@ using Match = LabelStreamOptions::Match;
 struct FakeFrame {
     int index;
     double timestamp_s;
+    double rgb_timestamp_s = -1.0;
 };
 
 // Frames with the given indices and timestamps, an 8x6 depth image each; the colour camera is 8x6 too
@@ -46,6 +47,7 @@ public:
         const FakeFrame& f = frames_[position_++];
         frame.index = f.index;
         frame.timestamp_s = f.timestamp_s;
+        frame.rgb_timestamp_s = f.rgb_timestamp_s;
         frame.depth_raw.resize(calib_.depth.size());
         for (std::size_t i = 0; i < frame.depth_raw.pixelCount(); ++i) frame.depth_raw.host()[i] = 1000;
         return true;
@@ -103,17 +105,18 @@ void expectConstructionIoError(Make make, const std::string& path, const std::st
     }
 }
 
-TEST(LabelledImageSource, IndexMatchingUsesNaturalOrder) {
+TEST(LabelledImageSource, IndexMatchingOfNamesThatAreNotFrameNumbersUsesNaturalOrder) {
     ScratchDir dir;
     const std::string folder = dir.file("labels/");
-    writeLabels(folder + "frame_2.png", 2);
-    writeLabels(folder + "frame_10.png", 10);
-    writeLabels(folder + "frame_1.png", 1);
+    // Numbers far too sparse to be frame numbers: the images are taken in order, one per frame.
+    writeLabels(folder + "shot_2.png", 2);
+    writeLabels(folder + "shot_50000.png", 50);
+    writeLabels(folder + "shot_1.png", 1);
     writeBytes(folder + "README.txt", "not an image, ignored");
     LabelledImageSource source(FakeSource::sequence(4), optionsFor(folder));
     EXPECT_EQ(source.match(), Match::Index);
     EXPECT_EQ(source.labelImageCount(), 3);
-    EXPECT_EQ(readIds(source), (std::vector<int>{1, 2, 10, -1}));  // frame 3: no image left, labels cleared
+    EXPECT_EQ(readIds(source), (std::vector<int>{1, 2, 50, -1}));  // frame 3: no image left, labels cleared
     EXPECT_EQ(source.framesWithLabels(), 3);
     EXPECT_EQ(source.framesWithoutLabels(), 1);
     EXPECT_EQ(source.labelErrors(), 0);
@@ -123,10 +126,24 @@ TEST(LabelledImageSource, IndexMatchingFollowsFrameIndexNotPosition) {
     ScratchDir dir;
     for (int i : {0, 1, 2, 9, 10, 11}) writeLabels(dir.file(std::to_string(i) + ".png"), 50 + i);
     // A source that starts later and skips frames: the index decides, not the call count.
-    LabelledImageSource source(std::make_unique<FakeSource>(std::vector<FakeFrame>{{2, 0.0}, {4, 0.1}, {7, 0.2}}),
+    LabelledImageSource source(std::make_unique<FakeSource>(std::vector<FakeFrame>{{2, 0.0}, {4, 0.1}, {9, 0.2}}),
                                optionsFor(dir.path()));
     EXPECT_EQ(source.match(), Match::Index);  // whole numbers are not timestamps
-    EXPECT_EQ(readIds(source), (std::vector<int>{52, 60, -1}));  // sorted: 0 1 2 9 10 11
+    EXPECT_EQ(readIds(source), (std::vector<int>{52, -1, 59}));  // 3 to 8 have no image
+}
+
+TEST(LabelledImageSource, NumberedImagesKeepTheirFramesAcrossGaps) {
+    ScratchDir dir;
+    // A segmentation that skipped frame 2 (and 4): the frames after a gap keep their own images.
+    for (int i : {0, 1, 3, 5}) writeLabels(dir.file("zero/" + std::string(i < 10 ? "00000" : "0000") + std::to_string(i) + ".png"), 10 + i);
+    LabelledImageSource from_zero(FakeSource::sequence(7), optionsFor(dir.file("zero")));
+    EXPECT_EQ(from_zero.labelImageCount(), 4);
+    EXPECT_EQ(readIds(from_zero), (std::vector<int>{10, 11, -1, 13, -1, 15, -1}));
+    EXPECT_NE(from_zero.description().find("2 frames in between without one"), std::string::npos) << from_zero.description();
+    // Numbered from 1, with a prefix: the smallest number goes with frame 0.
+    for (int i : {1, 2, 4}) writeLabels(dir.file("one/frame-" + std::to_string(i) + ".png"), 20 + i);
+    LabelledImageSource from_one(FakeSource::sequence(4), optionsFor(dir.file("one")));
+    EXPECT_EQ(readIds(from_one), (std::vector<int>{21, 22, -1, 24}));
 }
 
 TEST(LabelledImageSource, EightAndSixteenBitIdsWithIgnoreIdAndNoLabel) {
@@ -180,6 +197,11 @@ TEST(LabelledImageSource, TimestampMatchingTakesNearestWithinTolerance) {
     EXPECT_EQ(source.framesWithLabels(), 4);
     EXPECT_EQ(source.framesWithoutLabels(), 2);
 
+    // Where the source knows when the colour image was taken (TUM pairs depth with a colour image up
+    // to 0.02 s apart), the labels, computed from colour, are matched to that time.
+    LabelledImageSource by_colour(std::make_unique<FakeSource>(std::vector<FakeFrame>{{0, 100.045, 100.064}}), optionsFor(dir.path()));
+    EXPECT_EQ(readIds(by_colour), (std::vector<int>{3}));
+
     // A wider tolerance lets frame 3 take #3.
     LabelStreamOptions wide = optionsFor(dir.path(), Match::Timestamp);
     wide.max_time_difference_s = 0.03;
@@ -213,11 +235,16 @@ TEST(LabelledImageSource, ListFileWithRelativePaths) {
     ASSERT_TRUE(source.next(frame));
     EXPECT_EQ(uniformId(frame), -1);
     EXPECT_TRUE(frame.labels_path.empty());
-    EXPECT_NE(source.description().find("1 listed images not on disk skipped"), std::string::npos) << source.description();
+    EXPECT_NE(source.description().find("1 listed images not on disk"), std::string::npos) << source.description();
 
-    // Index matching of a list follows the order listed.
+    // Index matching of a list follows the order listed; a missing file keeps its line's frame.
     LabelledImageSource by_index(std::make_unique<FakeSource>(frames), optionsFor(list, Match::Index));
     EXPECT_EQ(readIds(by_index), (std::vector<int>{12, 11, -1}));
+    const std::string gap = dir.file("seq/gap.txt");
+    writeBytes(gap, "0 seg/a.png\n0 seg/missing.png\n0 seg/b.png\n");
+    LabelledImageSource across_gap(FakeSource::sequence(3), optionsFor(gap, Match::Index));
+    EXPECT_EQ(across_gap.labelImageCount(), 2);
+    EXPECT_EQ(readIds(across_gap), (std::vector<int>{11, -1, 12}));
 
     // A malformed line is an error naming the line.
     const std::string bad = dir.file("seq/bad.txt");

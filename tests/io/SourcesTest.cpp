@@ -86,13 +86,14 @@ TEST(TumSource, AssociatesByNearestTimestampOnHandMadeFolder) {
     EXPECT_EQ(source.groundTruth().size(), 3u);
 
     const std::vector<std::pair<int, int>> expected_seeds = {{20, 10}, {21, 11}, {23, 12}};  // depth, rgb
-    const std::vector<double> expected_times = {1.005, 1.040, 1.072};
+    const std::vector<double> expected_times = {1.005, 1.040, 1.072}, expected_rgb_times = {1.000, 1.033, 1.067};
     RGBDFrame frame;
     for (int i = 0; i < 3; ++i) {
         SCOPED_TRACE(i);
         ASSERT_TRUE(source.next(frame));
         EXPECT_EQ(frame.index, i);
         EXPECT_DOUBLE_EQ(frame.timestamp_s, expected_times[std::size_t(i)]);
+        EXPECT_DOUBLE_EQ(frame.rgb_timestamp_s, expected_rgb_times[std::size_t(i)]);
         EXPECT_TRUE(samePixels(frame.depth_raw, makeDepth(kSmall, expected_seeds[std::size_t(i)].first)));
         EXPECT_TRUE(samePixels(frame.rgb, makeRgb(kSmall, expected_seeds[std::size_t(i)].second)));
     }

@@ -23,20 +23,25 @@ struct LabelStreamOptions {
         // Timestamp for a list file, or for a folder whose file names are all decimal numbers with a
         // '.' (TUM style, "1305031102.175304.png"); Index otherwise.
         Automatic,
-        // The k-th label image belongs to the frame with RGBDFrame::index k. A folder's images are taken
-        // in natural order of their names ("2.png" before "10.png"; by value when every name is a
-        // number), a list file's in the order listed. Frames past the last image get no labels.
+        // The k-th label image belongs to the frame with RGBDFrame::index k (sources number frames from
+        // 0 in reading order). A list file's k-th line is the k-th image, also when that file is missing
+        // (then frame k has no labels). A folder whose names all carry a number (its last digit run:
+        // "000042.png", "frame-42.png") places each image by its number minus the smallest, so a gap
+        // in the numbers is a frame without labels; other folders (or numbers so sparse that they
+        // cannot be frame numbers) take their images in natural order of their names ("2.png" before
+        // "10.png"). Frames past the last image get no labels.
         Index,
         // A frame takes the label image whose timestamp (the list's first column, or the file name as a
-        // number of seconds) is nearest to RGBDFrame::timestamp_s, if within max_time_difference_s;
-        // otherwise it has no labels. A label image may serve more than one frame.
+        // number of seconds) is nearest to the frame's colour image (RGBDFrame::rgb_timestamp_s where
+        // the source sets it, else timestamp_s), if within max_time_difference_s; otherwise it has no
+        // labels. A label image may serve more than one frame.
         Timestamp
     };
     Match match = Match::Automatic;
 
-    // Timestamp matching only. TUM sources stamp each frame with its DEPTH image's time, while labels
-    // are computed from (and stamped like) the colour images, which TUM pairs with depth within 0.02 s:
-    // the default accepts exactly those pairs. Must be finite and >= 0.
+    // Timestamp matching only. Labels are computed from (and stamped like) the colour images, whose
+    // time TUM sources pass on: 0.02 s (as TUM's own pairing) leaves room for labels stamped with
+    // rounded times, or with the depth image's time. Must be finite and >= 0.
     double max_time_difference_s = 0.02;
 
     // Class id that means "no label" in the files (often 0 = unlabelled/background, or 255 for 8-bit
@@ -65,9 +70,9 @@ public:
     const std::vector<TimedPose>& groundTruth() const override { return source_->groundTruth(); }
     bool isLive() const override { return source_->isLive(); }
 
-    // The matching in use (never Automatic) and the label images found, in matching order.
+    // The matching in use (never Automatic) and the number of label images found on disk.
     LabelStreamOptions::Match match() const { return match_; }
-    int labelImageCount() const { return int(images_.size()); }
+    int labelImageCount() const { return image_count_; }
     int missingListedFiles() const { return missing_listed_files_; }  // listed, but not on disk
 
     // Frames delivered so far with labels, without (no label image matched), and frames skipped because
@@ -79,7 +84,7 @@ public:
 private:
     struct LabelImage {
         double time_s;     // Timestamp matching only
-        std::string path;
+        std::string path;  // Index matching: "" for a frame without a label image (a gap)
     };
 
     void readFolder();
@@ -90,7 +95,8 @@ private:
     LabelStreamOptions options_;
     LabelStreamOptions::Match match_ = LabelStreamOptions::Match::Index;
     bool is_list_ = false;
-    std::vector<LabelImage> images_;  // Index: in matching order; Timestamp: sorted by time
+    std::vector<LabelImage> images_;  // Index: one per frame index, from 0; Timestamp: sorted by time
+    int image_count_ = 0;             // entries of images_ with a file
     int missing_listed_files_ = 0;
     std::atomic<long> with_labels_{0};
     std::atomic<long> without_labels_{0};

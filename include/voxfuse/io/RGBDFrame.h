@@ -13,6 +13,8 @@ namespace voxfuse {
 struct RGBDFrame {
     int index = -1;                   // 0-based position in the source
     double timestamp_s = 0.0;         // source timestamp (frame index / 30 when the source has none)
+    double rgb_timestamp_s = -1.0;    // the colour image's own time where the source pairs images taken
+                                      // apart (TUM: timestamp_s is the depth image's); < 0 otherwise
     Image<std::uint16_t> depth_raw;   // raw depth samples; 0 = no measurement
     Image<Vec4u8> rgb;                // RGBA; empty when the source has no colour
     bool has_ground_truth = false;

@@ -38,7 +38,7 @@ public:
 
 private:
     struct FramePair {
-        double depth_time_s;
+        double depth_time_s, rgb_time_s;
         std::string depth_path;
         std::string rgb_path;
     };
