@@ -49,7 +49,8 @@ FrameUndistorter::FrameUndistorter(const RGBDCalib& calib)
     : rgb_maps_(makeMaps(calib.rgb, calib.rgb_distortion, CV_16SC2)),
       depth_maps_(makeMaps(calib.depth, calib.depth_distortion, CV_32FC1)),
       undistorted_(calib),
-      rgb_distortion_(calib.rgb_distortion) {
+      label_camera_(calib.rgb.valid() ? calib.rgb : calib.depth),
+      label_distortion_(calib.rgb.valid() ? calib.rgb_distortion : calib.depth_distortion) {
     undistorted_.rgb_distortion = LensDistortion{};
     undistorted_.depth_distortion = LensDistortion{};
 }
@@ -57,13 +58,14 @@ FrameUndistorter::FrameUndistorter(const RGBDCalib& calib)
 FrameUndistorter::~FrameUndistorter() = default;
 FrameUndistorter::FrameUndistorter(FrameUndistorter&& other) noexcept
     : rgb_maps_(std::move(other.rgb_maps_)), depth_maps_(std::move(other.depth_maps_)), undistorted_(other.undistorted_),
-      rgb_distortion_(other.rgb_distortion_), label_maps_(std::move(other.label_maps_)) {}
+      label_camera_(other.label_camera_), label_distortion_(other.label_distortion_), label_maps_(std::move(other.label_maps_)) {}
 
 FrameUndistorter& FrameUndistorter::operator=(FrameUndistorter&& other) noexcept {
     rgb_maps_ = std::move(other.rgb_maps_);
     depth_maps_ = std::move(other.depth_maps_);
     undistorted_ = other.undistorted_;
-    rgb_distortion_ = other.rgb_distortion_;
+    label_camera_ = other.label_camera_;
+    label_distortion_ = other.label_distortion_;
     label_maps_ = std::move(other.label_maps_);
     return *this;
 }
@@ -92,15 +94,15 @@ void FrameUndistorter::apply(RGBDFrame& frame) const {
                   cv::BORDER_CONSTANT, cv::Scalar(0, 0, 0, 0));
         frame.rgb = std::move(out);
     }
-    if (rgb_maps_ && !frame.labels.empty()) {
-        // The colour camera at the label image's resolution: same distortion coefficients (they act
+    if (label_distortion_.any() && !frame.labels.empty()) {
+        // The labels' camera at the label image's resolution: same distortion coefficients (they act
         // on normalised coordinates), float maps for the nearest-neighbour border reason above.
         std::shared_ptr<const Maps> maps;
         {
             const std::lock_guard<std::mutex> lock(label_maps_mutex_);
             if (!label_maps_ || label_maps_->size != frame.labels.size())
-                label_maps_ = makeMaps(undistorted_.rgb.resized(frame.labels.width(), frame.labels.height()),
-                                       rgb_distortion_, CV_32FC1);
+                label_maps_ = makeMaps(label_camera_.resized(frame.labels.width(), frame.labels.height()), label_distortion_,
+                                       CV_32FC1);
             maps = label_maps_;
         }
         Image<ClassId> out(frame.labels.size());

@@ -158,6 +158,22 @@ TEST(FrameUndistorter, LabelsAreUndistortedLikeColourAtTheirOwnResolution) {
     EXPECT_EQ(frame.labels.at(35, 30), 9);
 }
 
+TEST(FrameUndistorter, WithoutAColourCameraLabelsFollowTheDepthCamerasLens) {
+    RGBDCalib depth_only;
+    depth_only.depth = kCamera;
+    depth_only.depth_distortion = kLens;
+    const Vec2f ideal{70.f, 60.f};
+    const Vec2f raw = distortPixel(kCamera, kLens, ideal);
+    Image<ClassId> labels(kCamera.size());
+    for (int y = 0; y < kCamera.height; ++y)
+        for (int x = 0; x < kCamera.width; ++x)
+            labels.at(x, y) = std::abs(x - raw.x) <= 1.5f && std::abs(y - raw.y) <= 1.5f ? ClassId(9) : ClassId(1);
+    RGBDFrame frame = frameWith(Image<Vec4u8>(), Image<std::uint16_t>(kCamera.size()));
+    frame.labels = std::move(labels);
+    FrameUndistorter(depth_only).apply(frame);
+    EXPECT_EQ(frame.labels.at(70, 60), 9);
+}
+
 TEST(FrameUndistorter, WithoutDistortionFramesStayAsTheyAre) {
     RGBDCalib calib;
     calib.rgb = kCamera;

@@ -26,8 +26,9 @@ public:
 
     // Depth is resampled nearest-neighbour (never blended across object edges, and 0 stays "no
     // measurement"), colour bilinearly; pixels that see outside the raw image become 0. Label images
-    // (any resolution of the colour camera) are resampled nearest-neighbour with the colour camera's
-    // distortion; outside pixels become kNoLabel. An image that does not have its camera's calibrated
+    // (any resolution of the camera that saw them: the colour camera, or the depth camera in a
+    // calibration without colour) are resampled nearest-neighbour with that camera's distortion;
+    // outside pixels become kNoLabel. An image that does not have its camera's calibrated
     // size throws IoError naming frame.depth_path and frame.index. Safe to call from several threads
     // at once.
     void apply(RGBDFrame& frame) const;
@@ -40,7 +41,9 @@ private:
     std::unique_ptr<Maps> rgb_maps_;
     std::unique_ptr<Maps> depth_maps_;
     RGBDCalib undistorted_;
-    LensDistortion rgb_distortion_;
+    // The camera whose geometry label images have (undistorted intrinsics) and its distortion.
+    Intrinsics label_camera_;
+    LensDistortion label_distortion_;
     // Label images: maps for the last label resolution seen, made on first use.
     mutable std::mutex label_maps_mutex_;
     mutable std::shared_ptr<const Maps> label_maps_;
