@@ -119,9 +119,6 @@ TrackerSettings trackerSettings(const CliOptions& o) {
 std::vector<ClassId> excludedClasses(const CliOptions& o) { return std::vector<ClassId>(o.exclude_classes.begin(), o.exclude_classes.end()); }
 
 void writeMapOutputs(MainEngine& engine, const CliOptions& o) {
-    const bool with_classes = voxelTypeHasLabels(engine.settings().voxel_type);
-    if ((o.mesh_per_class || !o.exclude_classes.empty()) && !with_classes)
-        throw ConfigError("--mesh-per-class and --exclude-classes need a voxel type with classes (s_label, s_rgb_label)");
     if (o.write_mesh || !o.mesh_path.empty() || o.mesh_per_class) {
         const std::string path = o.mesh_path.empty() ? (fs::path(o.out_dir) / "mesh.ply").string() : o.mesh_path;
         const Timer t;
@@ -185,6 +182,9 @@ int run(CliOptions& o) {
     MainEngineSettings& s = o.engine;
     // Label images are decoded on the reader thread too: the stream goes inside it.
     LabelledImageSource* labels = app::attachLabelInput(source, o.source, o.labels, o.voxel, "s_rgb", s, "voxfuse");
+    // Before the run, not after it: a run must not end without its outputs over an option it cannot honour.
+    if ((o.mesh_per_class || !o.exclude_classes.empty()) && !voxelTypeHasLabels(s.voxel_type))
+        throw ConfigError("--mesh-per-class and --exclude-classes need a voxel type with classes (s_label, s_rgb_label)");
     // Live cameras always get the reader thread, so that the engine never makes the driver wait.
     ThreadedImageSource* threaded = nullptr;
     if (o.threaded || source->isLive()) {

@@ -46,3 +46,10 @@ execute_process(COMMAND ${VOXFUSE_CLI} --voxel s --labels ${DATA_DIR}/labels.txt
 if(rc EQUAL 0 OR NOT err MATCHES "voxel type with classes")
   message(FATAL_ERROR "--labels with --voxel s must fail with a reason; got ${rc}: ${err}")
 endif()
+
+# Class outputs asked of a voxel type without classes are refused before the run, not after it.
+execute_process(COMMAND ${VOXFUSE_CLI} --voxel s_rgb --mesh-per-class --frames 2 --out ${WORK_DIR}/no_classes
+                WORKING_DIRECTORY ${WORK_DIR} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(rc EQUAL 0 OR NOT err MATCHES "need a voxel type with classes" OR EXISTS ${WORK_DIR}/no_classes/trajectory.txt)
+  message(FATAL_ERROR "--mesh-per-class with --voxel s_rgb must fail before the run; got ${rc}: ${err}")
+endif()
