@@ -102,10 +102,11 @@ VF_HOST_DEVICE inline float integrateVoxel(TVoxel& voxel, Vec3i pos, const Integ
             Vec3f c;
             if (p_rgb.z > 0.f && sampleColorBilinear(f.rgb, f.rgb_intrinsics.size(), f.rgb_intrinsics.project(p_rgb), c)) {
                 const int old_wc = voxel.w_color;
-                for (int ch = 0; ch < 3; ++ch) {
-                    const float fusedc = (float(voxel.clr[ch]) * float(old_wc) + c[ch]) / float(old_wc + 1);
-                    voxel.clr[ch] = (unsigned char)(fusedc + 0.5f);
-                }
+                // Channel by channel without operator[]: GCC reads (&x)[i] on a byte vector as out of bounds.
+                auto blend = [old_wc](unsigned char old, float seen) {
+                    return (unsigned char)((float(old) * float(old_wc) + seen) / float(old_wc + 1) + 0.5f);
+                };
+                voxel.clr = {blend(voxel.clr.x, c.x), blend(voxel.clr.y, c.y), blend(voxel.clr.z, c.z)};
                 voxel.w_color = (unsigned char)(old_wc + 1 < f.max_weight ? old_wc + 1 : f.max_weight);
             }
         }
