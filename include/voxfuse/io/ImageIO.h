@@ -21,11 +21,11 @@ Image<std::uint16_t> readDepthPNG(const std::string& path);    // must be single
 void writePNG(const std::string& path, const Image<Vec4u8>& rgba);
 void writeDepthPNG(const std::string& path, const Image<std::uint16_t>& depth);
 
-// A semantic label image: one class id per pixel, in a single-channel 8- or 16-bit lossless file (PNG,
-// PGM, TIFF... through OpenCV). Pixels equal to `ignore_id` (-1: none) and 65535 become kNoLabel; 255 in
-// an 8-bit image stays class 255 unless it is the ignore id. Colour-coded or palette images, other bit
-// depths and unreadable files throw IoError naming the file and the reason; an ignore_id outside
-// -1..65535 throws ConfigError.
+// A semantic label image: one class id per pixel, in a single-channel lossless file: PNG (1 to 16-bit
+// grey), binary PGM (any maxval), TIFF... Ids are taken as stored, never rescaled to the file's range.
+// Pixels equal to `ignore_id` (-1: none) and 65535 become kNoLabel; 255 in an 8-bit image stays class
+// 255 unless it is the ignore id. Colour-coded or palette images, float images and unreadable files
+// throw IoError naming the file and the reason; an ignore_id outside -1..65535 throws ConfigError.
 Image<ClassId> readLabelImage(const std::string& path, int ignore_id);
 
 }  // namespace voxfuse
