@@ -222,8 +222,12 @@ TEST(SyntheticScene, DefaultRoomGivesEveryPrimitiveANamedClass) {
         EXPECT_TRUE(names.count(p.classId)) << "class " << p.classId << " has no name";
         EXPECT_LE(p.classId, 255) << "label images are 8-bit";
         used.insert(p.classId);
-        if (p.kind == PrimitiveKind::Sphere) EXPECT_EQ(p.classId, room_class::kBall);
-        if (p.kind == PrimitiveKind::Cylinder) EXPECT_EQ(p.classId, room_class::kCylinder);
+        if (p.kind == PrimitiveKind::Sphere) {
+            EXPECT_EQ(p.classId, room_class::kBall);
+        }
+        if (p.kind == PrimitiveKind::Cylinder) {
+            EXPECT_EQ(p.classId, room_class::kCylinder);
+        }
     }
     EXPECT_EQ(used.size(), names.size()) << "every class is used";
 
