@@ -28,11 +28,7 @@ VF_HOST_DEVICE inline Vec3f rotateInverse(const Mat4f& T, Vec3f d) {
 // the camera.
 VF_HOST_DEVICE inline int modelPixelIndex(const Intrinsics& model, Vec3f p_model) {
     if (p_model.z <= 1e-6f) return -1;
-    const Vec2f px = model.project(p_model);
-    // +0.5 and truncation round to the nearest pixel; the range check comes first so that the cast
-    // never sees a negative or huge value.
-    if (!(px.x >= -0.5f && px.y >= -0.5f && px.x < float(model.width) - 0.5f && px.y < float(model.height) - 0.5f)) return -1;
-    return int(px.x + 0.5f) + int(px.y + 0.5f) * model.width;
+    return model.nearestPixelIndex(model.project(p_model));
 }
 
 // The point-to-plane term of one frame vertex (camera coordinates, w = 1 when valid) with its normal

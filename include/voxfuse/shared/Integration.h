@@ -77,11 +77,10 @@ VF_HOST_DEVICE inline float integrateVoxel(TVoxel& voxel, Vec3i pos, const Integ
     const Vec3f p_world = toFloat(pos) * f.voxel_size_m;
     const Vec3f p_cam = transformPoint(f.T_depth_world, p_world);
     if (p_cam.z < f.near_m) return kNoUpdate;
-    const Vec2f px = f.depth_intrinsics.project(p_cam);
-    const int u = int(px.x + 0.5f), v = int(px.y + 0.5f);
-    if (px.x < -0.5f || px.y < -0.5f || u >= f.depth_intrinsics.width || v >= f.depth_intrinsics.height) return kNoUpdate;
+    const int depth_pixel = f.depth_intrinsics.nearestPixelIndex(f.depth_intrinsics.project(p_cam));
+    if (depth_pixel < 0) return kNoUpdate;
 
-    const float depth_m = f.depth[u + v * f.depth_intrinsics.width];
+    const float depth_m = f.depth[depth_pixel];
     if (!(depth_m >= f.min_depth_m && depth_m <= f.max_depth_m)) return kNoUpdate;  // also rejects 0 and NaN
 
     // Behind the observed surface by more than mu: the frame says nothing about this voxel.
@@ -95,9 +94,10 @@ VF_HOST_DEVICE inline float integrateVoxel(TVoxel& voxel, Vec3i pos, const Integ
     voxel.sdf = TVoxel::sdfFromFloat(fused);
     voxel.w_depth = (unsigned char)(old_w + 1 < f.max_weight ? old_w + 1 : f.max_weight);
 
+    // Colour and class belong to the surface: only voxels close to the zero crossing take them.
+    [[maybe_unused]] const bool near_surface = eta < 0.5f * f.mu_m && eta > -0.5f * f.mu_m;
     if constexpr (TVoxel::hasColor) {
-        // Colour belongs to the surface: only voxels close to the zero crossing take it.
-        if (f.rgb != nullptr && eta < 0.5f * f.mu_m && eta > -0.5f * f.mu_m) {
+        if (f.rgb != nullptr && near_surface) {
             const Vec3f p_rgb = transformPoint(f.T_rgb_world, p_world);
             Vec3f c;
             if (p_rgb.z > 0.f && sampleColorBilinear(f.rgb, f.rgb_intrinsics.size(), f.rgb_intrinsics.project(p_rgb), c)) {
@@ -112,18 +112,13 @@ VF_HOST_DEVICE inline float integrateVoxel(TVoxel& voxel, Vec3i pos, const Integ
         }
     }
     if constexpr (TVoxel::hasLabel) {
-        // Classes belong to the surface too; the class is the label image's pixel nearest to the voxel.
-        if (f.labels != nullptr && eta < 0.5f * f.mu_m && eta > -0.5f * f.mu_m) {
+        // The class is the label image's pixel nearest to the voxel (ids are never interpolated).
+        if (f.labels != nullptr && near_surface) {
             const Vec3f p_label = transformPoint(f.T_label_world, p_world);
-            if (p_label.z > 0.f) {
-                const Vec2f q = f.label_intrinsics.project(p_label);
-                const int lu = int(floorf(q.x + 0.5f)), lv = int(floorf(q.y + 0.5f));
-                if (lu >= 0 && lv >= 0 && lu < f.label_intrinsics.width && lv < f.label_intrinsics.height) {
-                    const ClassId observed = f.labels[lu + lv * f.label_intrinsics.width];
-                    if (observed != kNoLabel)
-                        fuseLabel(voxel.label, voxel.w_label, observed, f.label_update, f.max_weight, labelRandom(pos, f.label_seed));
-                }
-            }
+            const int label_pixel = p_label.z > 0.f ? f.label_intrinsics.nearestPixelIndex(f.label_intrinsics.project(p_label)) : -1;
+            const ClassId observed = label_pixel >= 0 ? f.labels[label_pixel] : kNoLabel;
+            if (observed != kNoLabel)
+                fuseLabel(voxel.label, voxel.w_label, observed, f.label_update, f.max_weight, labelRandom(pos, f.label_seed));
         }
     }
     return eta;
