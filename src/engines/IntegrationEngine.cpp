@@ -21,9 +21,8 @@ IntegrationFrame makeIntegrationFrame(const SceneParams& params, const View& vie
     // Colour and label images whose size disagrees with the calibration are scaled into it.
     if (f.rgb && view.rgb.size() != view.calib.rgb.size()) f.rgb_intrinsics = view.calib.rgb.resized(view.rgb.width(), view.rgb.height());
     f.labels = view.labels.empty() ? nullptr : labels;
-    const bool labels_from_rgb = view.calib.rgb.valid();
-    f.T_label_world = labels_from_rgb ? f.T_rgb_world : f.T_depth_world;
-    f.label_intrinsics = (labels_from_rgb ? view.calib.rgb : view.calib.depth).resized(view.labels.width(), view.labels.height());
+    f.T_label_world = view.calib.labelsFromColour() ? f.T_rgb_world : f.T_depth_world;
+    f.label_intrinsics = view.calib.labelCamera().resized(view.labels.width(), view.labels.height());
     f.label_update = params.label_update;
     f.label_seed = integration_number;
     f.voxel_size_m = params.voxel_size_m;

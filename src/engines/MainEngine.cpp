@@ -2,7 +2,6 @@
 
 #include "voxfuse/engines/MainEngine.h"
 
-#include <cmath>
 #include <cstring>
 #include <type_traits>
 
@@ -49,7 +48,7 @@ public:
                                                 std::to_string(view_.depth.height()) + " but the calibration says " +
                                                 std::to_string(view_.calib.depth.width) + "x" + std::to_string(view_.calib.depth.height),
                           frame.index);
-        if (!view_.labels.empty()) checkLabelGeometry(frame);
+        if (!view_.labels.empty()) checkLabelImageSize(view_.labels.size(), view_.calib, frame.labels_path, frame.index);
         result.stages.push_back({"depth", t.elapsedMs()});
 
         t = Timer();
@@ -147,18 +146,6 @@ private:
         }
         view_.labels.resize(frame.labels.size());
         std::memcpy(static_cast<void*>(view_.labels.host()), frame.labels.host(), frame.labels.pixelCount() * sizeof(ClassId));
-    }
-
-    // Label images may have any resolution, but must show the colour camera's field of view.
-    void checkLabelGeometry(const RGBDFrame& frame) const {
-        const Intrinsics& camera = view_.calib.rgb.valid() ? view_.calib.rgb : view_.calib.depth;
-        const double label_aspect = double(view_.labels.width()) / double(view_.labels.height());
-        const double camera_aspect = double(camera.width) / double(camera.height);
-        if (std::abs(label_aspect / camera_aspect - 1.0) > 0.01)
-            throw IoError(frame.labels_path, "label image is " + std::to_string(view_.labels.width()) + "x" +
-                                                 std::to_string(view_.labels.height()) + ", not the colour camera's aspect ratio (" +
-                                                 std::to_string(camera.width) + "x" + std::to_string(camera.height) + ")",
-                          frame.index);
     }
 
     MainEngineSettings settings_;

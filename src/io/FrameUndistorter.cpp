@@ -49,8 +49,7 @@ FrameUndistorter::FrameUndistorter(const RGBDCalib& calib)
     : rgb_maps_(makeMaps(calib.rgb, calib.rgb_distortion, CV_16SC2)),
       depth_maps_(makeMaps(calib.depth, calib.depth_distortion, CV_32FC1)),
       undistorted_(calib),
-      label_camera_(calib.rgb.valid() ? calib.rgb : calib.depth),
-      label_distortion_(calib.rgb.valid() ? calib.rgb_distortion : calib.depth_distortion) {
+      label_distortion_(calib.labelDistortion()) {
     undistorted_.rgb_distortion = LensDistortion{};
     undistorted_.depth_distortion = LensDistortion{};
 }
@@ -58,13 +57,12 @@ FrameUndistorter::FrameUndistorter(const RGBDCalib& calib)
 FrameUndistorter::~FrameUndistorter() = default;
 FrameUndistorter::FrameUndistorter(FrameUndistorter&& other) noexcept
     : rgb_maps_(std::move(other.rgb_maps_)), depth_maps_(std::move(other.depth_maps_)), undistorted_(other.undistorted_),
-      label_camera_(other.label_camera_), label_distortion_(other.label_distortion_), label_maps_(std::move(other.label_maps_)) {}
+      label_distortion_(other.label_distortion_), label_maps_(std::move(other.label_maps_)) {}
 
 FrameUndistorter& FrameUndistorter::operator=(FrameUndistorter&& other) noexcept {
     rgb_maps_ = std::move(other.rgb_maps_);
     depth_maps_ = std::move(other.depth_maps_);
     undistorted_ = other.undistorted_;
-    label_camera_ = other.label_camera_;
     label_distortion_ = other.label_distortion_;
     label_maps_ = std::move(other.label_maps_);
     return *this;
@@ -101,7 +99,7 @@ void FrameUndistorter::apply(RGBDFrame& frame) const {
         {
             const std::lock_guard<std::mutex> lock(label_maps_mutex_);
             if (!label_maps_ || label_maps_->size != frame.labels.size())
-                label_maps_ = makeMaps(label_camera_.resized(frame.labels.width(), frame.labels.height()), label_distortion_,
+                label_maps_ = makeMaps(undistorted_.labelCamera().resized(frame.labels.width(), frame.labels.height()), label_distortion_,
                                        CV_32FC1);
             maps = label_maps_;
         }

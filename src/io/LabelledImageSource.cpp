@@ -256,22 +256,12 @@ bool LabelledImageSource::next(RGBDFrame& frame) {
         ++label_errors_;
         throw IoError(e.file(), e.reason(), frame.index);
     }
-    // The engine projects voxels into the label image through the colour camera rescaled to the label
-    // image's size: a different aspect ratio would mean another field of view (a crop), not a resolution.
-    const RGBDCalib& calib = source_->calib();
-    const Intrinsics& camera = calib.rgb.valid() ? calib.rgb : calib.depth;
-    if (camera.width > 0 && camera.height > 0) {
-        const double label_aspect = double(labels.width()) / double(labels.height());
-        const double camera_aspect = double(camera.width) / double(camera.height);
-        if (std::abs(label_aspect / camera_aspect - 1.0) > 0.01) {
-            ++label_errors_;
-            throw IoError(image->path,
-                          "label image is " + std::to_string(labels.width()) + "x" + std::to_string(labels.height()) +
-                              ", not the aspect ratio of the " + (calib.rgb.valid() ? "colour" : "depth") + " camera (" +
-                              std::to_string(camera.width) + "x" + std::to_string(camera.height) +
-                              "); any resolution of that aspect ratio (within 1%) is accepted",
-                          frame.index);
-        }
+    // Checked here too, not only by the engine: here the frame is skipped, there the run would stop.
+    try {
+        checkLabelImageSize(labels.size(), source_->calib(), image->path, frame.index);
+    } catch (const IoError&) {
+        ++label_errors_;
+        throw;
     }
     frame.labels = std::move(labels);
     frame.labels_path = image->path;

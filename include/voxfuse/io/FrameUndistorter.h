@@ -41,9 +41,7 @@ private:
     std::unique_ptr<Maps> rgb_maps_;
     std::unique_ptr<Maps> depth_maps_;
     RGBDCalib undistorted_;
-    // The camera whose geometry label images have (undistorted intrinsics) and its distortion.
-    Intrinsics label_camera_;
-    LensDistortion label_distortion_;
+    LensDistortion label_distortion_;  // the input's calib.labelDistortion() (undistorted_ has none)
     // Label images: maps for the last label resolution seen, made on first use.
     mutable std::mutex label_maps_mutex_;
     mutable std::shared_ptr<const Maps> label_maps_;

@@ -7,6 +7,7 @@
 
 #include "voxfuse/core/Image.h"
 #include "voxfuse/objects/ClassLabel.h"
+#include "voxfuse/objects/RGBDCalib.h"
 
 namespace voxfuse {
 
@@ -26,5 +27,10 @@ struct RGBDFrame {
     Image<ClassId> labels;
     std::string labels_path;
 };
+
+// A label image may have any resolution, but must show calib.labelCamera()'s field of view: its aspect
+// ratio within 1% (another one would be a crop, which the engine cannot place). Throws IoError naming
+// `path`, `frame_index` and both sizes otherwise.
+void checkLabelImageSize(Vec2i label_size, const RGBDCalib& calib, const std::string& path, int frame_index);
 
 }  // namespace voxfuse

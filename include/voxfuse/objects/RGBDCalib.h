@@ -52,6 +52,12 @@ struct RGBDCalib {
     DisparityCalib disparity;
     LensDistortion rgb_distortion;    // optional "distortion_rgb" line of calib.txt
     LensDistortion depth_distortion;  // optional "distortion_depth" line of calib.txt
+
+    // Semantic label images show what the colour camera sees (segmentations are computed from colour),
+    // or what the depth camera sees in a calibration without colour.
+    bool labelsFromColour() const { return rgb.valid(); }
+    const Intrinsics& labelCamera() const { return labelsFromColour() ? rgb : depth; }
+    const LensDistortion& labelDistortion() const { return labelsFromColour() ? rgb_distortion : depth_distortion; }
 };
 
 }  // namespace voxfuse
