@@ -13,39 +13,18 @@ namespace {
 
 constexpr std::size_t kClassCount = std::size_t(1) << (8 * sizeof(ClassId));  // every ClassId, kNoLabel included
 
-void checkAttribute(const char* what, std::size_t count, std::size_t vertices, const char* name) {
-    if (count != 0 && count != vertices)
-        throw Error(std::string(what) + ": inconsistent data: " + std::to_string(count) + " " + name + " for " + std::to_string(vertices) +
-                    " vertices");
-}
-
-void checkLabels(const char* what, std::size_t labels, std::size_t vertices, const char* element) {
-    if (labels == 0 && vertices > 0)
+// Class tools need labels (voxel types without them give none) and a consistent surface.
+template <class TSurface>
+void checkLabelled(const char* what, const TSurface& surface, std::size_t elements, const char* element) {
+    if (surface.labels.empty() && elements > 0)
         throw Error(std::string(what) + ": the " + element +
                     " has no labels (only the voxel types with labels, s_label and s_rgb_label, give them)");
-    if (labels != vertices)
-        throw Error(std::string(what) + ": inconsistent data: " + std::to_string(labels) + " labels for " + std::to_string(vertices) +
-                    " vertices");
+    const std::string why = inconsistency(surface);
+    if (!why.empty()) throw Error(std::string(what) + ": inconsistent data: " + why);
 }
 
-void checkMesh(const char* what, const Mesh& mesh) {
-    const std::size_t n = mesh.vertices.size();
-    checkLabels(what, mesh.labels.size(), n, "mesh");
-    checkAttribute(what, mesh.normals.size(), n, "normals");
-    checkAttribute(what, mesh.colors.size(), n, "colours");
-    for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
-        for (int k = 0; k < 3; ++k)
-            if (mesh.triangles[t][k] < 0 || std::size_t(mesh.triangles[t][k]) >= n)
-                throw Error(std::string(what) + ": inconsistent data: triangle " + std::to_string(t) + " refers to vertex " +
-                            std::to_string(mesh.triangles[t][k]) + " of " + std::to_string(n));
-}
-
-void checkCloud(const char* what, const PointCloud& cloud) {
-    const std::size_t n = cloud.points.size();
-    checkLabels(what, cloud.labels.size(), n, "point cloud");
-    checkAttribute(what, cloud.normals.size(), n, "normals");
-    checkAttribute(what, cloud.colors.size(), n, "colours");
-}
+void checkMesh(const char* what, const Mesh& mesh) { checkLabelled(what, mesh, mesh.vertices.size(), "mesh"); }
+void checkCloud(const char* what, const PointCloud& cloud) { checkLabelled(what, cloud, cloud.points.size(), "point cloud"); }
 
 // The rule of triangleClass() on a checked mesh.
 ClassId classOfTriangle(const Mesh& mesh, const Vec3i& t) {
@@ -60,14 +39,19 @@ std::vector<bool> selectionTable(const std::vector<ClassId>& classes, ClassSelec
     return selected;
 }
 
-// The classes of a checked mesh's triangles, ascending.
-std::vector<ClassId> presentClasses(const Mesh& mesh) {
-    std::vector<bool> present(kClassCount, false);
-    for (const Vec3i& t : mesh.triangles) present[classOfTriangle(mesh, t)] = true;
+// The ids marked present, ascending.
+std::vector<ClassId> presentIds(const std::vector<bool>& present) {
     std::vector<ClassId> classes;
     for (std::size_t c = 0; c < kClassCount; ++c)
         if (present[c]) classes.push_back(ClassId(c));
     return classes;
+}
+
+// The classes of a checked mesh's triangles, ascending.
+std::vector<ClassId> presentClasses(const Mesh& mesh) {
+    std::vector<bool> present(kClassCount, false);
+    for (const Vec3i& t : mesh.triangles) present[classOfTriangle(mesh, t)] = true;
+    return presentIds(present);
 }
 
 void appendVertex(const Mesh& from, std::size_t v, Mesh& to) {
@@ -82,7 +66,7 @@ void appendVertex(const Mesh& from, std::size_t v, Mesh& to) {
 ClassId triangleClass(const Mesh& mesh, std::size_t triangle) {
     if (triangle >= mesh.triangles.size())
         throw Error("triangleClass: triangle " + std::to_string(triangle) + " of " + std::to_string(mesh.triangles.size()));
-    checkLabels("triangleClass", mesh.labels.size(), mesh.vertices.size(), "mesh");
+    if (mesh.labels.size() != mesh.vertices.size()) checkMesh("triangleClass", mesh);  // says what is wrong
     const Vec3i& t = mesh.triangles[triangle];
     for (int k = 0; k < 3; ++k)
         if (t[k] < 0 || std::size_t(t[k]) >= mesh.vertices.size())
@@ -100,10 +84,7 @@ std::vector<ClassId> classesOf(const PointCloud& cloud) {
     checkCloud("classesOf", cloud);
     std::vector<bool> present(kClassCount, false);
     for (const ClassId c : cloud.labels) present[c] = true;
-    std::vector<ClassId> classes;
-    for (std::size_t c = 0; c < kClassCount; ++c)
-        if (present[c]) classes.push_back(ClassId(c));
-    return classes;
+    return presentIds(present);
 }
 
 Mesh selectClasses(const Mesh& mesh, const std::vector<ClassId>& classes, ClassSelection mode) {

@@ -47,9 +47,7 @@ ClassId majorityLabel(BinnedPoint* first, BinnedPoint* last, const std::vector<C
 PointCloud downsampleVoxelGrid(const PointCloud& cloud, float cell_m) {
     if (!(cell_m > 0.f) || !std::isfinite(cell_m)) throw ConfigError("downsampling: the cell size must be a positive number (got " + std::to_string(cell_m) + ")");
     const std::size_t n = cloud.points.size();
-    if (cloud.hasNormals() && cloud.normals.size() != n) throw Error("downsampling: the cloud has " + std::to_string(cloud.normals.size()) + " normals for " + std::to_string(n) + " points");
-    if (cloud.hasColors() && cloud.colors.size() != n) throw Error("downsampling: the cloud has " + std::to_string(cloud.colors.size()) + " colours for " + std::to_string(n) + " points");
-    if (cloud.hasLabels() && cloud.labels.size() != n) throw Error("downsampling: the cloud has " + std::to_string(cloud.labels.size()) + " labels for " + std::to_string(n) + " points");
+    if (const std::string why = inconsistency(cloud); !why.empty()) throw Error("downsampling: inconsistent cloud: " + why);
     if (n > std::size_t(UINT32_MAX)) throw Error("downsampling: more than 2^32 points");
 
     // Cell of every finite point.

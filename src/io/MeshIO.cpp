@@ -74,23 +74,10 @@ private:
     std::string buffer_;
 };
 
-void checkVertexAttributes(const std::string& path, std::size_t vertices, std::size_t normals, std::size_t colors, std::size_t labels) {
-    if (normals != 0 && normals != vertices)
-        throw IoError(path, "inconsistent data: " + std::to_string(normals) + " normals for " + std::to_string(vertices) + " vertices");
-    if (colors != 0 && colors != vertices)
-        throw IoError(path, "inconsistent data: " + std::to_string(colors) + " colours for " + std::to_string(vertices) + " vertices");
-    if (labels != 0 && labels != vertices)
-        throw IoError(path, "inconsistent data: " + std::to_string(labels) + " labels for " + std::to_string(vertices) + " vertices");
-}
-
-void checkMesh(const std::string& path, const Mesh& mesh) {
-    checkVertexAttributes(path, mesh.vertices.size(), mesh.normals.size(), mesh.colors.size(), mesh.labels.size());
-    const long long n = (long long)mesh.vertices.size();
-    for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
-        for (int k = 0; k < 3; ++k)
-            if (mesh.triangles[t][k] < 0 || mesh.triangles[t][k] >= n)
-                throw IoError(path, "inconsistent data: triangle " + std::to_string(t) + " refers to vertex " +
-                                        std::to_string(mesh.triangles[t][k]) + " of " + std::to_string(n));
+template <class TSurface>
+void checkConsistent(const std::string& path, const TSurface& surface) {
+    const std::string why = inconsistency(surface);
+    if (!why.empty()) throw IoError(path, "inconsistent data: " + why);
 }
 
 // The label property has ScanNet's name and type (its *_vh_clean_2.labels.ply files), which their tools read.
@@ -137,7 +124,7 @@ std::string lowerExtension(const std::string& path) {
 }  // namespace
 
 void writeMeshPly(const std::string& path, const Mesh& mesh) {
-    checkMesh(path, mesh);
+    checkConsistent(path, mesh);
     BinaryFile file(path);
     file.text("ply\nformat binary_little_endian 1.0\ncomment written by VoxFuse\n" +
               plyVertexHeader(mesh.vertices.size(), mesh.hasNormals(), mesh.hasColors(), mesh.hasLabels()) + "element face " +
@@ -151,7 +138,7 @@ void writeMeshPly(const std::string& path, const Mesh& mesh) {
 }
 
 void writePointCloudPly(const std::string& path, const PointCloud& cloud) {
-    checkVertexAttributes(path, cloud.points.size(), cloud.normals.size(), cloud.colors.size(), cloud.labels.size());
+    checkConsistent(path, cloud);
     BinaryFile file(path);
     file.text("ply\nformat binary_little_endian 1.0\ncomment written by VoxFuse\n" +
               plyVertexHeader(cloud.points.size(), cloud.hasNormals(), cloud.hasColors(), cloud.hasLabels()) + "end_header\n");
@@ -160,7 +147,7 @@ void writePointCloudPly(const std::string& path, const PointCloud& cloud) {
 }
 
 void writeMeshObj(const std::string& path, const Mesh& mesh) {
-    checkMesh(path, mesh);
+    checkConsistent(path, mesh);
     BinaryFile file(path);  // OBJ is text, but written verbatim ("\n" line ends on every platform)
     std::string line = "# written by VoxFuse: " + std::to_string(mesh.vertices.size()) + " vertices, " +
                        std::to_string(mesh.triangles.size()) + " triangles\n";
@@ -192,7 +179,7 @@ void writeMeshObj(const std::string& path, const Mesh& mesh) {
 }
 
 void writeMeshStl(const std::string& path, const Mesh& mesh) {
-    checkMesh(path, mesh);
+    checkConsistent(path, mesh);
     if (mesh.triangles.size() > std::size_t(UINT32_MAX)) throw IoError(path, "too many triangles for STL (at most 2^32 - 1)");
     BinaryFile file(path);
     std::string header = "binary STL written by VoxFuse";

@@ -3,6 +3,7 @@
 // mesh writers (io/MeshIO.h) save it.
 
 #include <cstddef>
+#include <string>
 #include <vector>
 
 #include "voxfuse/core/Math.h"
@@ -33,5 +34,10 @@ struct Mesh {
                labels.size() * sizeof(ClassId) + triangles.size() * sizeof(Vec3i);
     }
 };
+
+// What is wrong with the mesh ("3 normals for 4 vertices", "triangle 7 refers to vertex 9 of 4"), or
+// "" when its normals, colours and labels are each empty or one per vertex and every triangle index
+// is a vertex. Writers and the class tools check this before they use a mesh.
+std::string inconsistency(const Mesh& mesh);
 
 }  // namespace voxfuse

@@ -3,6 +3,7 @@
 // type has colour, colours. Written by io/MeshIO.h, thinned by engines/PointCloudDownsampling.h.
 
 #include <cstddef>
+#include <string>
 #include <vector>
 
 #include "voxfuse/core/Math.h"
@@ -28,5 +29,9 @@ struct PointCloud {
         labels.clear();
     }
 };
+
+// What is wrong with the cloud ("3 normals for 4 points"), or "" when its normals, colours and labels
+// are each empty or one per point.
+std::string inconsistency(const PointCloud& cloud);
 
 }  // namespace voxfuse
