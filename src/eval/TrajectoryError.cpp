@@ -8,6 +8,8 @@
 
 #include <Eigen/Geometry>
 
+#include "../core/NearestInTime.h"
+
 namespace voxfuse {
 namespace {
 
@@ -27,18 +29,8 @@ std::vector<TimedPose> sortedByTime(std::vector<TimedPose> poses) {
 
 // Index of the pose nearest in time to t within max_dt, or -1. `poses` sorted by time.
 int nearest(const std::vector<TimedPose>& poses, double t, double max_dt) {
-    const auto it = std::lower_bound(poses.begin(), poses.end(), t, [](const TimedPose& p, double time) { return p.timestamp_s < time; });
-    int best = -1;
-    double best_dt = max_dt;
-    for (auto c : {it, it == poses.begin() ? poses.end() : it - 1}) {
-        if (c == poses.end()) continue;
-        const double dt = std::fabs(c->timestamp_s - t);
-        if (dt <= best_dt) {
-            best_dt = dt;
-            best = int(c - poses.begin());
-        }
-    }
-    return best;
+    const TimedPose* p = nearestInTime(poses, t, max_dt, [](const TimedPose& pose) { return pose.timestamp_s; });
+    return p ? int(p - poses.data()) : -1;
 }
 
 double rotationAngleRad(const Eigen::Matrix3d& R) { return std::acos(std::clamp((R.trace() - 1.0) / 2.0, -1.0, 1.0)); }

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 
+#include "../core/NearestInTime.h"
 #include "FrameReading.h"
 #include "TextParsing.h"
 #include "voxfuse/core/Error.h"
@@ -229,14 +230,7 @@ const LabelledImageSource::LabelImage* LabelledImageSource::find(const RGBDFrame
         return image.path.empty() ? nullptr : &image;
     }
     const double t = frame.rgb_timestamp_s >= 0.0 ? frame.rgb_timestamp_s : frame.timestamp_s;
-    const auto after = std::lower_bound(images_.begin(), images_.end(), t,
-                                        [](const LabelImage& image, double time) { return image.time_s < time; });
-    const LabelImage* best = nullptr;
-    if (after != images_.end()) best = &*after;
-    // The earlier neighbour wins ties: it was taken at or before the frame.
-    if (after != images_.begin() && (!best || t - std::prev(after)->time_s <= best->time_s - t)) best = &*std::prev(after);
-    if (best && std::abs(best->time_s - t) <= options_.max_time_difference_s) return best;
-    return nullptr;
+    return nearestInTime(images_, t, options_.max_time_difference_s, [](const LabelImage& image) { return image.time_s; });
 }
 
 bool LabelledImageSource::next(RGBDFrame& frame) {
