@@ -50,8 +50,8 @@ std::string defaultSource() {
 
 int main(int argc, char** argv) {
     CLI::App cli{"Per-stage timings of the VoxFuse pipeline on a sequence."};
-    std::string source_path, json_path = "voxfuse_bench.json", voxel, index = "hash", poses = "track";
-    app::LabelInputOptions labels;
+    std::string source_path, json_path = "voxfuse_bench.json", index = "hash", poses = "track";
+    app::LabelInputOptions labels;  // and --voxel
     int max_frames = 0, warmup = 3, repeats = 3;
     bool mesh = false, cloud = false;
     float cloud_voxel_m = 0.f;
@@ -61,9 +61,7 @@ int main(int argc, char** argv) {
     cli.add_option("source", source_path, "sequence (default: ../shared/data/tum_fr3_teddy_200, else the bundled data)");
     cli.add_option("--frames", max_frames, "at most N frames (0 = all)");
     cli.add_option("--warmup", warmup, "frames left out of the statistics")->capture_default_str();
-    cli.add_option("--voxel", voxel, "voxel type (default s; s_rgb_label with --labels)")
-        ->check(CLI::IsMember({"s", "f", "s_rgb", "f_rgb", "s_label", "s_rgb_label"}));
-    app::addLabelOptions(cli, labels);
+    app::addVoxelAndLabelOptions(cli, labels, "s");
     cli.add_option("--index", index, "voxel index")->capture_default_str()->check(CLI::IsMember({"dense", "hash"}));
     cli.add_option("--voxel-size", s.scene.voxel_size_m, "voxel edge (m)")->capture_default_str();
     cli.add_option("--mu", s.scene.mu_m, "truncation band (m)")->capture_default_str();
@@ -84,7 +82,7 @@ int main(int argc, char** argv) {
     try {
         if (source_path.empty()) source_path = defaultSource();
         std::unique_ptr<ImageSource> source = openImageSource(source_path);
-        app::attachLabelInput(source, source_path, labels, voxel, "s", s, "voxfuse_bench");
+        app::attachLabelInput(source, source_path, labels, s, "voxfuse_bench");
         s.index_type = parseIndexType(index);
         auto engine = MainEngine::create(s, source->calib());
         std::unique_ptr<OccupancyMapper> occupancy;

@@ -9,7 +9,10 @@ namespace fs = std::filesystem;
 
 namespace voxfuse::app {
 
-void addLabelOptions(CLI::App& cli, LabelInputOptions& o) {
+void addVoxelAndLabelOptions(CLI::App& cli, LabelInputOptions& o, const std::string& default_voxel) {
+    o.default_voxel = default_voxel;
+    cli.add_option("--voxel", o.voxel, "voxel type (default " + default_voxel + "; s_rgb_label with --labels)")
+        ->check(CLI::IsMember({"s", "f", "s_rgb", "f_rgb", "s_label", "s_rgb_label"}));
     cli.add_option("--labels", o.path,
                    "semantic label images (one class id per pixel, 8/16-bit PNG): a folder, or a list file of 'timestamp path' lines "
                    "(default: SOURCE/labels.txt or SOURCE/labels/ when a semantic voxel type is used)");
@@ -35,13 +38,12 @@ std::string labelsBeside(const std::string& source_path) {
 
 }  // namespace
 
-LabelledImageSource* attachLabelInput(std::unique_ptr<ImageSource>& source, const std::string& source_path, LabelInputOptions& o,
-                                      const std::string& voxel, const std::string& default_voxel, MainEngineSettings& s,
-                                      const char* program) {
+LabelledImageSource* attachLabelInput(std::unique_ptr<ImageSource>& source, const std::string& source_path, const LabelInputOptions& o,
+                                      MainEngineSettings& s, const char* program) {
     s.scene.label_update = o.update == "vote" ? LabelUpdate::Vote : LabelUpdate::Probabilistic;
-    s.voxel_type = parseVoxelType(!voxel.empty() ? voxel : !o.path.empty() ? "s_rgb_label" : default_voxel);
+    s.voxel_type = parseVoxelType(!o.voxel.empty() ? o.voxel : !o.path.empty() ? "s_rgb_label" : o.default_voxel);
     if (!o.path.empty() && !voxelTypeHasLabels(s.voxel_type))
-        throw ConfigError("--labels needs a voxel type with classes (s_label or s_rgb_label), not --voxel " + voxel);
+        throw ConfigError("--labels needs a voxel type with classes (s_label or s_rgb_label), not --voxel " + o.voxel);
     if (!voxelTypeHasLabels(s.voxel_type)) return nullptr;
     const std::string path = !o.path.empty() ? o.path : labelsBeside(source_path);
     if (path.empty()) {

@@ -26,8 +26,7 @@ constexpr const char* kKeyHelp =
 struct Options {
     std::string source;
     SourceOptions source_options;
-    std::string voxel;  // "" = s_rgb, or s_rgb_label with --labels
-    app::LabelInputOptions labels;
+    app::LabelInputOptions labels;  // and --voxel
     std::string index = "hash";
     std::string device = "cpu";
     std::string poses = "track";
@@ -59,7 +58,7 @@ int run(Options& o) {
     if (!o.size.empty()) parseWindowSize(o.size, o.viewer);
     std::unique_ptr<ImageSource> source = openImageSource(o.source, o.source_options);
     MainEngineSettings& s = o.engine;
-    app::attachLabelInput(source, o.source, o.labels, o.voxel, "s_rgb", s, "voxfuse_viewer");
+    app::attachLabelInput(source, o.source, o.labels, s, "voxfuse_viewer");
     std::cerr << "voxfuse_viewer: " << source->description() << "\n";
 
     s.index_type = parseIndexType(o.index);
@@ -83,9 +82,7 @@ int main(int argc, char** argv) {
     cli.add_option("--rgb", o.source_options.rgb_pattern, "PPM colour file pattern, e.g. frames/%04i.ppm");
     cli.add_option("--depth", o.source_options.depth_pattern, "16-bit PGM depth file pattern, e.g. frames/%04i.pgm");
     cli.add_option("--calib", o.source_options.calib_path, "InfiniTAM calib.txt (overrides the source's own)");
-    cli.add_option("--voxel", o.voxel, "voxel type (default s_rgb; s_rgb_label with --labels)")
-        ->check(CLI::IsMember({"s", "f", "s_rgb", "f_rgb", "s_label", "s_rgb_label"}));
-    app::addLabelOptions(cli, o.labels);
+    app::addVoxelAndLabelOptions(cli, o.labels, "s_rgb");
     cli.add_option("--index", o.index, "voxel index")->capture_default_str()->check(CLI::IsMember({"dense", "hash"}));
     cli.add_option("--voxel-size", o.engine.scene.voxel_size_m, "voxel edge in metres")->capture_default_str()->check(CLI::PositiveNumber);
     cli.add_option("--device", o.device, "where the engines run")->capture_default_str()->check(CLI::IsMember({"cpu", "cuda"}));

@@ -42,7 +42,6 @@ struct CliOptions {
     std::string out_dir = "voxfuse_out";
     int max_frames = 0;  // 0 = all
     int render_every = 25;
-    std::string voxel;                    // "" = s_rgb, or s_rgb_label with --labels
     std::string index = "hash";
     std::string device = "cpu";
     std::string poses = "track";
@@ -55,7 +54,7 @@ struct CliOptions {
     bool write_cloud = false;             // DIR/cloud.ply at the end
     float cloud_voxel_m = 0.f;            // downsample the cloud to one point per cell of this size
     float occupancy_res_m = 0.f;          // > 0: an OctoMap with cells of this size -> DIR/occupancy.bt
-    app::LabelInputOptions labels;
+    app::LabelInputOptions labels;        // and --voxel
     bool mesh_per_class = false;          // DIR/mesh_class_<id>.ply for each class of the mesh
     std::vector<int> exclude_classes;     // dropped from the mesh and the cloud (e.g. people from a static map)
     std::string tracker;                  // overrides of the tracker settings, applied in this order:
@@ -132,10 +131,12 @@ void writeMapOutputs(MainEngine& engine, const CliOptions& o) {
         }
         if (o.mesh_per_class) {
             for (const ClassMesh& part : splitByClass(mesh)) {
-                const std::string name = part.label == kNoLabel ? "mesh_unlabelled.ply" : "mesh_class_" + std::to_string(part.label) + ".ply";
-                writeMesh((fs::path(o.out_dir) / name).string(), part.mesh);
-                std::cerr << "voxfuse: class " << (part.label == kNoLabel ? std::string("none") : std::to_string(part.label)) << ": "
-                          << part.mesh.triangles.size() << " triangles -> " << (fs::path(o.out_dir) / name).string() << "\n";
+                const bool unlabelled = part.label == kNoLabel;
+                const std::string part_path =
+                    (fs::path(o.out_dir) / (unlabelled ? "mesh_unlabelled.ply" : "mesh_class_" + std::to_string(part.label) + ".ply")).string();
+                writeMesh(part_path, part.mesh);
+                std::cerr << "voxfuse: class " << (unlabelled ? std::string("none") : std::to_string(part.label)) << ": "
+                          << part.mesh.triangles.size() << " triangles -> " << part_path << "\n";
             }
         }
     }
@@ -181,7 +182,7 @@ int run(CliOptions& o) {
     }
     MainEngineSettings& s = o.engine;
     // Label images are decoded on the reader thread too: the stream goes inside it.
-    LabelledImageSource* labels = app::attachLabelInput(source, o.source, o.labels, o.voxel, "s_rgb", s, "voxfuse");
+    LabelledImageSource* labels = app::attachLabelInput(source, o.source, o.labels, s, "voxfuse");
     // Before the run, not after it: a run must not end without its outputs over an option it cannot honour.
     if ((o.mesh_per_class || !o.exclude_classes.empty()) && !voxelTypeHasLabels(s.voxel_type))
         throw ConfigError("--mesh-per-class and --exclude-classes need a voxel type with classes (s_label, s_rgb_label)");
@@ -286,8 +287,7 @@ int main(int argc, char** argv) {
     cli.add_option("--max-weight", o.engine.scene.max_weight, "cap on the per-voxel weight")->capture_default_str()->check(CLI::Range(1, 255));
     cli.add_option("--min-depth", o.engine.scene.view_frustum_min_m, "ignore depth below (m)")->capture_default_str();
     cli.add_option("--max-depth", o.engine.scene.view_frustum_max_m, "ignore depth beyond (m)")->capture_default_str();
-    cli.add_option("--voxel", o.voxel, "voxel type (default s_rgb; s_rgb_label with --labels)")
-        ->check(CLI::IsMember({"s", "f", "s_rgb", "f_rgb", "s_label", "s_rgb_label"}));
+    app::addVoxelAndLabelOptions(cli, o.labels, "s_rgb");
     cli.add_option("--index", o.index, "voxel index")->capture_default_str()->check(CLI::IsMember({"dense", "hash"}));
     cli.add_option("--max-blocks", o.engine.hash.max_block_count, "hash: most 8^3 voxel blocks (memory grows on demand up to this)")
         ->capture_default_str()->check(CLI::PositiveNumber);
@@ -303,7 +303,6 @@ int main(int argc, char** argv) {
         ->check(CLI::NonNegativeNumber);
     cli.add_option("--occupancy", o.occupancy_res_m, "also build an OctoMap with RES-metre cells on a background thread -> DIR/occupancy.bt")
         ->check(CLI::PositiveNumber);
-    app::addLabelOptions(cli, o.labels);
     cli.add_flag("--mesh-per-class", o.mesh_per_class, "also write one mesh per semantic class: DIR/mesh_class_<id>.ply");
     cli.add_option("--exclude-classes", o.exclude_classes, "drop these classes from the mesh and the cloud (e.g. people from a static map)")
         ->delimiter(',')->check(CLI::Range(0, 65535));
