@@ -174,6 +174,29 @@ std::unique_ptr<MainEngine> createForVoxel(const MainEngineSettings& s, const RG
     throw ConfigError("unknown index type");
 }
 
+template <class TVoxel>
+struct VoxelTag {
+    using Voxel = TVoxel;
+};
+
+constexpr VoxelType kVoxelTypes[] = {VoxelType::S,    VoxelType::F,      VoxelType::SRgb,
+                                     VoxelType::FRgb, VoxelType::SLabel, VoxelType::SRgbLabel};
+
+// Calls f(VoxelTag<TVoxel>{}) for the voxel struct that `type` names: the one place where run-time
+// voxel types meet the compile-time ones.
+template <class F>
+auto visitVoxelType(VoxelType type, F&& f) {
+    switch (type) {
+        case VoxelType::S: return f(VoxelTag<VoxelS>{});
+        case VoxelType::F: return f(VoxelTag<VoxelF>{});
+        case VoxelType::SRgb: return f(VoxelTag<VoxelSRgb>{});
+        case VoxelType::FRgb: return f(VoxelTag<VoxelFRgb>{});
+        case VoxelType::SLabel: return f(VoxelTag<VoxelSLabel>{});
+        case VoxelType::SRgbLabel: return f(VoxelTag<VoxelSRgbLabel>{});
+    }
+    throw ConfigError("unknown voxel type " + std::to_string(int(type)));
+}
+
 }  // namespace
 
 std::unique_ptr<MainEngine> MainEngine::create(const MainEngineSettings& s, const RGBDCalib& calib) {
@@ -188,44 +211,29 @@ std::unique_ptr<MainEngine> MainEngine::create(const MainEngineSettings& s, cons
             throw DeviceError("CUDA was requested but is not usable: " + device_memory::cudaDescription());
         throw ConfigError("the full CUDA pipeline is not available yet (CUDA integration is): use --device cpu");
     }
-    switch (s.voxel_type) {
-        case VoxelType::S: return createForVoxel<VoxelS>(s, calib);
-        case VoxelType::F: return createForVoxel<VoxelF>(s, calib);
-        case VoxelType::SRgb: return createForVoxel<VoxelSRgb>(s, calib);
-        case VoxelType::FRgb: return createForVoxel<VoxelFRgb>(s, calib);
-        case VoxelType::SLabel: return createForVoxel<VoxelSLabel>(s, calib);
-        case VoxelType::SRgbLabel: return createForVoxel<VoxelSRgbLabel>(s, calib);
-    }
-    throw ConfigError("unknown voxel type");
+    return visitVoxelType(s.voxel_type, [&](auto tag) { return createForVoxel<typename decltype(tag)::Voxel>(s, calib); });
 }
 
 VoxelType parseVoxelType(const std::string& name) {
-    if (name == "s") return VoxelType::S;
-    if (name == "f") return VoxelType::F;
-    if (name == "s_rgb") return VoxelType::SRgb;
-    if (name == "f_rgb") return VoxelType::FRgb;
-    if (name == "s_label") return VoxelType::SLabel;
-    if (name == "s_rgb_label") return VoxelType::SRgbLabel;
-    throw ConfigError("unknown voxel type '" + name + "' (expected s, f, s_rgb, f_rgb, s_label or s_rgb_label)");
+    std::string names;
+    for (const VoxelType type : kVoxelTypes) {
+        if (name == toString(type)) return type;
+        names += std::string(names.empty() ? "" : ", ") + toString(type);
+    }
+    throw ConfigError("unknown voxel type '" + name + "' (expected one of " + names + ")");
 }
 
 const char* toString(VoxelType type) {
-    switch (type) {
-        case VoxelType::S: return VoxelS::name;
-        case VoxelType::F: return VoxelF::name;
-        case VoxelType::SRgb: return VoxelSRgb::name;
-        case VoxelType::FRgb: return VoxelFRgb::name;
-        case VoxelType::SLabel: return VoxelSLabel::name;
-        case VoxelType::SRgbLabel: return VoxelSRgbLabel::name;
-    }
-    return "?";
+    return visitVoxelType(type, [](auto tag) { return decltype(tag)::Voxel::name; });
 }
 
 bool voxelTypeHasColor(VoxelType type) {
-    return type == VoxelType::SRgb || type == VoxelType::FRgb || type == VoxelType::SRgbLabel;
+    return visitVoxelType(type, [](auto tag) { return decltype(tag)::Voxel::hasColor; });
 }
 
-bool voxelTypeHasLabels(VoxelType type) { return type == VoxelType::SLabel || type == VoxelType::SRgbLabel; }
+bool voxelTypeHasLabels(VoxelType type) {
+    return visitVoxelType(type, [](auto tag) { return decltype(tag)::Voxel::hasLabel; });
+}
 
 IndexType parseIndexType(const std::string& name) {
     if (name == "dense") return IndexType::Dense;
