@@ -14,7 +14,7 @@ void addVoxelAndLabelOptions(CLI::App& cli, LabelInputOptions& o, const std::str
     cli.add_option("--voxel", o.voxel, "voxel type (default " + default_voxel + "; s_rgb_label with --labels)")
         ->check(CLI::IsMember({"s", "f", "s_rgb", "f_rgb", "s_label", "s_rgb_label"}));
     cli.add_option("--labels", o.path,
-                   "semantic label images (one class id per pixel, 8/16-bit PNG): a folder, or a list file of 'timestamp path' lines "
+                   "semantic label images (one class id per pixel; PNG, PGM or TIFF): a folder, or a list file of 'timestamp path' lines "
                    "(default: SOURCE/labels.txt or SOURCE/labels/ when a semantic voxel type is used)");
     cli.add_option("--label-match", o.match, "how label images find their frames: by file order (index), by timestamp, or auto")
         ->capture_default_str()->check(CLI::IsMember({"auto", "index", "timestamp"}));
