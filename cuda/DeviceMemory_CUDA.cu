@@ -1,10 +1,28 @@
 // device_memory on the CUDA runtime. A CUDA build still runs on machines without a GPU: every entry
 // point but cudaAvailable() then throws DeviceError.
 
-#include "CudaCheck.h"
+#include <cstring>
+
+#include "core/CudaCheck.h"
 #include "voxfuse/core/DeviceMemory.h"
 
 namespace voxfuse {
+namespace {
+
+// Up to 64 bytes of one element, passed to the kernel by value.
+struct FillPattern {
+    unsigned char bytes[64];
+};
+
+// Thread i writes element i, byte by byte: elements need not be aligned to more than their own size.
+__global__ void fillPatternKernel(unsigned char* dst, FillPattern pattern, unsigned pattern_bytes, std::size_t count) {
+    const std::size_t i = std::size_t(blockIdx.x) * blockDim.x + threadIdx.x;
+    if (i >= count) return;
+    unsigned char* element = dst + i * pattern_bytes;
+    for (unsigned b = 0; b < pattern_bytes; ++b) element[b] = pattern.bytes[b];
+}
+
+}  // namespace
 
 const char* deviceName(Device d) { return d == Device::CPU ? "cpu" : "cuda"; }
 
@@ -44,10 +62,37 @@ void* allocate(std::size_t bytes) {
 
 void release(void* ptr) noexcept { cudaFree(ptr); }
 
+void* allocatePinned(std::size_t bytes) noexcept {
+    if (!cudaAvailable()) return nullptr;
+    void* p = nullptr;
+    if (cudaMallocHost(&p, bytes) != cudaSuccess) {
+        cudaGetLastError();
+        return nullptr;
+    }
+    return p;
+}
+
+void releasePinned(void* ptr) noexcept {
+    if (ptr) cudaFreeHost(ptr);
+}
+
 void copyHostToDevice(void* dst, const void* src, std::size_t bytes) { VF_CUDA_CHECK(cudaMemcpy(dst, src, bytes, cudaMemcpyHostToDevice)); }
 void copyDeviceToHost(void* dst, const void* src, std::size_t bytes) { VF_CUDA_CHECK(cudaMemcpy(dst, src, bytes, cudaMemcpyDeviceToHost)); }
 void copyDeviceToDevice(void* dst, const void* src, std::size_t bytes) { VF_CUDA_CHECK(cudaMemcpy(dst, src, bytes, cudaMemcpyDeviceToDevice)); }
 void fill(void* dst, int byte_value, std::size_t bytes) { VF_CUDA_CHECK(cudaMemset(dst, byte_value, bytes)); }
+
+void fillPattern(void* dst, const void* pattern, std::size_t pattern_bytes, std::size_t count) {
+    if (pattern_bytes == 0 || pattern_bytes > sizeof(FillPattern)) throw DeviceError("fillPattern: element size must be 1..64 bytes");
+    if (count == 0) return;
+    FillPattern p{};
+    std::memcpy(p.bytes, pattern, pattern_bytes);
+    const unsigned threads = 256;
+    const std::size_t blocks = (count + threads - 1) / threads;
+    fillPatternKernel<<<unsigned(blocks), threads>>>(static_cast<unsigned char*>(dst), p, unsigned(pattern_bytes), count);
+    VF_CUDA_CHECK_LAUNCH();
+}
+
+void synchronize() { VF_CUDA_CHECK(cudaDeviceSynchronize()); }
 
 }  // namespace device_memory
 }  // namespace voxfuse

@@ -1,20 +1,30 @@
-// The CUDA engine factories in a build without CUDA: asking for one is a clear error.
+// The CUDA engine factories in a build without CUDA: asking for one is a clear error. One stub per
+// engine of VF_FOR_EACH_CUDA_ENGINE and voxel/index pair of VF_FOR_EACH_ENGINE_PAIR.
+
+#include <string>
 
 #include "voxfuse/core/Error.h"
-#include "voxfuse/engines/IntegrationEngine.h"
+#include "voxfuse/engines/AllocationEngine.h"
 #include "voxfuse/engines/EnginePairs.h"
-#include "voxfuse/objects/Voxel.h"
-#include "voxfuse/objects/VoxelBlockHash.h"
+#include "voxfuse/engines/IntegrationEngine.h"
+#include "voxfuse/engines/RaycastEngine.h"
 
 namespace voxfuse::cuda {
-
-template <class TVoxel, class TIndex>
-std::unique_ptr<IntegrationEngine<TVoxel, TIndex>> makeIntegrationEngine() {
-    throw DeviceError("this VoxFuse build has no CUDA support (rebuild with -DVOXFUSE_CUDA=ON)");
+namespace {
+[[noreturn]] void noCuda(const char* engine) {
+    throw DeviceError(std::string("the CUDA ") + engine + " is not in this VoxFuse build (rebuild with -DVOXFUSE_CUDA=ON)");
 }
+}  // namespace
 
-#define VF_INSTANTIATE(TVoxel, TIndex) template std::unique_ptr<IntegrationEngine<TVoxel, TIndex>> makeIntegrationEngine<TVoxel, TIndex>();
-VF_FOR_EACH_ENGINE_PAIR(VF_INSTANTIATE)
-#undef VF_INSTANTIATE
+#define VF_INSTANTIATE_STUB(Engine, TVoxel, TIndex) template std::unique_ptr<Engine<TVoxel, TIndex>> make##Engine<TVoxel, TIndex>();
+#define VF_STUB(Engine)                                      \
+    template <class TVoxel, class TIndex>                    \
+    std::unique_ptr<Engine<TVoxel, TIndex>> make##Engine() { \
+        noCuda(#Engine);                                     \
+    }                                                        \
+    VF_FOR_EACH_ENGINE_PAIR_WITH(VF_INSTANTIATE_STUB, Engine)
+VF_FOR_EACH_CUDA_ENGINE(VF_STUB)
+#undef VF_STUB
+#undef VF_INSTANTIATE_STUB
 
 }  // namespace voxfuse::cuda

@@ -20,7 +20,11 @@ void release(void*) noexcept {}
 void copyHostToDevice(void*, const void*, std::size_t) { noCuda(); }
 void copyDeviceToHost(void*, const void*, std::size_t) { noCuda(); }
 void copyDeviceToDevice(void*, const void*, std::size_t) { noCuda(); }
+void* allocatePinned(std::size_t) noexcept { return nullptr; }
+void releasePinned(void*) noexcept {}
 void fill(void*, int, std::size_t) { noCuda(); }
+void fillPattern(void*, const void*, std::size_t, std::size_t) { noCuda(); }
+void synchronize() {}
 }  // namespace device_memory
 
 }  // namespace voxfuse

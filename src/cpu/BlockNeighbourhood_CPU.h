@@ -8,6 +8,7 @@
 #include <utility>
 #include <vector>
 
+#include "engines/DeviceImages.h"
 #include "voxfuse/objects/PlainVoxelArray.h"
 #include "voxfuse/objects/Scene.h"
 #include "voxfuse/objects/VoxelBlockHash.h"
@@ -35,6 +36,7 @@ template <class TVoxel>
 class HashBlocks {
 public:
     explicit HashBlocks(const Scene<TVoxel, VoxelBlockHash>& scene) : hash_(scene.index().data()), voxels_(scene.voxels().host()) {
+        requireSceneOn(Device::CPU, scene, "meshing");
         const VoxelBlockHash& index = scene.index();
         std::vector<std::pair<std::uint64_t, int>> order;  // (Morton code, entry); codes are unique as blocks are
         for (int e = 0; e < index.entryCount(); ++e) {
@@ -74,6 +76,7 @@ template <class TVoxel>
 class DenseBlocks {
 public:
     explicit DenseBlocks(const Scene<TVoxel, PlainVoxelArray>& scene) : index_(scene.index().data()), voxels_(scene.voxels().host()) {
+        requireSceneOn(Device::CPU, scene, "meshing");
         first_ = blockOfVoxel(index_.offset);
         counts_ = blockOfVoxel(index_.offset + index_.size - Vec3i{1, 1, 1}) - first_ + Vec3i{1, 1, 1};
     }

@@ -238,7 +238,7 @@ private:
 
     // Marching cubes over the block's complete cells that have both signs (the others have no triangles).
     static void appendTriangles(const LocalVolume<TVoxel>& v, ThreadLists& out) {
-        const MarchingCubesTable& table = kMarchingCubesTable;
+        const MarchingCubesTable& table = marchingCubesTable();
         for (int z = 0; z < kBlockSide; ++z)
             for (int y = 0; y < kBlockSide; ++y)
                 for (unsigned cells = v.surface_cell_rows[cellRowIndex(y, z)] & kBlockBits; cells; cells &= cells - 1) {

@@ -23,13 +23,19 @@ public:
     MainEngineT(const MainEngineSettings& settings, const RGBDCalib& calib, TIndex index)
         : settings_(settings),
           scene_(settings.scene, std::move(index), settings.device),
-          low_level_(makeLowLevelEngine(settings.device)),
+          // Image processing, tracking and meshing have no CUDA layers yet: they run on the CPU, on
+          // host copies of what the GPU computed (frame images go up, the raycast comes down).
+          low_level_(makeLowLevelEngine(Device::CPU)),
           allocation_(makeAllocationEngine<TVoxel, TIndex>(settings.device)),
           integration_(makeIntegrationEngine<TVoxel, TIndex>(settings.device)),
           raycast_(makeRaycastEngine<TVoxel, TIndex>(settings.device)),
-          tracker_(makeTracker(settings.tracker, settings.device)),
+          tracker_(makeTracker(settings.tracker, Device::CPU)),
           meshing_(makeMeshingEngine<TVoxel, TIndex>(Device::CPU)) {
         view_.calib = calib;
+        if (onGpu()) {
+            // Pinned host memory: the frame's depth crosses the bus every frame.
+            view_.depth.resize(calib.depth.size(), true, true, HostMemory::Pinned);
+        }
     }
 
     FrameResult processFrame(const RGBDFrame& frame, const Mat4f* T_world_camera_given) override {
@@ -49,7 +55,8 @@ public:
                                                 std::to_string(view_.calib.depth.width) + "x" + std::to_string(view_.calib.depth.height),
                           frame.index);
         if (!view_.labels.empty()) checkLabelImageSize(view_.labels.size(), view_.calib, frame.labels_path, frame.index);
-        result.stages.push_back({"depth", t.elapsedMs()});
+        if (onGpu()) uploadView();
+        result.stages.push_back({"depth", stageMs(t)});
 
         t = Timer();
         if (T_world_camera_given) {
@@ -58,7 +65,7 @@ public:
         } else {
             tracker_->track(tracking_, view_, render_state_);
         }
-        result.stages.push_back({"track", t.elapsedMs()});
+        result.stages.push_back({"track", stageMs(t)});
         result.tracking = tracking_;
         result.quality = tracking_.quality;
         result.T_world_camera = tracking_.T_world_camera;
@@ -70,16 +77,17 @@ public:
 
         t = Timer();
         allocation_stats_ = allocation_->allocate(scene_, view_, tracking_.T_world_camera);
-        result.stages.push_back({"allocate", t.elapsedMs()});
+        result.stages.push_back({"allocate", stageMs(t)});
 
         t = Timer();
         integration_->integrate(scene_, view_, tracking_.T_world_camera);
         result.fused = true;
-        result.stages.push_back({"integrate", t.elapsedMs()});
+        result.stages.push_back({"integrate", stageMs(t)});
 
         t = Timer();
         raycast_->raycast(scene_, view_.calib.depth, tracking_.T_world_camera, render_state_);
-        result.stages.push_back({"raycast", t.elapsedMs()});
+        if (onGpu()) render_state_.updateHost();  // the tracker reads the model on the CPU
+        result.stages.push_back({"raycast", stageMs(t)});
 
         // Between frames, so that no stage holds voxel pointers.
         if (settings_.remove_empty_blocks_every > 0 && ++frames_fused_ % settings_.remove_empty_blocks_every == 0) {
@@ -117,11 +125,32 @@ public:
     }
     AllocationStats allocationStats() const override { return allocation_stats_; }
     const TrackerStats& trackerStats() const override { return tracker_->lastStats(); }
-    // Meshing reads the host copy of the scene, which is the authoritative one on the CPU device.
-    void extractMesh(Mesh& mesh) override { meshing_->extractMesh(scene_, mesh); }
-    void extractPointCloud(PointCloud& cloud) override { meshing_->extractPointCloud(scene_, cloud); }
+    // Meshing runs on the CPU: a map on the GPU is meshed from a host copy taken for the purpose.
+    void extractMesh(Mesh& mesh) override {
+        if (onGpu()) meshing_->extractMesh(scene_.copyTo(Device::CPU), mesh);
+        else meshing_->extractMesh(scene_, mesh);
+    }
+    void extractPointCloud(PointCloud& cloud) override {
+        if (onGpu()) meshing_->extractPointCloud(scene_.copyTo(Device::CPU), cloud);
+        else meshing_->extractPointCloud(scene_, cloud);
+    }
 
 private:
+    bool onGpu() const { return settings_.device == Device::CUDA; }
+
+    // A stage's wall-clock time; on the GPU once its queued work has finished.
+    double stageMs(const Timer& t) const {
+        if (onGpu()) device_memory::synchronize();
+        return t.elapsedMs();
+    }
+
+    // The frame's images go to the GPU once, for every engine that reads them.
+    void uploadView() {
+        view_.depth.memory().updateDevice();
+        if (TVoxel::hasColor && !view_.rgb.empty()) view_.rgb.memory().updateDevice();
+        if (TVoxel::hasLabel && !view_.labels.empty()) view_.labels.memory().updateDevice();
+    }
+
     void resetScene() {
         if constexpr (std::is_same<TIndex, VoxelBlockHash>::value) scene_.clearVoxelBlocks();
         else integration_->resetScene(scene_);
@@ -206,11 +235,8 @@ std::unique_ptr<MainEngine> MainEngine::create(const MainEngineSettings& s, cons
                           " m, mu " + std::to_string(s.scene.mu_m) + " m)");
     if (s.scene.max_weight < 1 || s.scene.max_weight > 255) throw ConfigError("max weight must be in 1..255");
     if (s.dense_size.x <= 0 || s.dense_size.y <= 0 || s.dense_size.z <= 0) throw ConfigError("dense volume size must be positive");
-    if (s.device == Device::CUDA) {
-        if (!device_memory::cudaAvailable())
-            throw DeviceError("CUDA was requested but is not usable: " + device_memory::cudaDescription());
-        throw ConfigError("the full CUDA pipeline is not available yet (CUDA integration is): use --device cpu");
-    }
+    if (s.device == Device::CUDA && !device_memory::cudaAvailable())
+        throw DeviceError("CUDA was requested but is not usable: " + device_memory::cudaDescription());
     return visitVoxelType(s.voxel_type, [&](auto tag) { return createForVoxel<typename decltype(tag)::Voxel>(s, calib); });
 }
 

@@ -4,6 +4,8 @@
 
 #include <algorithm>
 
+#include "voxfuse/core/Error.h"
+
 #include "voxfuse/engines/ColorTracker.h"
 #include "voxfuse/engines/DepthTracker.h"
 
@@ -11,7 +13,7 @@ namespace voxfuse {
 
 std::unique_ptr<Tracker> makeTracker(const TrackerSettings& settings, Device device) {
     validateTrackerSettings(settings);
-    // Every tracker runs its loops on the CPU until CUDA layers land (the host side is device-agnostic).
+    if (device != Device::CPU) throw DeviceError("the trackers have no CUDA layer yet: use Device::CPU");
     if (settings.kind == TrackerKind::Color) return makeColorTracker(settings, device);
     return makeDepthTracker(settings, device);
 }

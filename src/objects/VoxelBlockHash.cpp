@@ -1,14 +1,16 @@
-// Host-side operations of the voxel block hash: construction, insertion, removal, growth.
+// The voxel block hash's storage on its device, its host-side operations, and growth.
 
 #include "voxfuse/objects/VoxelBlockHash.h"
 
 #include <algorithm>
 #include <climits>
 #include <cstring>
+#include <set>
 #include <string>
 
 #include "voxfuse/core/Error.h"
 #include "voxfuse/shared/HashAccess.h"
+#include "voxfuse/shared/HashUpdate.h"
 
 namespace voxfuse {
 namespace {
@@ -26,31 +28,81 @@ void validate(const VoxelBlockHashSettings& s) {
     if (s.blocks_per_growth < 1) fail("blocks per growth must be positive (got " + std::to_string(s.blocks_per_growth) + ")");
 }
 
-Vec3<std::int16_t> toEntryPos(Vec3i block) { return {std::int16_t(block.x), std::int16_t(block.y), std::int16_t(block.z)}; }
-
-Vec3i toBlock(const HashEntry& e) { return {e.pos.x, e.pos.y, e.pos.z}; }
+template <class T>
+void allocateOn(MemoryBlock<T>& block, std::size_t count, Device where) {
+    block.allocate(count, where == Device::CPU, where == Device::CUDA);
+}
 
 }  // namespace
 
-VoxelBlockHash::VoxelBlockHash(const Settings& settings) : settings_(settings) {
+VoxelBlockHash::VoxelBlockHash(const Settings& settings, Device location) : VoxelBlockHash(settings, location, true) {}
+
+VoxelBlockHash::VoxelBlockHash(const Settings& settings, Device location, bool allocate_tables)
+    : settings_(settings), location_(location) {
     validate(settings_);
-    entries_.allocate(std::size_t(settings_.bucket_count) * settings_.entries_per_bucket + settings_.excess_entry_count, true, false);
-    free_excess_.allocate(std::size_t(settings_.excess_entry_count), true, false);
-    free_blocks_.allocate(std::size_t(settings_.max_block_count), true, false);
-    visible_entries_.allocate(std::size_t(settings_.max_block_count), true, false);
+    if (!allocate_tables) return;
+    const std::size_t entries = std::size_t(settings_.bucket_count) * settings_.entries_per_bucket + settings_.excess_entry_count;
+    allocateOn(entries_, entries, location_);
+    allocateOn(entry_visibility_, entries, location_);
+    allocateOn(free_excess_, std::size_t(settings_.excess_entry_count), location_);
+    allocateOn(free_blocks_, std::size_t(settings_.max_block_count), location_);
+    allocateOn(visible_entries_, std::size_t(settings_.max_block_count), location_);
     clearBlocks();
 }
 
+void VoxelBlockHash::moveTo(Device where) {
+    if (where == location_) return;
+    keepOnly(entries_, where);
+    keepOnly(entry_visibility_, where);
+    keepOnly(free_excess_, where);
+    keepOnly(free_blocks_, where);
+    keepOnly(visible_entries_, where);
+    location_ = where;
+}
+
+VoxelBlockHash VoxelBlockHash::copyTo(Device where) const {
+    VoxelBlockHash copy(settings_, where, false);
+    allocateOn(copy.entries_, entries_.size(), where);
+    allocateOn(copy.entry_visibility_, entry_visibility_.size(), where);
+    allocateOn(copy.free_excess_, free_excess_.size(), where);
+    allocateOn(copy.free_blocks_, free_blocks_.size(), where);
+    allocateOn(copy.visible_entries_, visible_entries_.size(), where);
+    copyAcross(copy.entries_, where, entries_, location_);
+    copyAcross(copy.entry_visibility_, where, entry_visibility_, location_);
+    copyAcross(copy.free_excess_, where, free_excess_, location_);
+    copyAcross(copy.free_blocks_, where, free_blocks_, location_);
+    copyAcross(copy.visible_entries_, where, visible_entries_, location_);
+    copy.free_block_count_ = free_block_count_;
+    copy.free_excess_count_ = free_excess_count_;
+    copy.block_capacity_ = block_capacity_;
+    copy.visible_count_ = visible_count_;
+    copy.visible_valid_ = visible_valid_;
+    copy.visible_T_world_camera_ = visible_T_world_camera_;
+    copy.visible_intrinsics_ = visible_intrinsics_;
+    copy.stats_ = stats_;
+    return copy;
+}
+
 VoxelBlockHash::Data VoxelBlockHash::data() const {
-    return Data{entries_.host(), settings_.bucket_count, settings_.entries_per_bucket,
+    return Data{entries_.data(location_), settings_.bucket_count, settings_.entries_per_bucket,
                 settings_.bucket_count * settings_.entries_per_bucket, settings_.excess_entry_count};
 }
 
+HashTableState VoxelBlockHash::state() {
+    return HashTableState{entries_.data(location_),     free_blocks_.data(location_), free_excess_.data(location_),
+                          entry_visibility_.data(location_), entryCount(),            settings_.bucket_count,
+                          settings_.entries_per_bucket, settings_.bucket_count * settings_.entries_per_bucket,
+                          settings_.excess_entry_count};
+}
+
 void VoxelBlockHash::clearBlocks() {
-    entries_.fillHost(HashEntry::empty());
-    // Popped from the top: excess entry 0 and (after growth) block 0 are used first.
+    entries_.fill(location_, HashEntry::empty(), 0, entries_.size());
+    entry_visibility_.fill(location_, kEntryNotVisible, 0, entry_visibility_.size());
+    // Popped from the top: excess entry 0 is used first.
+    std::vector<int> excess(std::size_t(settings_.excess_entry_count));
+    for (int i = 0; i < settings_.excess_entry_count; ++i) excess[std::size_t(i)] = settings_.excess_entry_count - 1 - i;
+    free_excess_.writeRange(location_, 0, excess.data(), excess.size());
     free_excess_count_ = settings_.excess_entry_count;
-    for (int i = 0; i < free_excess_count_; ++i) free_excess_.host()[i] = free_excess_count_ - 1 - i;
     block_capacity_ = 0;
     free_block_count_ = 0;
     visible_count_ = 0;
@@ -64,27 +116,45 @@ bool VoxelBlockHash::growBlockCapacity(int blocks) {
     const long long wanted = std::max<long long>(blocks, (long long)block_capacity_ + step);
     const long long rounded = (wanted + settings_.blocks_per_growth - 1) / settings_.blocks_per_growth * settings_.blocks_per_growth;
     const int capacity = int(std::min<long long>(rounded, settings_.max_block_count));
-    // New blocks go under the free ones already stacked, highest first, so that low indices are used first.
-    int* stack = free_blocks_.host();
+    // The new blocks go on top of the stack, highest first, so that they are taken in ascending order.
     const int added = capacity - block_capacity_;
-    std::memmove(stack + added, stack, std::size_t(free_block_count_) * sizeof(int));
-    for (int i = 0; i < added; ++i) stack[i] = capacity - 1 - i;
+    std::vector<int> fresh(static_cast<std::size_t>(added));
+    for (int i = 0; i < added; ++i) fresh[std::size_t(i)] = capacity - 1 - i;
+    free_blocks_.writeRange(location_, std::size_t(free_block_count_), fresh.data(), fresh.size());
     free_block_count_ += added;
     block_capacity_ = capacity;
     stats_.block_capacity = capacity;
     return true;
 }
 
-int VoxelBlockHash::popFreeBlock() { return free_block_count_ > 0 ? free_blocks_.host()[--free_block_count_] : -1; }
+void VoxelBlockHash::popFreeStacks(int blocks, int excess_entries) {
+    free_block_count_ -= blocks;
+    free_excess_count_ -= excess_entries;
+    if (free_block_count_ < 0 || free_block_count_ > block_capacity_ || free_excess_count_ < 0 ||
+        free_excess_count_ > settings_.excess_entry_count)
+        throw Error("voxel block hash: free stacks out of range after a device update (" + std::to_string(free_block_count_) +
+                    " blocks, " + std::to_string(free_excess_count_) + " excess entries)");
+}
 
-int VoxelBlockHash::popFreeExcessEntry() { return free_excess_count_ > 0 ? free_excess_.host()[--free_excess_count_] : -1; }
+void VoxelBlockHash::requireHost(const char* what) const {
+    if (location_ != Device::CPU)
+        throw DeviceError(std::string("voxel block hash: ") + what + " works on a hash in host memory; this one is on the GPU " +
+                          "(take a host copy with copyTo(Device::CPU))");
+}
+
+const HashEntry& VoxelBlockHash::entry(int i) const {
+    requireHost("entry()");
+    return entries_.host()[i];
+}
 
 int VoxelBlockHash::findEntry(Vec3i block) const {
+    requireHost("findEntry()");
     if (!blockIsAddressable(block)) return -1;
     return findHashEntry(data(), block);
 }
 
 VoxelBlockHash::InsertResult VoxelBlockHash::insert(Vec3i block, int* entry_out) {
+    requireHost("insert()");
     if (!blockIsAddressable(block)) return InsertResult::OutOfRange;
     int target;
     const int found = findHashEntry(data(), block, target);
@@ -92,24 +162,20 @@ VoxelBlockHash::InsertResult VoxelBlockHash::insert(Vec3i block, int* entry_out)
         if (entry_out) *entry_out = found;
         return InsertResult::AlreadyPresent;
     }
-    return insertAt(target, block, entry_out);
-}
-
-VoxelBlockHash::InsertResult VoxelBlockHash::insertAt(int target, Vec3i block, int* entry_out) {
-    if (!blockIsAddressable(block)) return InsertResult::OutOfRange;
     HashEntry* entries = entries_.host();
     const bool into_bucket = target < data().ordered_entry_count && entries[target].ptr == kEntryFree;
     if (free_block_count_ == 0) return InsertResult::NoVoxelBlock;
     if (!into_bucket && free_excess_count_ == 0) return InsertResult::NoHashEntry;
-    const int ptr = popFreeBlock();
+    const Vec3<std::int16_t> pos{std::int16_t(block.x), std::int16_t(block.y), std::int16_t(block.z)};
+    const int ptr = free_blocks_.host()[--free_block_count_];
     int index = target;
     if (into_bucket) {
-        entries[target].pos = toEntryPos(block);  // keeps `next`: a bucket's last entry may carry its chain
+        entries[target].pos = pos;  // keeps `next`: a bucket's last entry may carry its chain
         entries[target].ptr = ptr;
     } else {
-        const int excess = popFreeExcessEntry();
+        const int excess = free_excess_.host()[--free_excess_count_];
         index = data().ordered_entry_count + excess;
-        entries[index] = HashEntry{toEntryPos(block), kEndOfChain, ptr};
+        entries[index] = HashEntry{pos, kEndOfChain, ptr};
         entries[target].next = excess;
     }
     ++stats_.blocks_allocated;
@@ -117,69 +183,64 @@ VoxelBlockHash::InsertResult VoxelBlockHash::insertAt(int target, Vec3i block, i
     return InsertResult::Inserted;
 }
 
-void VoxelBlockHash::removeEntry(int index) {
-    HashEntry* entries = entries_.host();
-    const Data h = data();
-    const HashEntry removed = entries[index];
-    if (removed.ptr >= 0) free_blocks_.host()[free_block_count_++] = removed.ptr;
-    --stats_.blocks_allocated;
-    ++stats_.blocks_removed_total;
-
-    const int first = hashBucket(toBlock(removed), h.bucket_count) * h.entries_per_bucket;
-    const int last = first + h.entries_per_bucket - 1;
-    if (index < h.ordered_entry_count) {
-        const int head = entries[last].next;
-        if (head == kEndOfChain) {
-            entries[index].ptr = kEntryFree;  // `next` stays kEndOfChain
-            return;
-        }
-        // Keep the bucket full while it has a chain: the chain head moves into the freed entry.
-        const HashEntry moved = entries[h.ordered_entry_count + head];
-        entries[index].pos = moved.pos;
-        entries[index].ptr = moved.ptr;
-        entries[last].next = moved.next;
-        entries[h.ordered_entry_count + head] = HashEntry::empty();
-        free_excess_.host()[free_excess_count_++] = head;
-        return;
-    }
-    // An excess entry: unlink it from its predecessor.
-    const int excess = index - h.ordered_entry_count;
-    int prev = last;
-    while (entries[prev].next != excess) prev = h.ordered_entry_count + entries[prev].next;
-    entries[prev].next = removed.next;
-    entries[index] = HashEntry::empty();
-    free_excess_.host()[free_excess_count_++] = excess;
-}
-
 int VoxelBlockHash::removeBlocks(const std::vector<Vec3i>& blocks) {
-    // Removal moves entries, so the visible list is kept as block positions meanwhile.
-    std::vector<Vec3i> visible(static_cast<std::size_t>(visible_count_));
-    for (int i = 0; i < visible_count_; ++i) visible[std::size_t(i)] = toBlock(entry(visible_entries_.host()[i]));
-
+    requireHost("removeBlocks()");
+    std::vector<std::uint8_t> remove(entries_.size(), 0);
+    std::set<int> buckets;
     int removed = 0;
     for (const Vec3i& b : blocks) {
         const int e = findEntry(b);
-        if (e < 0) continue;
-        removeEntry(e);
+        if (e < 0 || entries_.host()[e].ptr < 0 || remove[std::size_t(e)]) continue;
+        remove[std::size_t(e)] = 1;
+        buckets.insert(hashBucket(b, settings_.bucket_count));
         ++removed;
     }
-    int kept = 0;
-    for (const Vec3i& b : visible) {
-        const int e = findEntry(b);
-        if (e >= 0 && entry(e).ptr >= 0) visible_entries_.host()[kept++] = e;
+    // The parallel removal's two passes, bucket by bucket: count, then remove at the running offsets.
+    std::vector<int> freed_blocks(std::size_t(settings_.bucket_count), 0), freed_excess(std::size_t(settings_.bucket_count), 0);
+    BucketRemoval r{state(), remove.data(), freed_blocks.data(), freed_excess.data(), free_block_count_, free_excess_count_};
+    int block_offset = 0, excess_offset = 0;
+    for (int bucket : buckets) {
+        CountBucketRemovals{r}(bucket);
+        const int blocks_here = freed_blocks[std::size_t(bucket)], excess_here = freed_excess[std::size_t(bucket)];
+        freed_blocks[std::size_t(bucket)] = block_offset;
+        freed_excess[std::size_t(bucket)] = excess_offset;
+        RemoveBucketEntries{r}(bucket);
+        block_offset += blocks_here;
+        excess_offset += excess_here;
     }
-    visible_count_ = kept;
-    stats_.visible_blocks = kept;
+    popFreeStacks(-block_offset, -excess_offset);
+    stats_.blocks_allocated -= removed;
+    stats_.blocks_removed_total += removed;
+
+    // The visible list: the entries still marked visible (removal moved marks with their entries).
+    std::vector<int> visible;
+    for (int i = 0; i < entryCount(); ++i)
+        if (entry_visibility_.host()[i] == kEntryVisible) visible.push_back(i);
+    std::copy(visible.begin(), visible.end(), visible_entries_.host());
+    setVisibleCount(int(visible.size()));
     return removed;
 }
 
 void VoxelBlockHash::setVisibleEntries(const std::vector<int>& entries, const Mat4f& T_world_camera, const Intrinsics& intrinsics) {
-    visible_count_ = int(std::min<std::size_t>(entries.size(), visible_entries_.size()));
-    std::copy(entries.begin(), entries.begin() + visible_count_, visible_entries_.host());
+    requireHost("setVisibleEntries()");
+    const int count = int(std::min<std::size_t>(entries.size(), visible_entries_.size()));
+    std::fill(entry_visibility_.host(), entry_visibility_.host() + entry_visibility_.size(), kEntryNotVisible);
+    for (int k = 0; k < count; ++k) entry_visibility_.host()[entries[std::size_t(k)]] = kEntryVisible;
+    std::copy(entries.begin(), entries.begin() + count, visible_entries_.host());
+    setVisibleListFor(count, T_world_camera, intrinsics);
+}
+
+void VoxelBlockHash::setVisibleListFor(int count, const Mat4f& T_world_camera, const Intrinsics& intrinsics) {
+    visible_count_ = count;
     visible_valid_ = true;
     visible_T_world_camera_ = T_world_camera;
     visible_intrinsics_ = intrinsics;
     stats_.visible_blocks = visible_count_;
+}
+
+void VoxelBlockHash::setVisibleCount(int count) {
+    visible_count_ = count;
+    stats_.visible_blocks = count;
 }
 
 bool VoxelBlockHash::visibleListIsFor(const Mat4f& T_world_camera, const Intrinsics& intrinsics) const {

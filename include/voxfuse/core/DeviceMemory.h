@@ -21,10 +21,19 @@ bool cudaAvailable();
 std::string cudaDescription();
 void* allocate(std::size_t bytes);
 void release(void* ptr) noexcept;
+// Page-locked host memory: transfers from and to it run at full bus speed and without a hidden
+// staging copy. Returns nullptr where there is no usable GPU (callers fall back to ordinary memory).
+void* allocatePinned(std::size_t bytes) noexcept;
+void releasePinned(void* ptr) noexcept;
 void copyHostToDevice(void* dst_device, const void* src_host, std::size_t bytes);
 void copyDeviceToHost(void* dst_host, const void* src_device, std::size_t bytes);
 void copyDeviceToDevice(void* dst_device, const void* src_device, std::size_t bytes);
 void fill(void* dst_device, int byte_value, std::size_t bytes);
+// Writes `count` copies of the `pattern_bytes`-byte value at `pattern` (host memory, at most 64 bytes)
+// to consecutive elements at dst_device.
+void fillPattern(void* dst_device, const void* pattern, std::size_t pattern_bytes, std::size_t count);
+// Waits for all work queued on the GPU; reports a fault of an earlier kernel as DeviceError.
+void synchronize();
 }  // namespace device_memory
 
 }  // namespace voxfuse

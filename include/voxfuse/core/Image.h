@@ -10,11 +10,14 @@ template <typename T>
 class Image {
 public:
     Image() = default;
-    Image(Vec2i size, bool on_host = true, bool on_device = false) { resize(size, on_host, on_device); }
+    Image(Vec2i size, bool on_host = true, bool on_device = false, HostMemory host_kind = HostMemory::Pageable) {
+        resize(size, on_host, on_device, host_kind);
+    }
 
-    void resize(Vec2i size, bool on_host = true, bool on_device = false) {
+    // Contents are lost unless the size and locations already match.
+    void resize(Vec2i size, bool on_host = true, bool on_device = false, HostMemory host_kind = HostMemory::Pageable) {
         size_ = size;
-        memory_.allocate(std::size_t(size.x) * std::size_t(size.y), on_host, on_device);
+        memory_.allocate(std::size_t(size.x) * std::size_t(size.y), on_host, on_device, host_kind);
     }
     Vec2i size() const { return size_; }
     int width() const { return size_.x; }

@@ -4,17 +4,20 @@
 //   1. per depth pixel, walk the segment [d - mu, d + mu] through block space and mark each block as
 //      visible (allocated) or to be allocated (plain writes, no critical sections: of two new blocks that
 //      want the same hash entry in one frame only one is marked);
-//   2. allocate the marked blocks from the free stacks (ordered bucket entry if free, else excess list),
-//      growing the voxel block array first when it needs more blocks; the CPU layer then also inserts
-//      the blocks that lost such a collision (the report leaves them to the next frame);
+//   2. allocate the missing blocks from the free stacks (ordered bucket entry if free, else excess list),
+//      growing the voxel block array first when it needs more blocks. Unlike the report, which leaves
+//      a block that lost an intra-frame collision (two new blocks, one insertion target) to the next
+//      frame, every missing block is inserted in the frame that needs it: insertion runs in rounds, one
+//      block per target and round (shared/HashUpdate.h);
 //   3. build the visible list: blocks marked in stage 1 or 2, plus previously visible blocks that are
 //      still in the view frustum. Integration updates exactly these blocks.
-// A full table or block array is counted in AllocationStats, never silent. The dense index needs no
-// allocation: its engine does nothing, so that the main engine runs one pipeline for both.
-// Device layers: src/cpu/AllocationEngine_CPU.cpp; per-pixel work in shared/Allocation.h.
+// A full table or block array is counted in AllocationStats, never silent. For the same frames the CPU
+// and CUDA layers build the same table, entry for entry. The dense index needs no allocation: its
+// engine does nothing, so that the main engine runs one pipeline for both.
+// Stages: src/engines/AllocationEngine_Impl.h, run by src/cpu/AllocationEngine_CPU.cpp and
+// cuda/AllocationEngine_CUDA.cu; per-element work in shared/Allocation.h and shared/HashUpdate.h.
 
 #include <memory>
-#include <type_traits>
 
 #include "voxfuse/core/DeviceMemory.h"
 #include "voxfuse/core/Error.h"
@@ -52,14 +55,15 @@ namespace cpu {
 template <class TVoxel, class TIndex>
 std::unique_ptr<AllocationEngine<TVoxel, TIndex>> makeAllocationEngine();
 }
+namespace cuda {
+template <class TVoxel, class TIndex>
+std::unique_ptr<AllocationEngine<TVoxel, TIndex>> makeAllocationEngine();
+}
 
-// The dense engine does nothing and serves every device. The hash has no CUDA layer yet: asking for
-// one throws DeviceError.
+// The engine of `device` for scenes on that device; DeviceError in a build without CUDA.
 template <class TVoxel, class TIndex>
 std::unique_ptr<AllocationEngine<TVoxel, TIndex>> makeAllocationEngine(Device device) {
-    if (!std::is_same<TIndex, PlainVoxelArray>::value && device != Device::CPU)
-        throw DeviceError("the hash allocation engine has no CUDA layer yet: use the CPU device");
-    return cpu::makeAllocationEngine<TVoxel, TIndex>();
+    return device == Device::CPU ? cpu::makeAllocationEngine<TVoxel, TIndex>() : cuda::makeAllocationEngine<TVoxel, TIndex>();
 }
 
 }  // namespace voxfuse

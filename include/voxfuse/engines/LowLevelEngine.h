@@ -6,6 +6,7 @@
 #include <memory>
 
 #include "voxfuse/core/DeviceMemory.h"
+#include "voxfuse/core/Error.h"
 #include "voxfuse/core/Image.h"
 #include "voxfuse/objects/RGBDCalib.h"
 
@@ -34,9 +35,9 @@ namespace cpu {
 std::unique_ptr<LowLevelEngine> makeLowLevelEngine();
 }
 
+// The engine of `device`. Low-level processing has no CUDA layer yet: Device::CUDA throws DeviceError.
 inline std::unique_ptr<LowLevelEngine> makeLowLevelEngine(Device device) {
-    // The CUDA pipeline keeps low-level processing on the CPU until its kernels land.
-    (void)device;
+    if (device != Device::CPU) throw DeviceError("low-level image processing has no CUDA layer yet: use Device::CPU");
     return cpu::makeLowLevelEngine();
 }
 

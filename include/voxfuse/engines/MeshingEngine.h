@@ -34,7 +34,8 @@ template <class TVoxel, class TIndex>
 class MeshingEngine {
 public:
     virtual ~MeshingEngine() = default;
-    // Replaces `mesh` with the scene's surface. Reads the host copy of the voxels.
+    // Replaces `mesh` with the scene's surface. The scene must live on the engine's device (a map on the
+    // GPU is meshed from a host copy: Scene::copyTo(Device::CPU)).
     virtual void extractMesh(const Scene<TVoxel, TIndex>& scene, Mesh& mesh) = 0;
     // Replaces `cloud` with the vertices of extractMesh() (points, normals, colours, classes) without
     // building the triangles: one point per zero-crossing voxel edge.

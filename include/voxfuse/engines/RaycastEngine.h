@@ -7,16 +7,9 @@
 #include "voxfuse/core/DeviceMemory.h"
 #include "voxfuse/objects/RenderState.h"
 #include "voxfuse/objects/Scene.h"
+#include "voxfuse/shared/Render.h"  // RenderMode
 
 namespace voxfuse {
-
-enum class RenderMode {
-    Shaded,   // Lambertian, light at the camera
-    Color,    // fused voxel colours (grey shading for voxel types without colour)
-    Normals,  // world normal mapped to RGB
-    Depth,    // distance along the optical axis, colour-mapped
-    Class     // semantic class colours, shaded (grey shading for voxel types without labels)
-};
 
 template <class TVoxel, class TIndex>
 class RaycastEngine {
@@ -37,12 +30,15 @@ namespace cpu {
 template <class TVoxel, class TIndex>
 std::unique_ptr<RaycastEngine<TVoxel, TIndex>> makeRaycastEngine();
 }
+namespace cuda {
+template <class TVoxel, class TIndex>
+std::unique_ptr<RaycastEngine<TVoxel, TIndex>> makeRaycastEngine();
+}
 
+// The engine of `device` for scenes on that device; DeviceError in a build without CUDA.
 template <class TVoxel, class TIndex>
 std::unique_ptr<RaycastEngine<TVoxel, TIndex>> makeRaycastEngine(Device device) {
-    // Raycasting runs on the CPU for every device until its CUDA kernel lands.
-    (void)device;
-    return cpu::makeRaycastEngine<TVoxel, TIndex>();
+    return device == Device::CPU ? cpu::makeRaycastEngine<TVoxel, TIndex>() : cuda::makeRaycastEngine<TVoxel, TIndex>();
 }
 
 }  // namespace voxfuse

@@ -50,7 +50,7 @@ public:
 };
 
 // The tracker `settings.kind` asks for (validated first: ConfigError when a setting is out of range).
-// Every tracker runs on the CPU for now; Device::CUDA gets the CPU implementation.
+// The trackers have no CUDA layer yet: Device::CUDA throws DeviceError.
 std::unique_ptr<Tracker> makeTracker(const TrackerSettings& settings, Device device);
 
 // True when `model` holds a surface point and point/normal images of its camera's size: something

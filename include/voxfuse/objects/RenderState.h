@@ -14,11 +14,20 @@ struct RenderState {
     Image<Vec4f> normals_world;  // unit normal per pixel (w = 1 when valid)
     Image<Vec2f> depth_range;    // per-pixel [min, max] search range along z, metres
 
-    void resize(const Intrinsics& intr) {
+    // Sizes the images for `intr` on `where` (the raycast engine's device). On the GPU, points and
+    // normals get pinned host memory for the copies the CPU-side tracker reads every frame.
+    void resize(const Intrinsics& intr, Device where = Device::CPU) {
         intrinsics = intr;
-        points_world.resize(intr.size());
-        normals_world.resize(intr.size());
-        depth_range.resize(intr.size());
+        const bool host = where == Device::CPU, device = where == Device::CUDA;
+        const HostMemory kind = device ? HostMemory::Pinned : HostMemory::Pageable;
+        points_world.resize(intr.size(), host, device, kind);
+        normals_world.resize(intr.size(), host, device, kind);
+        depth_range.resize(intr.size(), host, device);
+    }
+    // Brings the host copies of points and normals up to date (after a raycast on the GPU).
+    void updateHost() {
+        points_world.memory().updateHost();
+        normals_world.memory().updateHost();
     }
 };
 

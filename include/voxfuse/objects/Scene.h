@@ -1,9 +1,12 @@
 #pragma once
-// The map: voxel storage addressed through an index, plus the settings it was built with.
+// The map: voxel storage addressed through an index, plus the settings it was built with. A scene
+// lives on one device (location()): on the GPU its voxels and its hash table are in GPU memory only,
+// with no host mirror to go stale. copyTo() makes an independent copy on another device (e.g. a host
+// snapshot to write a mesh from, or to compare the two devices in a test).
 
 #include <algorithm>
 #include <cstdint>
-#include <cstring>
+#include <type_traits>
 #include <utility>
 
 #include "voxfuse/core/DeviceMemory.h"
@@ -12,29 +15,46 @@
 
 namespace voxfuse {
 
+class VoxelBlockHash;
+
 template <class TVoxel, class TIndex>
 class Scene {
 public:
     using Voxel = TVoxel;
     using Index = TIndex;
 
-    // Allocates the voxel storage the index asks for, where `location` says, and sets every voxel to
-    // TVoxel::initial(). The index is moved in (the hash index owns large tables and is not copyable).
+    // Allocates the voxel storage the index asks for on `location` (moving the index there too) and sets
+    // every voxel to TVoxel::initial(). The index is moved in (the hash owns large tables).
     Scene(const SceneParams& params, TIndex index, Device location)
         : params_(params), index_(std::move(index)), location_(location) {
+        if constexpr (std::is_same<TIndex, VoxelBlockHash>::value) index_.moveTo(location_);
         resizeVoxelStorage(index_.voxelCount());
     }
+    Scene(Scene&&) = default;
+    Scene& operator=(Scene&&) = default;
 
     const SceneParams& params() const { return params_; }
     TIndex& index() { return index_; }
     const TIndex& index() const { return index_; }
+    // The voxels, on location() only.
     MemoryBlock<TVoxel>& voxels() { return voxels_; }
     const MemoryBlock<TVoxel>& voxels() const { return voxels_; }
-    // Where the authoritative copy lives (engines of the other device must copy explicitly).
+    TVoxel* voxelData() { return voxels_.data(location_); }
+    const TVoxel* voxelData() const { return voxels_.data(location_); }
+    // Where the scene lives; engines of another device refuse it.
     Device location() const { return location_; }
     // Each call of an integration engine takes the next number (from 0). Label fusion draws its random
     // numbers from it: they differ from frame to frame whatever indices the caller gives its frames.
     std::uint32_t takeIntegrationNumber() { return integrations_++; }
+
+    // An independent copy of the whole scene (index, voxels, integration count) on `where`.
+    Scene copyTo(Device where) const {
+        Scene copy(params_, copyIndex(where), where, NoVoxels{});
+        copy.voxels_.allocate(voxels_.size(), where == Device::CPU, where == Device::CUDA);
+        copyAcross(copy.voxels_, where, voxels_, location_);
+        copy.integrations_ = integrations_;
+        return copy;
+    }
 
     // ---- Indexes whose storage grows (VoxelBlockHash); not instantiated for the others ----
 
@@ -53,18 +73,22 @@ public:
     }
 
 private:
-    // Reallocates the voxels (host, plus device for a CUDA scene) to `count`, keeping the first
-    // min(count, old size) and setting the rest to TVoxel::initial().
+    struct NoVoxels {};
+    Scene(const SceneParams& params, TIndex index, Device location, NoVoxels)
+        : params_(params), index_(std::move(index)), location_(location) {}
+
+    TIndex copyIndex(Device where) const {
+        if constexpr (std::is_same<TIndex, VoxelBlockHash>::value) return index_.copyTo(where);
+        else return index_;
+    }
+
+    // Reallocates the voxels on location() to `count`, keeping the first min(count, old size) and
+    // setting the rest to TVoxel::initial().
     void resizeVoxelStorage(std::size_t count) {
-        const bool on_device = location_ == Device::CUDA;
-        MemoryBlock<TVoxel> resized(count, true, on_device);
+        MemoryBlock<TVoxel> resized(count, location_ == Device::CPU, location_ == Device::CUDA);
         const std::size_t kept = std::min(count, voxels_.size());
-        if (kept) std::memcpy(static_cast<void*>(resized.host()), voxels_.host(), kept * sizeof(TVoxel));
-        std::fill(resized.host() + kept, resized.host() + count, TVoxel::initial());
-        if (on_device && count > 0) {
-            if (kept) device_memory::copyDeviceToDevice(resized.device(), voxels_.device(), kept * sizeof(TVoxel));
-            device_memory::copyHostToDevice(resized.device() + kept, resized.host() + kept, (count - kept) * sizeof(TVoxel));
-        }
+        resized.copyRangeFrom(location_, voxels_, 0, 0, kept);
+        resized.fill(location_, TVoxel::initial(), kept, count - kept);
         voxels_ = std::move(resized);
     }
 

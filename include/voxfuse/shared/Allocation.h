@@ -8,9 +8,15 @@
 // between those depths. Stage 1 samples that segment and visits every block holding a voxel centre
 // within (half a pixel + half a sample spacing) of a sample, so no block such a voxel lies in is missed.
 
+#include <cstdint>
+
+#include "voxfuse/core/Atomics.h"
 #include "voxfuse/core/Math.h"
+#include "voxfuse/objects/HashTableTypes.h"
 #include "voxfuse/objects/Intrinsics.h"
-#include "voxfuse/objects/VoxelBlockHash.h"
+#include "voxfuse/shared/BlockProjection.h"
+#include "voxfuse/shared/HashAccess.h"
+#include "voxfuse/shared/HashUpdate.h"
 
 namespace voxfuse {
 
@@ -73,6 +79,95 @@ VF_HOST_DEVICE inline void forEachBlockOnDepthSegment(const DepthSegmentFrame& f
     }
 }
 
+// Blocks visited recently by one loop element (direct-mapped, `Slots` a power of two): neighbouring
+// pixels mostly need the same blocks, and a block looked up once need not be looked up again.
+template <int Slots>
+struct RecentBlocks {
+    Vec3i slots[Slots];
+    VF_HOST_DEVICE RecentBlocks() {
+        for (int i = 0; i < Slots; ++i) slots[i] = Vec3i{-0x7fffffff, 0, 0};  // no block has x = -2^31 + 1
+    }
+    // True when `b` was visited already; remembers it otherwise.
+    VF_HOST_DEVICE bool checkAndRemember(Vec3i b) {
+        Vec3i& slot = slots[(unsigned(b.x) * 73856093u ^ unsigned(b.y) * 19349669u ^ unsigned(b.z) * 83492791u) & unsigned(Slots - 1)];
+        if (slot == b) return true;
+        slot = b;
+        return false;
+    }
+};
+
+// Allocation stage 1 for a run of `span` pixels of one row (element e: row e / spans_per_row): each block
+// the pixels need is marked seen when the hash has it, or its key is appended to the missing list
+// (every block outside the storable coordinates as kOutOfRangeBlockKey). The list may get a block more
+// than once; appends beyond its capacity are counted but not stored (the caller repeats the pass).
+// `RecentSlots` sizes the cache of blocks already handled within the run: the CPU layer runs whole rows
+// with a large cache, the CUDA layer single pixels.
+template <int RecentSlots>
+struct MarkBlocksForPixels {
+    DepthSegmentFrame frame;          // depth on the layer's device
+    HashTableView table;
+    std::uint8_t* entry_visibility;
+    std::uint64_t* missing;
+    int* missing_count;               // appends attempted (may exceed the capacity)
+    int missing_capacity;
+    int span;                         // pixels per element
+
+    VF_HOST_DEVICE int elementCount() const {
+        return ((frame.intrinsics.width + span - 1) / span) * frame.intrinsics.height;
+    }
+    VF_HOST_DEVICE void operator()(int element) const {
+        const int spans_per_row = (frame.intrinsics.width + span - 1) / span;
+        const int y = element / spans_per_row, x0 = (element % spans_per_row) * span;
+        const int x1 = x0 + span < frame.intrinsics.width ? x0 + span : frame.intrinsics.width;
+        RecentBlocks<RecentSlots> recent;
+        auto mark = [&](Vec3i block) {
+            if (recent.checkAndRemember(block)) return;
+            const int entry = blockIsAddressable(block) ? findHashEntry(table, block) : -1;
+            if (entry >= 0) {
+                racingStore(&entry_visibility[entry], kEntrySeenThisFrame);
+                return;
+            }
+            const int slot = atomicAddInt(missing_count, 1);
+            if (slot < missing_capacity) missing[slot] = blockKey(block);
+        };
+        for (int x = x0; x < x1; ++x) forEachBlockOnDepthSegment(frame, x, y, mark);
+    }
+};
+
+// Allocation stage 3, per hash entry: blocks seen this frame become visible; blocks visible before stay
+// while their box is in the view frustum; everything else (and every entry without a block) is not.
+struct UpdateEntryVisibility {
+    HashTableState table;
+    BlockProjection projection;  // the live view
+    VF_HOST_DEVICE void operator()(int i) const {
+        const std::uint8_t mark = table.entry_visibility[i];
+        if (mark == kEntryNotVisible) return;
+        const HashEntry& e = table.entries[i];
+        bool visible = e.ptr >= 0;
+        if (visible && mark == kEntryVisible) {
+            Vec2f lo, hi;
+            float z_min, z_max;
+            visible = projectBlockBox({e.pos.x, e.pos.y, e.pos.z}, 0.5f, projection, lo, hi, z_min, z_max);
+        }
+        table.entry_visibility[i] = visible ? kEntryVisible : kEntryNotVisible;
+    }
+};
+
+// Selects the visible entries (for the launchers' selectIndices).
+struct EntryIsVisible {
+    const std::uint8_t* entry_visibility;
+    VF_HOST_DEVICE bool operator()(int i) const { return entry_visibility[i] == kEntryVisible; }
+};
+
+// Blocks come off the free stack with old contents (removal does not clear them): element i resets
+// voxel i % 512 of block ptrs[i / 512].
+template <class TVoxel>
+struct ResetVoxelBlocks {
+    TVoxel* voxels;
+    const int* ptrs;
+    VF_HOST_DEVICE void operator()(int i) const { voxels[(long long)ptrs[i / kBlockVoxelCount] * kBlockVoxelCount + i % kBlockVoxelCount] = TVoxel::initial(); }
+};
+
 // Block removal: a block holds information while one of its voxels has a depth observation.
 template <class TVoxel>
 VF_HOST_DEVICE inline bool blockIsEmpty(const TVoxel* block_voxels) {
@@ -80,5 +175,17 @@ VF_HOST_DEVICE inline bool blockIsEmpty(const TVoxel* block_voxels) {
         if (block_voxels[i].w_depth > 0) return false;
     return true;
 }
+
+// Per entry: remove[i] = 1 for an allocated block that is empty.
+template <class TVoxel>
+struct MarkEmptyBlocks {
+    const HashEntry* entries;
+    const TVoxel* voxels;
+    std::uint8_t* remove;
+    VF_HOST_DEVICE void operator()(int i) const {
+        const int ptr = entries[i].ptr;
+        remove[i] = ptr >= 0 && blockIsEmpty(voxels + (long long)ptr * kBlockVoxelCount) ? 1 : 0;
+    }
+};
 
 }  // namespace voxfuse

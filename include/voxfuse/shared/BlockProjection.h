@@ -4,7 +4,7 @@
 
 #include "voxfuse/core/Math.h"
 #include "voxfuse/objects/Intrinsics.h"
-#include "voxfuse/objects/VoxelBlockHash.h"
+#include "voxfuse/objects/HashTableTypes.h"
 
 namespace voxfuse {
 

@@ -2,7 +2,7 @@
 // Finding voxels through the voxel block hash, one element at a time (CPU loops and CUDA kernels alike).
 
 #include "voxfuse/core/Math.h"
-#include "voxfuse/objects/VoxelBlockHash.h"
+#include "voxfuse/objects/HashTableTypes.h"
 
 namespace voxfuse {
 
@@ -32,7 +32,7 @@ VF_HOST_DEVICE inline bool entryHolds(const HashEntry& e, Vec3i block) {
 // Entry index of `block` (allocated or swapped out), or -1. Also reports where an insertion of an absent
 // block must go: the first free ordered entry of its bucket, or else the last entry of the bucket's chain
 // (a new excess entry is linked after it).
-VF_HOST_DEVICE inline int findHashEntry(const VoxelBlockHash::Data& h, Vec3i block, int& insert_target) {
+VF_HOST_DEVICE inline int findHashEntry(const HashTableView& h, Vec3i block, int& insert_target) {
     const int first = hashBucket(block, h.bucket_count) * h.entries_per_bucket;
     insert_target = -1;
     for (int k = 0; k < h.entries_per_bucket; ++k) {
@@ -51,13 +51,13 @@ VF_HOST_DEVICE inline int findHashEntry(const VoxelBlockHash::Data& h, Vec3i blo
     return -1;
 }
 
-VF_HOST_DEVICE inline int findHashEntry(const VoxelBlockHash::Data& h, Vec3i block) {
+VF_HOST_DEVICE inline int findHashEntry(const HashTableView& h, Vec3i block) {
     int unused;
     return findHashEntry(h, block, unused);
 }
 
 // Voxel block index of `block`, or -1 when it has none in the voxel array.
-VF_HOST_DEVICE inline int findVoxelBlock(const VoxelBlockHash::Data& h, Vec3i block) {
+VF_HOST_DEVICE inline int findVoxelBlock(const HashTableView& h, Vec3i block) {
     if (!blockIsAddressable(block)) return -1;
     const int e = findHashEntry(h, block);
     return e >= 0 && h.entries[e].ptr >= 0 ? h.entries[e].ptr : -1;
@@ -65,7 +65,7 @@ VF_HOST_DEVICE inline int findVoxelBlock(const VoxelBlockHash::Data& h, Vec3i bl
 
 // `found` is false where no block is allocated (the returned voxel is then TVoxel::initial()).
 template <class TVoxel>
-VF_HOST_DEVICE inline TVoxel readVoxel(const TVoxel* voxels, const VoxelBlockHash::Data& h, Vec3i p, bool& found) {
+VF_HOST_DEVICE inline TVoxel readVoxel(const TVoxel* voxels, const HashTableView& h, Vec3i p, bool& found) {
     const int ptr = findVoxelBlock(h, blockOfVoxel(p));
     found = ptr >= 0;
     return found ? voxels[ptr * kBlockVoxelCount + voxelIndexInBlock(p)] : TVoxel::initial();
@@ -75,11 +75,11 @@ VF_HOST_DEVICE inline TVoxel readVoxel(const TVoxel* voxels, const VoxelBlockHas
 // of consecutive ray steps mostly fall in one block. One per thread (or ray); the table must not change
 // while it is in use. Works with every reader of shared/VoxelAccess.h.
 struct CachedHashView {
-    VoxelBlockHash::Data hash;
+    HashTableView hash;
     mutable Vec3i last_block;
     mutable int last_ptr;
 
-    VF_HOST_DEVICE explicit CachedHashView(const VoxelBlockHash::Data& h)
+    VF_HOST_DEVICE explicit CachedHashView(const HashTableView& h)
         : hash(h), last_block{-0x7fffffff, 0, 0}, last_ptr(-1) {}  // no voxel lies in block x = -2^31 + 1
 
     VF_HOST_DEVICE int voxelBlock(Vec3i block) const {

@@ -3,7 +3,9 @@
 // as in section 4.3 of the InfiniTAM report, shared by the CPU loop and the CUDA kernel.
 
 #include "voxfuse/core/Math.h"
+#include "voxfuse/objects/HashTableTypes.h"
 #include "voxfuse/objects/Intrinsics.h"
+#include "voxfuse/objects/PlainVoxelArray.h"
 #include "voxfuse/shared/LabelFusion.h"
 
 namespace voxfuse {
@@ -123,5 +125,67 @@ VF_HOST_DEVICE inline float integrateVoxel(TVoxel& voxel, Vec3i pos, const Integ
     }
     return eta;
 }
+
+// ---- Loop bodies of the device layers ----
+
+// The voxel block hash: element i updates `VoxelsPerElement` consecutive voxels (a divisor of 512) of
+// the visible blocks, taken in visible-list order: the CPU layer runs whole blocks (the block's entry
+// is read once), the CUDA layer a voxel per thread.
+template <class TVoxel, int VoxelsPerElement>
+struct IntegrateHashVoxels {
+    static_assert(kBlockVoxelCount % VoxelsPerElement == 0, "elements must not straddle blocks");
+    static constexpr int kElementsPerBlock = kBlockVoxelCount / VoxelsPerElement;
+    TVoxel* voxels;
+    const HashEntry* entries;
+    const int* visible_entries;
+    IntegrationFrame frame;
+
+    static int elementCount(int visible_blocks) { return visible_blocks * kElementsPerBlock; }
+    VF_HOST_DEVICE void operator()(int i) const {
+        const HashEntry& e = entries[visible_entries[i / kElementsPerBlock]];
+        TVoxel* block = voxels + (long long)e.ptr * kBlockVoxelCount;
+        const Vec3i corner{e.pos.x * kBlockSide, e.pos.y * kBlockSide, e.pos.z * kBlockSide};
+        const int first = (i % kElementsPerBlock) * VoxelsPerElement;
+        for (int v = first; v < first + VoxelsPerElement; ++v)
+            integrateVoxel(block[v], corner + Vec3i{v & 7, (v >> 3) & 7, v >> 6}, frame);
+    }
+};
+
+// The dense array, one voxel per element: element i is voxel i of the box [lo, lo + box) of array
+// coordinates (x fastest) starting at box slice `z_first`. For the GPU (neighbouring threads,
+// neighbouring voxels).
+template <class TVoxel>
+struct IntegrateDenseVoxel {
+    TVoxel* voxels;
+    PlainVoxelArray::Data index;
+    Vec3i lo, box;
+    int z_first;
+    IntegrationFrame frame;
+    VF_HOST_DEVICE void operator()(int i) const {
+        const int x = lo.x + i % box.x, y = lo.y + (i / box.x) % box.y, z = lo.z + z_first + i / (box.x * box.y);
+        integrateVoxel(voxels[x + (long long)index.size.x * (y + (long long)index.size.y * z)], Vec3i{x, y, z} + index.offset, frame);
+    }
+};
+
+// The dense array, one x-row of the box per element, clipped to the frustum first (frustumRowRange):
+// for the CPU, where skipping the voxels outside the frustum is what pays.
+template <class TVoxel>
+struct IntegrateDenseRow {
+    TVoxel* voxels;
+    PlainVoxelArray::Data index;
+    Vec3i lo, hi;
+    float far_m;
+    IntegrationFrame frame;
+    VF_HOST_DEVICE void operator()(int row) const {
+        const int y = lo.y + row % (hi.y - lo.y), z = lo.z + row / (hi.y - lo.y);
+        TVoxel* line = voxels + (long long)index.size.x * (y + (long long)index.size.y * z);
+        int x_begin = lo.x, x_end = hi.x;
+        const Vec3f row_origin = toFloat(Vec3i{0, y, z} + index.offset) * frame.voxel_size_m;
+        if (!frustumRowRange(frame, row_origin, Vec3f{frame.voxel_size_m, 0.f, 0.f}, frame.near_m, far_m, x_begin, x_end)) return;
+        x_begin = x_begin > lo.x ? x_begin : lo.x;
+        x_end = x_end < hi.x ? x_end : hi.x;
+        for (int x = x_begin; x < x_end; ++x) integrateVoxel(line[x], Vec3i{x, y, z} + index.offset, frame);
+    }
+};
 
 }  // namespace voxfuse

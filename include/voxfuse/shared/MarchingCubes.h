@@ -138,8 +138,20 @@ constexpr MarchingCubesTable build() {
 
 }  // namespace marching_cubes_detail
 
-// The table, derived at compile time (host memory: a CUDA layer copies it to constant memory).
+// The table, derived at compile time: host code reads kMarchingCubesTable, device code a copy in
+// constant memory; marchingCubesTable() picks the right one for either.
 inline constexpr MarchingCubesTable kMarchingCubesTable = marching_cubes_detail::build();
+#if defined(__CUDACC__)
+static __constant__ MarchingCubesTable kMarchingCubesTableDevice = marching_cubes_detail::build();
+#endif
+
+VF_HOST_DEVICE inline const MarchingCubesTable& marchingCubesTable() {
+#if defined(__CUDA_ARCH__)
+    return kMarchingCubesTableDevice;
+#else
+    return kMarchingCubesTable;
+#endif
+}
 
 // Corners are inside (the case bit is set) where the SDF is negative; zero counts as outside, as it
 // does for the raycast's front-to-back crossing.

@@ -3,8 +3,11 @@
 // allows (never shorter than a voxel), a trilinear refinement at the zero crossing, and no surface
 // reported where a ray enters the band from behind (the report's WRONG_SIDE case).
 
+#include "voxfuse/core/Atomics.h"
 #include "voxfuse/core/Math.h"
+#include "voxfuse/objects/HashTableTypes.h"
 #include "voxfuse/objects/Intrinsics.h"
+#include "voxfuse/shared/BlockProjection.h"
 #include "voxfuse/shared/VoxelAccess.h"
 
 namespace voxfuse {
@@ -175,5 +178,183 @@ VF_HOST_DEVICE inline unsigned char shadeIntensity(Vec3f normal, Vec3f to_camera
     const float i = 0.2f + 0.8f * (lambert > 0.f ? lambert : 0.f);
     return (unsigned char)(255.f * i);
 }
+
+// ---- Loop bodies of the device layers ----
+
+// The camera rays are cast from, and the march's constants (trivially copyable).
+struct RaycastCamera {
+    Intrinsics intrinsics;
+    Mat4f T_world_camera;
+    Vec3f origin_grid;     // camera centre in grid units
+    float inv_voxel_size;  // 1 / voxel size (grid units per metre)
+    float step_scale;      // mu in voxels: the longest step an SDF value allows
+    float voxel_size_m;
+    float min_depth_m, max_depth_m;  // depth slab searched along the optical axis
+
+    // Pixel (x, y)'s ray in world grid units (unit direction) and the ray parameter per metre of depth.
+    VF_HOST_DEVICE Vec3f rayThroughPixel(int x, int y, float& t_per_depth) const {
+        float distance_per_depth;
+        const Vec3f dir = transformDirection(T_world_camera, pixelRayDirection(intrinsics, float(x), float(y), distance_per_depth));
+        t_per_depth = distance_per_depth * inv_voxel_size;
+        return dir;
+    }
+};
+
+// The dense array, one pixel per element: the ray clipped to the array, then castRay().
+template <class TVoxel>
+struct RaycastDensePixel {
+    const TVoxel* voxels;
+    PlainVoxelArray::Data index;
+    RaycastCamera camera;
+    Vec4f* points_world;
+    Vec4f* normals_world;
+    Vec2f* depth_range;  // set to the whole slab: the dense raycast searches all of it
+
+    VF_HOST_DEVICE void operator()(int i) const {
+        const int x = i % camera.intrinsics.width, y = i / camera.intrinsics.width;
+        points_world[i] = normals_world[i] = Vec4f{0.f, 0.f, 0.f, 0.f};
+        depth_range[i] = Vec2f{camera.min_depth_m, camera.max_depth_m};
+        float t_per_depth;
+        const Vec3f dir = camera.rayThroughPixel(x, y, t_per_depth);
+        float t_min = camera.min_depth_m * t_per_depth, t_max = camera.max_depth_m * t_per_depth;
+        // The array spans voxel centres offset .. offset + size - 1.
+        const Vec3f box_lo = toFloat(index.offset), box_hi = toFloat(index.offset + index.size) - Vec3f{1.f, 1.f, 1.f};
+        if (!clipRayToBox(camera.origin_grid, dir, box_lo, box_hi, t_min, t_max)) return;
+        Vec3f hit;
+        if (!castRay(hit, voxels, index, camera.origin_grid, dir, t_min, t_max, camera.step_scale)) return;
+        raycastHitOutputs(voxels, index, hit, camera.voxel_size_m, points_world[i], normals_world[i]);
+    }
+};
+
+// The voxel block hash, a run of `span` pixels of a row per element sharing one CachedHashView (the CPU
+// layer runs whole rows, the CUDA layer single pixels): castRayHash() within the pixel's expected depth
+// range.
+template <class TVoxel>
+struct RaycastHashPixels {
+    const TVoxel* voxels;
+    HashTableView table;
+    RaycastCamera camera;
+    const Vec2f* depth_range;
+    Vec4f* points_world;
+    Vec4f* normals_world;
+    int span;
+
+    VF_HOST_DEVICE int elementCount() const {
+        return ((camera.intrinsics.width + span - 1) / span) * camera.intrinsics.height;
+    }
+    VF_HOST_DEVICE void operator()(int element) const {
+        const int width = camera.intrinsics.width, spans_per_row = (width + span - 1) / span;
+        const int y = element / spans_per_row, x0 = (element % spans_per_row) * span;
+        const int x1 = x0 + span < width ? x0 + span : width;
+        const CachedHashView view(table);
+        for (int x = x0; x < x1; ++x) {
+            const int i = x + y * width;
+            points_world[i] = normals_world[i] = Vec4f{0.f, 0.f, 0.f, 0.f};
+            const float z_min = fmaxf(depth_range[i].x, camera.min_depth_m);
+            const float z_max = fminf(depth_range[i].y, camera.max_depth_m);
+            if (!(z_max > z_min)) continue;  // no visible block projects here
+            float t_per_depth;
+            const Vec3f dir = camera.rayThroughPixel(x, y, t_per_depth);
+            Vec3f hit;
+            if (!castRayHash(hit, voxels, view, camera.origin_grid, dir, camera.min_depth_m * t_per_depth, z_min * t_per_depth,
+                             z_max * t_per_depth, camera.step_scale))
+                continue;
+            raycastHitOutputs(voxels, view, hit, camera.voxel_size_m, points_world[i], normals_world[i]);
+        }
+    }
+};
+
+// ---- Expected depth ranges from forward-projected blocks (section 4.4 of the report) ----
+// The image is covered by tiles of kRangeTile x kRangeTile pixels, each with a [min, max] depth.
+// Every candidate block projects its box into the tile grid; the tiles it covers are split into
+// fragments of up to kRangeFragment x kRangeFragment tiles (16 x 16 pixels), one element each, which
+// lower each tile's min and raise its max atomically. A pixel's range is its tile's.
+
+constexpr int kRangeTile = 4;
+constexpr int kRangeFragment = 4;
+
+// The tiles a block covers and its depth range ([z_min, z_max], padded).
+struct BlockTileRect {
+    int x0, y0, x1, y1;  // inclusive tile bounds; x0 > x1 when the block covers none
+    float z_min, z_max;
+};
+
+struct RangeTiles {
+    Vec2f* ranges;  // per tile: x = min, y = max ({1e30, -1e30} when no block covers it)
+    int tiles_x, tiles_y;
+};
+
+// Per candidate block k (entry candidates[k], or entry k without a list): its tile rectangle and
+// how many fragments cover it.
+struct ProjectBlockToTiles {
+    const HashEntry* entries;
+    const int* candidates;  // the visible list, or nullptr for every entry
+    BlockProjection projection;
+    float near_pad_m, far_pad_m;
+    RangeTiles tiles;
+    BlockTileRect* rects;
+    int* fragment_counts;
+
+    VF_HOST_DEVICE void operator()(int k) const {
+        BlockTileRect r{0, 0, -1, -1, 0.f, 0.f};
+        fragment_counts[k] = 0;
+        rects[k] = r;
+        const HashEntry& e = entries[candidates ? candidates[k] : k];
+        if (e.ptr < 0) return;
+        Vec2f lo, hi;
+        float z_lo, z_hi;
+        // Boxes grow by one voxel (trilinear reads reach that far).
+        if (!projectBlockBox({e.pos.x, e.pos.y, e.pos.z}, 1.f, projection, lo, hi, z_lo, z_hi)) return;
+        // Pixel centres inside the projected box, clipped to the image, then their tiles.
+        const Intrinsics& in = projection.intrinsics;
+        const int px0 = int(ceilf(fmaxf(lo.x, 0.f))), px1 = int(floorf(fminf(hi.x, float(in.width - 1))));
+        const int py0 = int(ceilf(fmaxf(lo.y, 0.f))), py1 = int(floorf(fminf(hi.y, float(in.height - 1))));
+        if (px0 > px1 || py0 > py1) return;
+        r = BlockTileRect{px0 / kRangeTile, py0 / kRangeTile, px1 / kRangeTile, py1 / kRangeTile, z_lo - near_pad_m, z_hi + far_pad_m};
+        rects[k] = r;
+        fragment_counts[k] = ((r.x1 - r.x0) / kRangeFragment + 1) * ((r.y1 - r.y0) / kRangeFragment + 1);
+    }
+};
+
+// Per fragment f: finds its block (fragment_offsets is the exclusive scan of fragment_counts) and
+// widens the ranges of the fragment's tiles.
+struct FillRangeFragment {
+    const BlockTileRect* rects;
+    const int* fragment_offsets;
+    int block_count;
+    RangeTiles tiles;
+
+    VF_HOST_DEVICE void operator()(int f) const {
+        int lo = 0, hi = block_count - 1;  // the last block whose offset is <= f
+        while (lo < hi) {
+            const int mid = (lo + hi + 1) / 2;
+            if (fragment_offsets[mid] <= f) lo = mid;
+            else hi = mid - 1;
+        }
+        const BlockTileRect& r = rects[lo];
+        const int index = f - fragment_offsets[lo], per_row = (r.x1 - r.x0) / kRangeFragment + 1;
+        const int tx0 = r.x0 + (index % per_row) * kRangeFragment, ty0 = r.y0 + (index / per_row) * kRangeFragment;
+        const int tx1 = tx0 + kRangeFragment - 1 < r.x1 ? tx0 + kRangeFragment - 1 : r.x1;
+        const int ty1 = ty0 + kRangeFragment - 1 < r.y1 ? ty0 + kRangeFragment - 1 : r.y1;
+        for (int ty = ty0; ty <= ty1; ++ty)
+            for (int tx = tx0; tx <= tx1; ++tx) {
+                Vec2f* range = &tiles.ranges[tx + ty * tiles.tiles_x];
+                atomicMinFloat(&range->x, r.z_min);
+                atomicMaxFloat(&range->y, r.z_max);
+            }
+    }
+};
+
+// Per pixel: the range of its tile, or {0, 0} where no block projects.
+struct PixelRangeFromTiles {
+    RangeTiles tiles;
+    int width;
+    Vec2f* depth_range;
+    VF_HOST_DEVICE void operator()(int i) const {
+        const int x = i % width, y = i / width;
+        const Vec2f r = tiles.ranges[x / kRangeTile + (y / kRangeTile) * tiles.tiles_x];
+        depth_range[i] = r.y > r.x ? r : Vec2f{0.f, 0.f};
+    }
+};
 
 }  // namespace voxfuse

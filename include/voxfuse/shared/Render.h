@@ -7,6 +7,14 @@
 
 namespace voxfuse {
 
+enum class RenderMode {
+    Shaded,   // Lambertian, light at the camera
+    Color,    // fused voxel colours (grey shading for voxel types without colour)
+    Normals,  // world normal mapped to RGB
+    Depth,    // distance along the optical axis, colour-mapped
+    Class     // semantic class colours, shaded (grey shading for voxel types without labels)
+};
+
 constexpr Vec4u8 kBackground{0, 0, 0, 255};
 
 VF_HOST_DEVICE inline Vec4u8 renderShaded(Vec3f normal, Vec3f to_camera_unit) {
@@ -62,5 +70,46 @@ VF_HOST_DEVICE inline Vec4u8 renderDepth(float depth_m, float max_depth_m) {
     const float b = clampValue(0.55f + 0.6f * t - 1.1f * t * t, 0.f, 1.f);
     return {(unsigned char)(255.f * r), (unsigned char)(255.f * g), (unsigned char)(255.f * b), 255};
 }
+
+// The render of one raycast pixel (element i of the image) in `mode`; the voxels are read only for
+// RenderMode::Color and RenderMode::Class.
+template <class TVoxel, class TIndexData>
+struct RenderRaycastPixel {
+    const TVoxel* voxels;
+    TIndexData index;
+    RenderMode mode;
+    float inv_voxel_size;
+    float max_depth_m;          // of the depth colour map
+    Vec3f camera_world;         // where the light is
+    Mat4f T_camera_world;
+    const Vec4f* points_world;
+    const Vec4f* normals_world;
+    Vec4u8* image;
+
+    VF_HOST_DEVICE void operator()(int i) const {
+        if (points_world[i].w <= 0.f) {
+            image[i] = kBackground;
+            return;
+        }
+        const Vec3f p = points_world[i].xyz(), n = normals_world[i].xyz();
+        switch (mode) {
+            case RenderMode::Shaded: image[i] = renderShaded(n, normalize(camera_world - p)); break;
+            case RenderMode::Normals: image[i] = renderNormal(n); break;
+            case RenderMode::Depth: image[i] = renderDepth(transformPoint(T_camera_world, p).z, max_depth_m); break;
+            case RenderMode::Color:
+                if constexpr (TVoxel::hasColor)
+                    image[i] = renderColor(readColorInterpolated(voxels, index, p * inv_voxel_size));
+                else
+                    image[i] = renderShaded(n, normalize(camera_world - p));
+                break;
+            case RenderMode::Class:
+                if constexpr (TVoxel::hasLabel)
+                    image[i] = renderClass(readLabelNearest(voxels, index, p * inv_voxel_size), n, normalize(camera_world - p));
+                else
+                    image[i] = renderShaded(n, normalize(camera_world - p));
+                break;
+        }
+    }
+};
 
 }  // namespace voxfuse

@@ -1,0 +1,86 @@
+#pragma once
+// The CPU launcher and primitives: what a stage written once (src/engines/*_Impl.h) needs from the
+// device it runs on. Its twin for the GPU is CudaDevice (CudaDevice.cuh); both offer the same static
+// functions, so a stage is a template on the device type.
+//
+//   parallelFor(n, body)          body(i) for i in [0, n), any order, in parallel
+//   exclusiveScan(in, out, n)     out[i] = in[0] + ... + in[i - 1]; returns the total
+//   selectIndices(n, pred, out)   the i in [0, n) with pred(i), ascending; returns how many
+//   sortUnique(keys, n)           sorts 64-bit keys ascending and drops repeats; returns how many remain
+//   read(p, scratch), write(p, v) one element between the device's memory and the host
+//
+// Loop bodies are functors from include/voxfuse/shared/ with VF_HOST_DEVICE operator()(int).
+
+#include <omp.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <vector>
+
+#include "core/DeviceScratch.h"
+#include "voxfuse/core/DeviceMemory.h"
+
+namespace voxfuse {
+
+struct CpuDevice {
+    static constexpr Device kind = Device::CPU;
+
+    // Dynamic scheduling in chunks of about 1/32 of a thread's share: loop bodies of uneven cost (rays,
+    // pixels with and without depth) balance, and cheap ones pay one scheduling step per chunk.
+    template <class Body>
+    static void parallelFor(int n, const Body& body) {
+        if (n <= 0) return;
+        const int chunk = std::max(1, n / (32 * omp_get_max_threads()));
+#pragma omp parallel for schedule(dynamic, chunk)
+        for (int i = 0; i < n; ++i) body(i);
+    }
+
+    static int exclusiveScan(const int* in, int* out, int n, DeviceScratch&) {
+        int sum = 0;
+        for (int i = 0; i < n; ++i) {
+            const int v = in[i];
+            out[i] = sum;
+            sum += v;
+        }
+        return sum;
+    }
+
+    // Two passes over equal shares: count per share, then write at the share's offset.
+    template <class Pred>
+    static int selectIndices(int n, const Pred& pred, int* out, DeviceScratch&) {
+        if (n <= 0) return 0;
+        const int shares = std::max(1, std::min(omp_get_max_threads() * 4, n / 4096));
+        std::vector<int> counts(static_cast<std::size_t>(shares) + 1, 0);
+        auto share_begin = [&](int s) { return int((long long)n * s / shares); };
+#pragma omp parallel for schedule(static)
+        for (int s = 0; s < shares; ++s) {
+            int c = 0;
+            for (int i = share_begin(s); i < share_begin(s + 1); ++i) c += pred(i) ? 1 : 0;
+            counts[std::size_t(s) + 1] = c;
+        }
+        for (int s = 0; s < shares; ++s) counts[std::size_t(s) + 1] += counts[std::size_t(s)];
+#pragma omp parallel for schedule(static)
+        for (int s = 0; s < shares; ++s) {
+            int* o = out + counts[std::size_t(s)];
+            for (int i = share_begin(s); i < share_begin(s + 1); ++i)
+                if (pred(i)) *o++ = i;
+        }
+        return counts.back();
+    }
+
+    static int sortUnique(std::uint64_t* keys, int n, DeviceScratch&) {
+        std::sort(keys, keys + n);
+        return int(std::unique(keys, keys + n) - keys);
+    }
+
+    template <class T>
+    static T read(const T* p, DeviceScratch&) {
+        return *p;
+    }
+    template <class T>
+    static void write(T* p, const T& value) {
+        *p = value;
+    }
+};
+
+}  // namespace voxfuse

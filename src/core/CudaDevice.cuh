@@ -1,0 +1,97 @@
+#pragma once
+// The CUDA launcher and primitives: the same static functions as CpuDevice (CpuDevice.h, which says
+// what each does), as kernel launches and CUB calls. Work is queued on the default stream in order;
+// read() and the primitives that return a count wait for the GPU, the others return at once.
+// Only nvcc compiles this file.
+
+#include <cub/device/device_radix_sort.cuh>
+#include <cub/device/device_scan.cuh>
+#include <cub/device/device_select.cuh>
+#include <thrust/iterator/counting_iterator.h>
+
+#include <cstdint>
+
+#include "core/CudaCheck.h"
+#include "core/DeviceScratch.h"
+#include "voxfuse/core/DeviceMemory.h"
+
+namespace voxfuse {
+namespace cuda_detail {
+
+template <class Body>
+__global__ void parallelForKernel(int n, Body body) {
+    const int i = int(blockIdx.x * blockDim.x + threadIdx.x);
+    if (i < n) body(i);
+}
+
+inline std::size_t alignUp(std::size_t bytes) { return (bytes + 255) & ~std::size_t(255); }
+
+}  // namespace cuda_detail
+
+struct CudaDevice {
+    static constexpr Device kind = Device::CUDA;
+    static constexpr int kThreadsPerBlock = 256;
+
+    template <class Body>
+    static void parallelFor(int n, const Body& body) {
+        if (n <= 0) return;
+        cuda_detail::parallelForKernel<<<unsigned((n + kThreadsPerBlock - 1) / kThreadsPerBlock), kThreadsPerBlock>>>(n, body);
+        VF_CUDA_CHECK_LAUNCH();
+    }
+
+    static int exclusiveScan(const int* in, int* out, int n, DeviceScratch& scratch) {
+        if (n <= 0) return 0;
+        std::size_t temp_bytes = 0;
+        VF_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(nullptr, temp_bytes, in, out, n));
+        void* temp = scratch.get(temp_bytes);
+        VF_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(temp, temp_bytes, in, out, n));
+        // The total is the last offset plus the last input.
+        int* last = static_cast<int*>(scratch.hostResult(2 * sizeof(int)));
+        VF_CUDA_CHECK(cudaMemcpy(last, out + n - 1, sizeof(int), cudaMemcpyDeviceToHost));
+        VF_CUDA_CHECK(cudaMemcpy(last + 1, in + n - 1, sizeof(int), cudaMemcpyDeviceToHost));
+        return last[0] + last[1];
+    }
+
+    template <class Pred>
+    static int selectIndices(int n, const Pred& pred, int* out, DeviceScratch& scratch) {
+        if (n <= 0) return 0;
+        const thrust::counting_iterator<int> first(0);
+        std::size_t temp_bytes = 0;
+        VF_CUDA_CHECK(cub::DeviceSelect::If(nullptr, temp_bytes, first, out, static_cast<int*>(nullptr), n, pred));
+        char* base = static_cast<char*>(scratch.get(cuda_detail::alignUp(sizeof(int)) + temp_bytes));
+        int* selected = reinterpret_cast<int*>(base);
+        VF_CUDA_CHECK(cub::DeviceSelect::If(base + cuda_detail::alignUp(sizeof(int)), temp_bytes, first, out, selected, n, pred));
+        return read(selected, scratch);
+    }
+
+    // Radix sort into a second buffer, then the unique keys back into `keys`.
+    static int sortUnique(std::uint64_t* keys, int n, DeviceScratch& scratch) {
+        if (n <= 1) return n;
+        const std::size_t keys_bytes = cuda_detail::alignUp(std::size_t(n) * sizeof(std::uint64_t));
+        std::size_t sort_bytes = 0, unique_bytes = 0;
+        VF_CUDA_CHECK(cub::DeviceRadixSort::SortKeys(nullptr, sort_bytes, keys, keys, n));
+        VF_CUDA_CHECK(cub::DeviceSelect::Unique(nullptr, unique_bytes, keys, keys, static_cast<int*>(nullptr), n));
+        const std::size_t temp_bytes = sort_bytes > unique_bytes ? sort_bytes : unique_bytes;
+        char* base = static_cast<char*>(scratch.get(keys_bytes + cuda_detail::alignUp(sizeof(int)) + temp_bytes));
+        auto* sorted = reinterpret_cast<std::uint64_t*>(base);
+        int* count = reinterpret_cast<int*>(base + keys_bytes);
+        void* temp = base + keys_bytes + cuda_detail::alignUp(sizeof(int));
+        VF_CUDA_CHECK(cub::DeviceRadixSort::SortKeys(temp, sort_bytes, keys, sorted, n));
+        VF_CUDA_CHECK(cub::DeviceSelect::Unique(temp, unique_bytes, sorted, keys, count, n));
+        return read(count, scratch);
+    }
+
+    // One element to the host through the scratch's pinned memory (waits for the GPU).
+    template <class T>
+    static T read(const T* p, DeviceScratch& scratch) {
+        T* staged = static_cast<T*>(scratch.hostResult(sizeof(T)));
+        VF_CUDA_CHECK(cudaMemcpy(staged, p, sizeof(T), cudaMemcpyDeviceToHost));
+        return *staged;
+    }
+    template <class T>
+    static void write(T* p, const T& value) {
+        VF_CUDA_CHECK(cudaMemcpy(p, &value, sizeof(T), cudaMemcpyHostToDevice));
+    }
+};
+
+}  // namespace voxfuse

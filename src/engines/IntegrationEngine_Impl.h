@@ -1,0 +1,109 @@
+#pragma once
+// The integration engine's stages, written once for both device layers: a template on the device type
+// (CpuDevice or CudaDevice), instantiated by src/cpu/IntegrationEngine_CPU.cpp and
+// cuda/IntegrationEngine_CUDA.cu. Every voxel update is integrateVoxel() (shared/Integration.h).
+// The launch shapes differ: the CPU runs a whole hash block per element, and for the dense index
+// frustum-clipped rows (IntegrateDenseRow: only voxels inside the frustum are visited); the GPU one
+// voxel per thread (coalesced reads and writes).
+
+#include <algorithm>
+#include <memory>
+#include <type_traits>
+
+#include "engines/DeviceImages.h"
+#include "voxfuse/core/Error.h"
+#include "voxfuse/engines/IntegrationEngine.h"
+#include "voxfuse/objects/PlainVoxelArray.h"
+#include "voxfuse/objects/VoxelBlockHash.h"
+
+namespace voxfuse {
+
+template <class TDevice, class TVoxel, class TIndex>
+class IntegrationEngineOn;
+
+// The frame as the device sees it: the view's images on kDevice (colour and classes only for voxels
+// that store them).
+template <class TVoxel>
+class IntegrationInputs {
+public:
+    IntegrationFrame frame(Device where, const SceneParams& params, const View& view, const Mat4f& T_world_camera,
+                           std::uint32_t integration_number) {
+        const float* depth = imageOn(where, view.depth, depth_);
+        const Vec4u8* rgb = TVoxel::hasColor ? imageOn(where, view.rgb, rgb_) : nullptr;
+        const ClassId* labels = TVoxel::hasLabel ? imageOn(where, view.labels, labels_) : nullptr;
+        return makeIntegrationFrame(params, view, T_world_camera, depth, rgb, labels, integration_number);
+    }
+
+private:
+    MemoryBlock<float> depth_;
+    MemoryBlock<Vec4u8> rgb_;
+    MemoryBlock<ClassId> labels_;
+};
+
+template <class TDevice, class TVoxel>
+class IntegrationEngineOn<TDevice, TVoxel, PlainVoxelArray> final : public IntegrationEngine<TVoxel, PlainVoxelArray> {
+    static constexpr Device kDevice = TDevice::kind;
+
+public:
+    void integrate(Scene<TVoxel, PlainVoxelArray>& scene, const View& view, const Mat4f& T_world_camera) override {
+        requireSceneOn(kDevice, scene, "the integration engine");
+        const PlainVoxelArray::Data index = scene.index().data();
+        const std::uint32_t integration_number = scene.takeIntegrationNumber();
+        Vec3i lo, hi;  // array coordinates (not offset)
+        float far_m;
+        if (!denseIntegrationBox(index, scene.params(), view, T_world_camera, lo, hi, far_m)) return;
+        const IntegrationFrame frame = inputs_.frame(kDevice, scene.params(), view, T_world_camera, integration_number);
+        if constexpr (kDevice == Device::CPU) {
+            TDevice::parallelFor((hi.y - lo.y) * (hi.z - lo.z), IntegrateDenseRow<TVoxel>{scene.voxelData(), index, lo, hi, far_m, frame});
+        } else {
+            // Slabs of whole z-slices, each at most 2^30 voxels (element indices are ints).
+            const Vec3i box = hi - lo;
+            const int slices_per_launch = std::max(1, (1 << 30) / (box.x * box.y));
+            for (int z = 0; z < box.z; z += slices_per_launch) {
+                const int slices = std::min(slices_per_launch, box.z - z);
+                TDevice::parallelFor(box.x * box.y * slices, IntegrateDenseVoxel<TVoxel>{scene.voxelData(), index, lo, box, z, frame});
+            }
+        }
+    }
+
+    void resetScene(Scene<TVoxel, PlainVoxelArray>& scene) override {
+        requireSceneOn(kDevice, scene, "the integration engine");
+        scene.voxels().fill(kDevice, TVoxel::initial(), 0, scene.voxels().size());
+    }
+
+private:
+    IntegrationInputs<TVoxel> inputs_;
+};
+
+// The hash: every voxel of the blocks in the visible list, which the allocation engine built for this view.
+template <class TDevice, class TVoxel>
+class IntegrationEngineOn<TDevice, TVoxel, VoxelBlockHash> final : public IntegrationEngine<TVoxel, VoxelBlockHash> {
+    static constexpr Device kDevice = TDevice::kind;
+
+public:
+    void integrate(Scene<TVoxel, VoxelBlockHash>& scene, const View& view, const Mat4f& T_world_camera) override {
+        requireSceneOn(kDevice, scene, "the integration engine");
+        const VoxelBlockHash& hash = scene.index();
+        if (!hash.visibleListIsFor(T_world_camera, view.calib.depth))
+            throw Error("hash integration: the visible list is not for this view (run the allocation engine on it first)");
+        const IntegrationFrame frame = inputs_.frame(kDevice, scene.params(), view, T_world_camera, scene.takeIntegrationNumber());
+        using Body = IntegrateHashVoxels<TVoxel, kDevice == Device::CPU ? kBlockVoxelCount : 1>;
+        TDevice::parallelFor(Body::elementCount(hash.visibleCount()), Body{scene.voxelData(), hash.data().entries, hash.visibleEntries(), frame});
+    }
+
+    // Frees every block and returns the voxel storage to its initial (empty) size.
+    void resetScene(Scene<TVoxel, VoxelBlockHash>& scene) override {
+        requireSceneOn(kDevice, scene, "the integration engine");
+        scene.clearVoxelBlocks();
+    }
+
+private:
+    IntegrationInputs<TVoxel> inputs_;
+};
+
+template <class TDevice, class TVoxel, class TIndex>
+std::unique_ptr<IntegrationEngine<TVoxel, TIndex>> makeIntegrationEngineOn() {
+    return std::make_unique<IntegrationEngineOn<TDevice, TVoxel, TIndex>>();
+}
+
+}  // namespace voxfuse
