@@ -1,6 +1,8 @@
 // voxfuse_bench: per-stage timings of the pipeline on a recorded sequence, as a table and as JSON, and
 // on request what the map outputs cost (meshing, point clouds, the occupancy map's thread).
 // Defaults to TUM fr3/teddy from ../shared/data when present, else the bundled synthetic sequence.
+// `synthetic[:N]` renders the synthetic room in memory instead (no image files, no codec): the only
+// source of a build without I/O (VOXFUSE_IO=OFF), such as the GPU bundle of scripts/gpu_bundle.sh.
 
 #include <CLI/CLI.hpp>
 #include <cstdio>
@@ -10,14 +12,17 @@
 #include <map>
 
 #include "JsonWriter.h"
-#include "LabelInput.h"
 #include "MapOutputBench.h"
 #include "ResourceUsage.h"
 #include "RunRecord.h"
 #include "SequenceRunner.h"
 #include "Statistics.h"
+#include "SyntheticSource.h"
 #include "voxfuse/core/Error.h"
 #include "voxfuse/core/Timer.h"
+#if VOXFUSE_WITH_IO
+#include "LabelInput.h"
+#endif
 
 namespace fs = std::filesystem;
 using namespace voxfuse;
@@ -41,28 +46,53 @@ StageSummary summarise(std::vector<double> v) {
 }
 
 std::string defaultSource() {
+#if VOXFUSE_WITH_IO
     const std::string teddy = std::string(VOXFUSE_SHARED_DATA_DIR) + "/tum_fr3_teddy_200";
     if (fs::exists(teddy + "/rgb.txt")) return teddy;
     return VOXFUSE_DEFAULT_DATA_DIR;
+#else
+    return "synthetic";
+#endif
+}
+
+std::unique_ptr<ImageSource> openSource(const std::string& path) {
+    if (app::SyntheticSource::isSyntheticName(path)) return app::SyntheticSource::open(path);
+#if VOXFUSE_WITH_IO
+    return openImageSource(path);
+#else
+    throw ConfigError("this build has no image I/O (VOXFUSE_IO=OFF): the source must be synthetic or synthetic:N, not '" + path + "'");
+#endif
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
     CLI::App cli{"Per-stage timings of the VoxFuse pipeline on a sequence."};
-    std::string source_path, json_path = "voxfuse_bench.json", index = "hash", poses = "track";
+    std::string source_path, json_path = "voxfuse_bench.json", index = "hash", poses = "track", device = "cpu";
+#if VOXFUSE_WITH_IO
     app::LabelInputOptions labels;  // and --voxel
+#else
+    std::string voxel = "s";
+#endif
     int max_frames = 0, warmup = 3, repeats = 3;
     bool mesh = false, cloud = false;
     float cloud_voxel_m = 0.f;
     OccupancySettings occupancy_settings;
     occupancy_settings.resolution_m = 0.f;  // off unless --occupancy
     MainEngineSettings s;
-    cli.add_option("source", source_path, "sequence (default: ../shared/data/tum_fr3_teddy_200, else the bundled data)");
+    cli.add_option("source", source_path,
+                   "sequence (default: ../shared/data/tum_fr3_teddy_200, else the bundled data), or synthetic[:N] for N frames of the "
+                   "synthetic room rendered in memory");
     cli.add_option("--frames", max_frames, "at most N frames (0 = all)");
     cli.add_option("--warmup", warmup, "frames left out of the statistics")->capture_default_str();
+#if VOXFUSE_WITH_IO
     app::addVoxelAndLabelOptions(cli, labels, "s");
+#else
+    cli.add_option("--voxel", voxel, "voxel type")->capture_default_str()->check(CLI::IsMember({"s", "f", "s_rgb", "f_rgb", "s_label", "s_rgb_label"}));
+#endif
     cli.add_option("--index", index, "voxel index")->capture_default_str()->check(CLI::IsMember({"dense", "hash"}));
+    cli.add_option("--device", device, "where the scene lives and allocation, integration and raycast run (tracking stays on the CPU)")
+        ->capture_default_str()->check(CLI::IsMember({"cpu", "cuda"}));
     cli.add_option("--voxel-size", s.scene.voxel_size_m, "voxel edge (m)")->capture_default_str();
     cli.add_option("--mu", s.scene.mu_m, "truncation band (m)")->capture_default_str();
     cli.add_option("--poses", poses, "track the camera, or use the source's ground truth")
@@ -81,9 +111,14 @@ int main(int argc, char** argv) {
 
     try {
         if (source_path.empty()) source_path = defaultSource();
-        std::unique_ptr<ImageSource> source = openImageSource(source_path);
+        std::unique_ptr<ImageSource> source = openSource(source_path);
+#if VOXFUSE_WITH_IO
         app::attachLabelInput(source, source_path, labels, s, "voxfuse_bench");
+#else
+        s.voxel_type = parseVoxelType(voxel);
+#endif
         s.index_type = parseIndexType(index);
+        s.device = device == "cuda" ? Device::CUDA : Device::CPU;
         auto engine = MainEngine::create(s, source->calib());
         std::unique_ptr<OccupancyMapper> occupancy;
         if (occupancy_settings.resolution_m > 0.f) occupancy = std::make_unique<OccupancyMapper>(occupancy_settings);
@@ -127,8 +162,10 @@ int main(int argc, char** argv) {
         order.push_back("total");
 
         std::printf("VoxFuse benchmark: %s\n", record.source.c_str());
+        const std::string device_text =
+            s.device == Device::CUDA ? std::string("cuda: ") + device_memory::cudaDescription() : std::string(deviceName(s.device));
         std::printf("  %s voxels, %s index, %.1f mm voxels, device %s, poses %s; %zu frames (%d warm-up frames left out)\n\n",
-                    toString(s.voxel_type), toString(s.index_type), 1000.0 * s.scene.voxel_size_m, deviceName(s.device),
+                    toString(s.voxel_type), toString(s.index_type), 1000.0 * s.scene.voxel_size_m, device_text.c_str(),
                     record.tracked ? (std::string("tracked (") + toString(s.tracker.kind) + ")").c_str() : "ground truth",
                     record.frames.size(), warmup);
         std::printf("  %-12s %10s %10s %10s\n", "stage", "median ms", "mean ms", "p90 ms");
@@ -178,6 +215,8 @@ int main(int argc, char** argv) {
         j.value("voxel", toString(s.voxel_type));
         j.value("index", toString(s.index_type));
         j.value("voxel_size_m", double(s.scene.voxel_size_m));
+        j.value("device", deviceName(s.device));
+        if (s.device == Device::CUDA) j.value("gpu", device_memory::cudaDescription());
         j.value("frames", int(record.frames.size()));
         j.value("warmup_frames", warmup);
         j.beginObject("stages");
@@ -210,6 +249,9 @@ int main(int argc, char** argv) {
         std::printf("  JSON: %s\n", json_path.c_str());
         return 0;
     } catch (const Error& e) {
+        std::cerr << "voxfuse_bench: error: " << e.what() << "\n";
+        return 2;
+    } catch (const std::exception& e) {
         std::cerr << "voxfuse_bench: error: " << e.what() << "\n";
         return 2;
     }

@@ -125,6 +125,7 @@ void writeSummaryJson(const std::string& path, const RunRecord& run) {
     j.value("voxel", toString(run.settings.voxel_type));
     j.value("index", toString(run.settings.index_type));
     j.value("device", deviceName(run.settings.device));
+    if (run.settings.device == Device::CUDA) j.value("gpu", device_memory::cudaDescription());
     j.value("voxel_size_m", double(run.settings.scene.voxel_size_m));
     j.value("mu_m", double(run.settings.scene.mu_m));
     j.value("max_weight", run.settings.scene.max_weight);

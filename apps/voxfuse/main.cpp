@@ -295,7 +295,7 @@ int main(int argc, char** argv) {
     cli.add_option("--hash-excess", o.engine.hash.excess_entry_count, "hash: entries in the excess list")->capture_default_str()->check(CLI::NonNegativeNumber);
     cli.add_option("--volume-size", o.dense_size, "dense volume size in voxels (x y z)")->expected(3)->capture_default_str();
     cli.add_option("--volume-offset", o.dense_offset, "dense volume's first voxel, grid units (x y z)")->expected(3)->capture_default_str();
-    cli.add_option("--device", o.device, "where the engines run")->capture_default_str()->check(CLI::IsMember({"cpu", "cuda"}));
+    cli.add_option("--device", o.device, "where the scene lives and allocation, integration and raycast run (tracking stays on the CPU)")->capture_default_str()->check(CLI::IsMember({"cpu", "cuda"}));
     cli.add_flag("--mesh", o.write_mesh, "write the map's mesh (marching cubes) to DIR/mesh.ply at the end");
     cli.add_option("--mesh-file", o.mesh_path, "write the mesh to this file instead (.ply, .obj or .stl)");
     cli.add_flag("--cloud", o.write_cloud, "write the surface points with normals (and colours) to DIR/cloud.ply");

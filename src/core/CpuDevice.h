@@ -24,6 +24,10 @@ namespace voxfuse {
 
 struct CpuDevice {
     static constexpr Device kind = Device::CPU;
+    // Loop bodies come in two launch shapes: a wide element (a row of pixels, a whole block) with a
+    // cache for the CPU's few threads, or one item per element for the GPU's many. Stages pick theirs
+    // from this, not from `kind`, so that a test can run the GPU's shapes on the CPU.
+    static constexpr bool kOneThreadPerItem = false;
 
     // Dynamic scheduling in chunks of about 1/32 of a thread's share: loop bodies of uneven cost (rays,
     // pixels with and without depth) balance, and cheap ones pay one scheduling step per chunk.

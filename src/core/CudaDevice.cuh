@@ -30,6 +30,7 @@ inline std::size_t alignUp(std::size_t bytes) { return (bytes + 255) & ~std::siz
 
 struct CudaDevice {
     static constexpr Device kind = Device::CUDA;
+    static constexpr bool kOneThreadPerItem = true;
     static constexpr int kThreadsPerBlock = 256;
 
     template <class Body>

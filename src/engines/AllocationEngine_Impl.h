@@ -120,7 +120,7 @@ private:
             TDevice::write(on(missing_count_), 0);
             const HashTableView table = hash.data();
             std::uint8_t* visibility = hash.state().entry_visibility;
-            if constexpr (kDevice == Device::CPU) {
+            if constexpr (!TDevice::kOneThreadPerItem) {
                 const MarkBlocksForPixels<256> mark{frame, table, visibility, on(missing_), on(missing_count_), int(missing_.size()),
                                                     frame.intrinsics.width};
                 TDevice::parallelFor(mark.elementCount(), mark);

@@ -53,7 +53,7 @@ public:
         float far_m;
         if (!denseIntegrationBox(index, scene.params(), view, T_world_camera, lo, hi, far_m)) return;
         const IntegrationFrame frame = inputs_.frame(kDevice, scene.params(), view, T_world_camera, integration_number);
-        if constexpr (kDevice == Device::CPU) {
+        if constexpr (!TDevice::kOneThreadPerItem) {
             TDevice::parallelFor((hi.y - lo.y) * (hi.z - lo.z), IntegrateDenseRow<TVoxel>{scene.voxelData(), index, lo, hi, far_m, frame});
         } else {
             // Slabs of whole z-slices, each at most 2^30 voxels (element indices are ints).
@@ -87,7 +87,7 @@ public:
         if (!hash.visibleListIsFor(T_world_camera, view.calib.depth))
             throw Error("hash integration: the visible list is not for this view (run the allocation engine on it first)");
         const IntegrationFrame frame = inputs_.frame(kDevice, scene.params(), view, T_world_camera, scene.takeIntegrationNumber());
-        using Body = IntegrateHashVoxels<TVoxel, kDevice == Device::CPU ? kBlockVoxelCount : 1>;
+        using Body = IntegrateHashVoxels<TVoxel, TDevice::kOneThreadPerItem ? 1 : kBlockVoxelCount>;
         TDevice::parallelFor(Body::elementCount(hash.visibleCount()), Body{scene.voxelData(), hash.data().entries, hash.visibleEntries(), frame});
     }
 

@@ -86,8 +86,13 @@ public:
 
         t = Timer();
         raycast_->raycast(scene_, view_.calib.depth, tracking_.T_world_camera, render_state_);
-        if (onGpu()) render_state_.updateHost();  // the tracker reads the model on the CPU
         result.stages.push_back({"raycast", stageMs(t)});
+        if (onGpu()) {
+            // The tracker reads the model on the CPU: points and normals come down (pinned memory).
+            t = Timer();
+            render_state_.updateHost();
+            result.stages.push_back({"download", stageMs(t)});
+        }
 
         // Between frames, so that no stage holds voxel pointers.
         if (settings_.remove_empty_blocks_every > 0 && ++frames_fused_ % settings_.remove_empty_blocks_every == 0) {

@@ -40,7 +40,7 @@ public:
         const int pixels = intr.width * intr.height;
         if constexpr (kHash) {
             computeDepthRanges(scene, intr, T_world_camera, ranges);
-            const int span = kDevice == Device::CPU ? intr.width : 1;
+            const int span = TDevice::kOneThreadPerItem ? 1 : intr.width;
             const RaycastHashPixels<TVoxel> rays{scene.voxelData(), scene.index().data(), camera, ranges, points, normals, span};
             TDevice::parallelFor(rays.elementCount(), rays);
         } else {

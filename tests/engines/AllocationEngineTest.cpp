@@ -1,15 +1,20 @@
 // Allocation for the voxel block hash: every block a depth frame needs is allocated and visible, the
-// visible list follows the frustum, full capacities are counted exactly, empty blocks are removed.
+// visible list follows the frustum, full capacities are counted exactly, empty blocks are removed, and
+// the table depends on the frames only. Every test runs on each device (DeviceTestSupport.h).
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstring>
 #include <cmath>
 #include <map>
 #include <set>
 #include <tuple>
 #include <vector>
 
+#include <omp.h>
+
+#include "DeviceTestSupport.h"
 #include "SyntheticViews.h"
 #include "voxfuse/engines/AllocationEngine.h"
 #include "voxfuse/engines/IntegrationEngine.h"
@@ -32,8 +37,8 @@ SceneParams testParams() {
     return p;
 }
 
-HashScene makeScene(const SceneParams& params, VoxelBlockHashSettings s = VoxelBlockHashSettings()) {
-    return HashScene(params, VoxelBlockHash(s), Device::CPU);
+HashScene makeScene(const SceneParams& params, Device device, VoxelBlockHashSettings s = VoxelBlockHashSettings()) {
+    return HashScene(params, VoxelBlockHash(s, device), device);
 }
 
 const Intrinsics kIntr = test::kinectIntrinsics(160, 120);
@@ -83,16 +88,18 @@ BlockSet blocksTheFrameNeeds(const View& view, const Mat4f& T_world_camera, cons
 }
 
 BlockSet allocatedBlocks(const VoxelBlockHash& hash) {
+    const VoxelBlockHash host = hash.copyTo(Device::CPU);
     BlockSet s;
-    for (int i = 0; i < hash.entryCount(); ++i)
-        if (hash.entry(i).ptr >= 0) s.insert({hash.entry(i).pos.x, hash.entry(i).pos.y, hash.entry(i).pos.z});
+    for (int i = 0; i < host.entryCount(); ++i)
+        if (host.entry(i).ptr >= 0) s.insert({host.entry(i).pos.x, host.entry(i).pos.y, host.entry(i).pos.z});
     return s;
 }
 
 BlockSet visibleBlocks(const VoxelBlockHash& hash) {
+    const VoxelBlockHash host = hash.copyTo(Device::CPU);
     BlockSet s;
-    for (int k = 0; k < hash.visibleCount(); ++k) {
-        const HashEntry& e = hash.entry(hash.visibleEntries()[k]);
+    for (int k = 0; k < host.visibleCount(); ++k) {
+        const HashEntry& e = host.entry(host.visibleEntries()[k]);
         s.insert({e.pos.x, e.pos.y, e.pos.z});
     }
     return s;
@@ -114,10 +121,16 @@ int missingFrom(const BlockSet& needed, const BlockSet& have) {
     return missing;
 }
 
-TEST(AllocationEngineTest, EveryBlockTheDepthNeedsIsAllocatedAndVisible) {
+class AllocationEngineTest : public ::testing::TestWithParam<Device> {
+protected:
+    void SetUp() override { VF_SKIP_IF_UNAVAILABLE(GetParam()); }
+    Device device() const { return GetParam(); }
+};
+
+TEST_P(AllocationEngineTest, EveryBlockTheDepthNeedsIsAllocatedAndVisible) {
     const SceneParams params = testParams();
-    HashScene scene = makeScene(params);
-    auto allocation = makeAllocationEngine<VoxelS, VoxelBlockHash>(Device::CPU);
+    HashScene scene = makeScene(params, device());
+    auto allocation = makeAllocationEngine<VoxelS, VoxelBlockHash>(device());
     for (const Mat4f& pose : {poseA(), poseB()}) {
         const View view = test::renderView(world(), kIntr, pose, false);
         const AllocationStats stats = allocation->allocate(scene, view, pose);
@@ -136,10 +149,10 @@ TEST(AllocationEngineTest, EveryBlockTheDepthNeedsIsAllocatedAndVisible) {
     }
 }
 
-TEST(AllocationEngineTest, VisibleListKeepsPreviouslyVisibleBlocksWhileInTheFrustum) {
+TEST_P(AllocationEngineTest, VisibleListKeepsPreviouslyVisibleBlocksWhileInTheFrustum) {
     const SceneParams params = testParams();
-    HashScene scene = makeScene(params);
-    auto allocation = makeAllocationEngine<VoxelS, VoxelBlockHash>(Device::CPU);
+    HashScene scene = makeScene(params, device());
+    auto allocation = makeAllocationEngine<VoxelS, VoxelBlockHash>(device());
     View view = test::renderView(world(), kIntr, poseA(), false);
     allocation->allocate(scene, view, poseA());
     const BlockSet first = visibleBlocks(scene.index());
@@ -162,17 +175,22 @@ TEST(AllocationEngineTest, VisibleListKeepsPreviouslyVisibleBlocksWhileInTheFrus
     EXPECT_EQ(stats.visible_blocks, 0) << "blocks re-enter the list only when the depth sees them";
 }
 
-class AllocationCapacityTest : public ::testing::TestWithParam<int> {};
+class AllocationCapacityTest : public ::testing::TestWithParam<std::tuple<Device, int>> {
+protected:
+    void SetUp() override { VF_SKIP_IF_UNAVAILABLE(device()); }
+    Device device() const { return std::get<0>(GetParam()); }
+    int entriesPerBucket() const { return std::get<1>(GetParam()); }
+};
 
 TEST_P(AllocationCapacityTest, FullBucketsAndExcessListAreCountedExactly) {
     const SceneParams params = testParams();
     VoxelBlockHashSettings s;
     s.bucket_count = 4;
-    s.entries_per_bucket = GetParam();
+    s.entries_per_bucket = entriesPerBucket();
     s.excess_entry_count = 8;
-    HashScene scene = makeScene(params, s);
-    auto allocation = makeAllocationEngine<VoxelS, VoxelBlockHash>(Device::CPU);
-    auto integration = cpu::makeIntegrationEngine<VoxelS, VoxelBlockHash>();
+    HashScene scene = makeScene(params, device(), s);
+    auto allocation = makeAllocationEngine<VoxelS, VoxelBlockHash>(device());
+    auto integration = makeIntegrationEngine<VoxelS, VoxelBlockHash>(device());
     const View view = test::renderView(world(), kIntr, poseA(), false);
     const int walked = int(blocksOnSegments(view, poseA(), params).size());
     const int capacity = 4 * s.entries_per_bucket + 8;
@@ -187,15 +205,19 @@ TEST_P(AllocationCapacityTest, FullBucketsAndExcessListAreCountedExactly) {
     }
 }
 
-INSTANTIATE_TEST_SUITE_P(EntriesPerBucket, AllocationCapacityTest, ::testing::Values(1, 2));
+INSTANTIATE_TEST_SUITE_P(DevicesAndBuckets, AllocationCapacityTest, ::testing::Combine(test::kAllDevices, ::testing::Values(1, 2)),
+                         [](const ::testing::TestParamInfo<std::tuple<Device, int>>& info) {
+                             return std::string(deviceName(std::get<0>(info.param))) + "_" + std::to_string(std::get<1>(info.param)) +
+                                    "_entries_per_bucket";
+                         });
 
-TEST(AllocationEngineTest, FullVoxelBlockArrayIsCountedExactly) {
+TEST_P(AllocationEngineTest, FullVoxelBlockArrayIsCountedExactly) {
     const SceneParams params = testParams();
     VoxelBlockHashSettings s;
     s.max_block_count = 50;
     s.blocks_per_growth = 16;
-    HashScene scene = makeScene(params, s);
-    auto allocation = makeAllocationEngine<VoxelS, VoxelBlockHash>(Device::CPU);
+    HashScene scene = makeScene(params, device(), s);
+    auto allocation = makeAllocationEngine<VoxelS, VoxelBlockHash>(device());
     const View view = test::renderView(world(), kIntr, poseA(), false);
     const int walked = int(blocksOnSegments(view, poseA(), params).size());
     const AllocationStats stats = allocation->allocate(scene, view, poseA());
@@ -206,13 +228,13 @@ TEST(AllocationEngineTest, FullVoxelBlockArrayIsCountedExactly) {
     EXPECT_EQ(stats.failures_hash_full_this_frame, 0);
 }
 
-TEST(AllocationEngineTest, VoxelArrayGrowsWithTheSceneInSteps) {
+TEST_P(AllocationEngineTest, VoxelArrayGrowsWithTheSceneInSteps) {
     const SceneParams params = testParams();
     VoxelBlockHashSettings s;
     s.blocks_per_growth = 256;
-    HashScene scene = makeScene(params, s);
+    HashScene scene = makeScene(params, device(), s);
     EXPECT_EQ(scene.voxels().size(), 0u);
-    auto allocation = makeAllocationEngine<VoxelS, VoxelBlockHash>(Device::CPU);
+    auto allocation = makeAllocationEngine<VoxelS, VoxelBlockHash>(device());
     const AllocationStats a = allocation->allocate(scene, test::renderView(world(), kIntr, poseA(), false), poseA());
     EXPECT_EQ(a.block_capacity % 256, 0);
     EXPECT_LT(a.block_capacity, a.blocks_allocated + 256);
@@ -222,50 +244,66 @@ TEST(AllocationEngineTest, VoxelArrayGrowsWithTheSceneInSteps) {
     EXPECT_LT(b.block_capacity, b.blocks_allocated + std::max(256, a.block_capacity / 4) + 256);
 }
 
-TEST(AllocationEngineTest, RemovalFreesExactlyTheEmptyBlocksAndKeepsTheRest) {
+TEST_P(AllocationEngineTest, RemovalFreesExactlyTheEmptyBlocksAndKeepsTheRest) {
     const SceneParams params = testParams();
-    HashScene scene = makeScene(params);
-    auto allocation = makeAllocationEngine<VoxelS, VoxelBlockHash>(Device::CPU);
-    auto integration = cpu::makeIntegrationEngine<VoxelS, VoxelBlockHash>();
+    HashScene scene = makeScene(params, device());
+    auto allocation = makeAllocationEngine<VoxelS, VoxelBlockHash>(device());
+    auto integration = makeIntegrationEngine<VoxelS, VoxelBlockHash>(device());
     for (const Mat4f& pose : {poseA(), poseB()}) {
         const View view = test::renderView(world(), kIntr, pose, false);
         allocation->allocate(scene, view, pose);
         integration->integrate(scene, view, pose);
     }
-    // A block allocated but never integrated (outside every view) must go too.
-    ASSERT_EQ(scene.index().insert({300, 300, 300}), VoxelBlockHash::InsertResult::Inserted);
-    scene.voxels().host()[scene.index().entry(scene.index().findEntry({300, 300, 300})).ptr * kBlockVoxelCount] = VoxelS::initial();
+    // A block allocated but never integrated (outside every view) must go too: added on a host copy.
+    {
+        HashScene host = test::onHost(scene);
+        ASSERT_EQ(host.index().insert({300, 300, 300}), VoxelBlockHash::InsertResult::Inserted);
+        host.voxels().fill(Device::CPU, VoxelS::initial(), std::size_t(host.index().entry(host.index().findEntry({300, 300, 300})).ptr) * kBlockVoxelCount,
+                           kBlockVoxelCount);
+        scene = host.copyTo(device());
+    }
 
-    const VoxelBlockHash& hash = scene.index();
-    const VoxelS* voxels = scene.voxels().host();
     std::map<Key, std::vector<VoxelS>> kept;
     int empty = 0;
-    for (int i = 0; i < hash.entryCount(); ++i) {
-        const HashEntry& e = hash.entry(i);
-        if (e.ptr < 0) continue;
-        const VoxelS* block = voxels + e.ptr * kBlockVoxelCount;
-        bool observed = false;
-        for (int v = 0; v < kBlockVoxelCount; ++v) observed = observed || block[v].w_depth > 0;
-        if (observed)
-            kept[{e.pos.x, e.pos.y, e.pos.z}].assign(block, block + kBlockVoxelCount);
-        else
-            ++empty;
+    {
+        const HashScene host = test::onHost(scene);
+        const VoxelBlockHash& hash = host.index();
+        const VoxelS* voxels = host.voxels().host();
+        for (int i = 0; i < hash.entryCount(); ++i) {
+            const HashEntry& e = hash.entry(i);
+            if (e.ptr < 0) continue;
+            const VoxelS* block = voxels + e.ptr * kBlockVoxelCount;
+            bool observed = false;
+            for (int v = 0; v < kBlockVoxelCount; ++v) observed = observed || block[v].w_depth > 0;
+            if (observed)
+                kept[{e.pos.x, e.pos.y, e.pos.z}].assign(block, block + kBlockVoxelCount);
+            else
+                ++empty;
+        }
     }
     ASSERT_GT(empty, 0);
-    const int before = hash.blocksInUse();
+    const int before = scene.index().blocksInUse();
+    const int visible_before = scene.index().visibleCount();
     EXPECT_EQ(allocation->removeEmptyBlocks(scene), empty);
-    EXPECT_EQ(hash.blocksInUse(), before - empty);
-    EXPECT_EQ(hash.stats().blocks_removed_total, empty);
-    EXPECT_EQ(hash.findEntry({300, 300, 300}), -1);
-    EXPECT_EQ(int(allocatedBlocks(hash).size()), int(kept.size()));
-    for (const auto& [k, contents] : kept) {
-        const int e = hash.findEntry({std::get<0>(k), std::get<1>(k), std::get<2>(k)});
-        ASSERT_GE(e, 0);
-        const VoxelS* block = scene.voxels().host() + hash.entry(e).ptr * kBlockVoxelCount;
-        for (int v = 0; v < kBlockVoxelCount; ++v) {
-            ASSERT_EQ(block[v].sdf, contents[v].sdf);
-            ASSERT_EQ(block[v].w_depth, contents[v].w_depth);
+    EXPECT_EQ(scene.index().blocksInUse(), before - empty);
+    EXPECT_EQ(scene.index().stats().blocks_removed_total, empty);
+    EXPECT_LT(scene.index().visibleCount(), visible_before) << "removed blocks leave the visible list";
+    {
+        const HashScene host = test::onHost(scene);
+        const VoxelBlockHash& hash = host.index();
+        EXPECT_EQ(hash.findEntry({300, 300, 300}), -1);
+        EXPECT_EQ(int(allocatedBlocks(hash).size()), int(kept.size()));
+        for (const auto& [k, contents] : kept) {
+            const int e = hash.findEntry({std::get<0>(k), std::get<1>(k), std::get<2>(k)});
+            ASSERT_GE(e, 0);
+            const VoxelS* block = host.voxels().host() + hash.entry(e).ptr * kBlockVoxelCount;
+            for (int v = 0; v < kBlockVoxelCount; ++v) {
+                ASSERT_EQ(block[v].sdf, contents[v].sdf);
+                ASSERT_EQ(block[v].w_depth, contents[v].w_depth);
+            }
         }
+        // Every entry of the visible list still holds a block.
+        for (int k = 0; k < hash.visibleCount(); ++k) ASSERT_GE(hash.entry(hash.visibleEntries()[k]).ptr, 0);
     }
     EXPECT_EQ(allocation->removeEmptyBlocks(scene), 0) << "nothing left to remove";
 
@@ -276,11 +314,11 @@ TEST(AllocationEngineTest, RemovalFreesExactlyTheEmptyBlocksAndKeepsTheRest) {
     EXPECT_EQ(missingFrom(blocksTheFrameNeeds(view, poseA(), params), allocatedBlocks(scene.index())), 0);
 }
 
-TEST(AllocationEngineTest, IntegrationRefusesAViewTheAllocationDidNotPrepare) {
+TEST_P(AllocationEngineTest, IntegrationRefusesAViewTheAllocationDidNotPrepare) {
     const SceneParams params = testParams();
-    HashScene scene = makeScene(params);
-    auto allocation = makeAllocationEngine<VoxelS, VoxelBlockHash>(Device::CPU);
-    auto integration = cpu::makeIntegrationEngine<VoxelS, VoxelBlockHash>();
+    HashScene scene = makeScene(params, device());
+    auto allocation = makeAllocationEngine<VoxelS, VoxelBlockHash>(device());
+    auto integration = makeIntegrationEngine<VoxelS, VoxelBlockHash>(device());
     const View view = test::renderView(world(), kIntr, poseA(), false);
     EXPECT_THROW(integration->integrate(scene, view, poseA()), Error);
     allocation->allocate(scene, view, poseA());
@@ -288,13 +326,64 @@ TEST(AllocationEngineTest, IntegrationRefusesAViewTheAllocationDidNotPrepare) {
     EXPECT_THROW(integration->integrate(scene, view, poseB()), Error);
 }
 
-TEST(AllocationEngineTest, DenseIndexNeedsNoAllocation) {
-    Scene<VoxelS, PlainVoxelArray> scene(testParams(), PlainVoxelArray({-8, -8, -8}, {16, 16, 16}), Device::CPU);
-    auto allocation = makeAllocationEngine<VoxelS, PlainVoxelArray>(Device::CPU);
+TEST_P(AllocationEngineTest, DenseIndexNeedsNoAllocation) {
+    Scene<VoxelS, PlainVoxelArray> scene(testParams(), PlainVoxelArray({-8, -8, -8}, {16, 16, 16}), device());
+    auto allocation = makeAllocationEngine<VoxelS, PlainVoxelArray>(device());
     const AllocationStats stats = allocation->allocate(scene, test::renderView(world(), kIntr, poseA(), false), poseA());
     EXPECT_EQ(stats.blocks_allocated, 0);
     EXPECT_EQ(allocation->removeEmptyBlocks(scene), 0);
 }
+
+// The table is a function of the frames: the same entries, blocks and free stacks whatever the number
+// of threads (the same rule makes the CPU and CUDA tables equal: tests/cuda/EngineCudaParityTest.cpp).
+TEST_P(AllocationEngineTest, TheTableDoesNotDependOnTheNumberOfThreads) {
+    if (device() != Device::CPU) GTEST_SKIP() << "threads are a CPU matter";
+    const SceneParams params = testParams();
+    VoxelBlockHashSettings small;
+    small.bucket_count = 4096;  // many collisions and chains
+    small.excess_entry_count = 4096;
+    auto run = [&](int threads) {
+        const int saved = omp_get_max_threads();
+        omp_set_num_threads(threads);
+        HashScene scene = makeScene(params, Device::CPU, small);
+        auto allocation = makeAllocationEngine<VoxelS, VoxelBlockHash>(Device::CPU);
+        auto integration = makeIntegrationEngine<VoxelS, VoxelBlockHash>(Device::CPU);
+        for (const Mat4f& pose : {poseA(), poseB(), poseA()}) {
+            const View view = test::renderView(world(), kIntr, pose, false);
+            allocation->allocate(scene, view, pose);
+            integration->integrate(scene, view, pose);
+        }
+        allocation->removeEmptyBlocks(scene);
+        omp_set_num_threads(saved);
+        return scene;
+    };
+    const HashScene one = run(1), four = run(4);
+    const VoxelBlockHash &a = one.index(), &b = four.index();
+    ASSERT_EQ(a.entryCount(), b.entryCount());
+    ASSERT_EQ(a.freeBlocks(), b.freeBlocks());
+    ASSERT_EQ(a.visibleCount(), b.visibleCount());
+    ASSERT_EQ(test::firstDifferentEntry(a, b), -1);
+    for (int k = 0; k < a.visibleCount(); ++k) ASSERT_EQ(a.visibleEntries()[k], b.visibleEntries()[k]);
+    ASSERT_EQ(test::firstDifferentVoxel(one.voxels(), four.voxels()), -1);
+}
+
+// Blocks that want one insertion target in one frame all get in (one per round), not only the first.
+TEST_P(AllocationEngineTest, CollidingNewBlocksAreAllInsertedInTheirFrame) {
+    const SceneParams params = testParams();
+    VoxelBlockHashSettings tiny;
+    tiny.bucket_count = 16;  // hundreds of blocks in 16 buckets: long chains built in one frame
+    tiny.excess_entry_count = 8192;
+    HashScene scene = makeScene(params, device(), tiny);
+    auto allocation = makeAllocationEngine<VoxelS, VoxelBlockHash>(device());
+    const View view = test::renderView(world(), kIntr, poseA(), false);
+    const AllocationStats stats = allocation->allocate(scene, view, poseA());
+    const BlockSet walked = blocksOnSegments(view, poseA(), params);
+    EXPECT_EQ(stats.allocation_failures_this_frame, 0);
+    EXPECT_EQ(stats.blocks_allocated_this_frame, int(walked.size()));
+    EXPECT_EQ(allocatedBlocks(scene.index()), walked);
+}
+
+INSTANTIATE_TEST_SUITE_P(Devices, AllocationEngineTest, test::kAllDevices, test::DeviceName());
 
 }  // namespace
 }  // namespace voxfuse

@@ -1,7 +1,8 @@
-// Integration against closed-form signed distances.
+// Integration against closed-form signed distances, on each device.
 
 #include <gtest/gtest.h>
 
+#include "DeviceTestSupport.h"
 #include "SyntheticViews.h"
 #include "voxfuse/engines/IntegrationEngine.h"
 #include "voxfuse/objects/Voxel.h"
@@ -10,10 +11,12 @@
 namespace voxfuse {
 namespace {
 
-template <class TVoxel>
-class IntegrationEngineTest : public ::testing::Test {};
-using VoxelTypes = ::testing::Types<VoxelS, VoxelF, VoxelSRgb, VoxelFRgb, VoxelSLabel, VoxelSRgbLabel>;
-TYPED_TEST_SUITE(IntegrationEngineTest, VoxelTypes);
+template <class TDeviceAndVoxel>
+class IntegrationEngineTest : public ::testing::Test {
+protected:
+    void SetUp() override { VF_SKIP_IF_UNAVAILABLE(TDeviceAndVoxel::device); }
+};
+TYPED_TEST_SUITE(IntegrationEngineTest, test::DevicesAndVoxels, test::DeviceAndVoxelName);
 
 SceneParams smallSceneParams() {
     SceneParams p;
@@ -24,9 +27,10 @@ SceneParams smallSceneParams() {
 
 // A wall facing the camera at z = 1 m: the projective SDF equals the true SDF, 1 - z, clamped to mu.
 TYPED_TEST(IntegrationEngineTest, FrontoParallelPlaneMatchesAnalyticSdf) {
-    using TVoxel = TypeParam;
+    using TVoxel = typename TypeParam::Voxel;
+    constexpr Device device = TypeParam::device;
     const SceneParams params = smallSceneParams();
-    Scene<TVoxel, PlainVoxelArray> scene(params, PlainVoxelArray({-40, -30, 0}, {80, 60, 140}), Device::CPU);
+    Scene<TVoxel, PlainVoxelArray> scene(params, PlainVoxelArray({-40, -30, 0}, {80, 60, 140}), device);
     // World z up in the synthetic scene; look along world +x at a wall x = 1, then express the volume in camera coordinates
     // by making the camera the world origin: a plane at camera z = 1.
     View view;
@@ -34,14 +38,15 @@ TYPED_TEST(IntegrationEngineTest, FrontoParallelPlaneMatchesAnalyticSdf) {
     view.depth.resize(view.calib.depth.size());
     for (std::size_t i = 0; i < view.depth.pixelCount(); ++i) view.depth.host()[i] = 1.0f;
 
-    auto engine = makeIntegrationEngine<TVoxel, PlainVoxelArray>(Device::CPU);
+    auto engine = makeIntegrationEngine<TVoxel, PlainVoxelArray>(device);
     engine->integrate(scene, view, Mat4f::identity());
 
-    const PlainVoxelArray::Data index = scene.index().data();
+    const auto host = test::onHost(scene);
+    const PlainVoxelArray::Data index = host.index().data();
     int checked = 0;
     for (int z = 80; z <= 120; ++z) {
         bool found;
-        const TVoxel v = readVoxel(scene.voxels().host(), index, Vec3i{0, 0, z}, found);
+        const TVoxel v = readVoxel(host.voxels().host(), index, Vec3i{0, 0, z}, found);
         ASSERT_TRUE(found);
         const float z_m = z * params.voxel_size_m;
         const float eta = 1.0f - z_m;
@@ -59,26 +64,28 @@ TYPED_TEST(IntegrationEngineTest, FrontoParallelPlaneMatchesAnalyticSdf) {
 
 // A tilted plane seen from several poses: the fused zero crossing lies within one voxel of the plane.
 TYPED_TEST(IntegrationEngineTest, TiltedPlaneZeroCrossingWithinOneVoxel) {
-    using TVoxel = TypeParam;
+    using TVoxel = typename TypeParam::Voxel;
+    constexpr Device device = TypeParam::device;
     const SceneParams params = smallSceneParams();
     // World: plane through (0, 0, 0) with normal (0.3, 0, 1) (z up); cameras above it looking down-ish.
     const Eigen::Vector3f normal = Eigen::Vector3f(0.3f, 0.f, 1.f).normalized();
     const synth::SyntheticScene plane = synth::SyntheticScene::singlePlane(Eigen::Vector3f::Zero(), normal);
-    Scene<TVoxel, PlainVoxelArray> scene(params, PlainVoxelArray({-60, -60, -40}, {120, 120, 80}), Device::CPU);
-    auto engine = makeIntegrationEngine<TVoxel, PlainVoxelArray>(Device::CPU);
+    Scene<TVoxel, PlainVoxelArray> scene(params, PlainVoxelArray({-60, -60, -40}, {120, 120, 80}), device);
+    auto engine = makeIntegrationEngine<TVoxel, PlainVoxelArray>(device);
     const Intrinsics intr = test::kinectIntrinsics(160, 120);
     for (const Eigen::Vector3f& eye : {Eigen::Vector3f(0.2f, 0.1f, 1.0f), Eigen::Vector3f(-0.2f, 0.1f, 0.9f), Eigen::Vector3f(0.0f, -0.3f, 1.1f)})
         engine->integrate(scene, test::renderView(plane, intr, test::lookAt(eye, Eigen::Vector3f::Zero())), test::lookAt(eye, Eigen::Vector3f::Zero()));
 
     // Along vertical lines near the origin, find the sign change and compare with the plane's height.
-    const PlainVoxelArray::Data index = scene.index().data();
+    const auto host = test::onHost(scene);
+    const PlainVoxelArray::Data index = host.index().data();
     int lines = 0;
     for (int x = -15; x <= 15; x += 5)
         for (int y = -15; y <= 15; y += 5) {
             float prev = 1.f;
             for (int z = 30; z > -30; --z) {
                 bool found;
-                const TVoxel v = readVoxel(scene.voxels().host(), index, Vec3i{x, y, z}, found);
+                const TVoxel v = readVoxel(host.voxels().host(), index, Vec3i{x, y, z}, found);
                 if (v.w_depth == 0) continue;
                 const float sdf = TVoxel::sdfToFloat(v.sdf);
                 if (prev > 0.f && sdf <= 0.f) {
@@ -95,27 +102,34 @@ TYPED_TEST(IntegrationEngineTest, TiltedPlaneZeroCrossingWithinOneVoxel) {
 }
 
 TYPED_TEST(IntegrationEngineTest, WeightIsCappedAndInvalidDepthIgnored) {
-    using TVoxel = TypeParam;
+    using TVoxel = typename TypeParam::Voxel;
+    constexpr Device device = TypeParam::device;
     SceneParams params = smallSceneParams();
     params.max_weight = 3;
-    Scene<TVoxel, PlainVoxelArray> scene(params, PlainVoxelArray({-40, -30, 0}, {80, 60, 140}), Device::CPU);
+    Scene<TVoxel, PlainVoxelArray> scene(params, PlainVoxelArray({-40, -30, 0}, {80, 60, 140}), device);
     View view;
     view.calib.depth = view.calib.rgb = test::kinectIntrinsics(160, 120);
     view.depth.resize(view.calib.depth.size());
     for (std::size_t i = 0; i < view.depth.pixelCount(); ++i) view.depth.host()[i] = (i % 2) ? 1.0f : NAN;
-    auto engine = makeIntegrationEngine<TVoxel, PlainVoxelArray>(Device::CPU);
+    auto engine = makeIntegrationEngine<TVoxel, PlainVoxelArray>(device);
     for (int k = 0; k < 6; ++k) engine->integrate(scene, view, Mat4f::identity());
+    const auto host = test::onHost(scene);
     int max_w = 0;
-    for (std::size_t i = 0; i < scene.voxels().size(); ++i) {
-        max_w = std::max<int>(max_w, scene.voxels().host()[i].w_depth);
-        ASSERT_FALSE(std::isnan(TVoxel::sdfToFloat(scene.voxels().host()[i].sdf)));
+    for (std::size_t i = 0; i < host.voxels().size(); ++i) {
+        max_w = std::max<int>(max_w, host.voxels().host()[i].w_depth);
+        ASSERT_FALSE(std::isnan(TVoxel::sdfToFloat(host.voxels().host()[i].sdf)));
     }
     EXPECT_EQ(max_w, 3);
 }
 
-TEST(IntegrationColorTest, ColourOfAUniformWallIsFused) {
+class IntegrationColorTest : public ::testing::TestWithParam<Device> {
+protected:
+    void SetUp() override { VF_SKIP_IF_UNAVAILABLE(GetParam()); }
+};
+
+TEST_P(IntegrationColorTest, ColourOfAUniformWallIsFused) {
     const SceneParams params = smallSceneParams();
-    Scene<VoxelSRgb, PlainVoxelArray> scene(params, PlainVoxelArray({-40, -30, 0}, {80, 60, 140}), Device::CPU);
+    Scene<VoxelSRgb, PlainVoxelArray> scene(params, PlainVoxelArray({-40, -30, 0}, {80, 60, 140}), GetParam());
     View view;
     view.calib.depth = view.calib.rgb = test::kinectIntrinsics(160, 120);
     view.depth.resize(view.calib.depth.size());
@@ -124,17 +138,20 @@ TEST(IntegrationColorTest, ColourOfAUniformWallIsFused) {
         view.depth.host()[i] = 1.0f;
         view.rgb.host()[i] = Vec4u8{200, 100, 50, 255};
     }
-    auto engine = makeIntegrationEngine<VoxelSRgb, PlainVoxelArray>(Device::CPU);
+    auto engine = makeIntegrationEngine<VoxelSRgb, PlainVoxelArray>(GetParam());
     engine->integrate(scene, view, Mat4f::identity());
+    const auto host = test::onHost(scene);
     bool found;
-    const VoxelSRgb v = readVoxel(scene.voxels().host(), scene.index().data(), Vec3i{0, 0, 100}, found);
+    const VoxelSRgb v = readVoxel(host.voxels().host(), host.index().data(), Vec3i{0, 0, 100}, found);
     EXPECT_EQ(v.w_color, 1);
     EXPECT_EQ(v.clr.x, 200);
     EXPECT_EQ(v.clr.y, 100);
     EXPECT_EQ(v.clr.z, 50);
-    const VoxelSRgb far_in_front = readVoxel(scene.voxels().host(), scene.index().data(), Vec3i{0, 0, 50}, found);
+    const VoxelSRgb far_in_front = readVoxel(host.voxels().host(), host.index().data(), Vec3i{0, 0, 50}, found);
     EXPECT_EQ(far_in_front.w_color, 0) << "only voxels near the surface take colour";
 }
+
+INSTANTIATE_TEST_SUITE_P(Devices, IntegrationColorTest, test::kAllDevices, test::DeviceName());
 
 // The frustum clipping of rows must not drop any voxel the per-voxel update would change.
 TEST(IntegrationBoxTest, RowClippingLosesNoUpdate) {

@@ -1,9 +1,11 @@
-// The whole per-frame pipeline on synthetic frames with exact poses, for every voxel type.
+// The whole per-frame pipeline on synthetic frames with exact poses, for every voxel type and device.
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <tuple>
 
+#include "DeviceTestSupport.h"
 #include "SyntheticViews.h"
 #include "voxfuse/core/Error.h"
 #include "voxfuse/engines/MainEngine.h"
@@ -21,11 +23,15 @@ RGBDFrame toFrame(const View& view, int index) {
     return f;
 }
 
-class MainEngineVoxelTest : public ::testing::TestWithParam<VoxelType> {};
+class MainEngineVoxelTest : public ::testing::TestWithParam<std::tuple<Device, VoxelType>> {
+protected:
+    void SetUp() override { VF_SKIP_IF_UNAVAILABLE(std::get<0>(GetParam())); }
+};
 
 TEST_P(MainEngineVoxelTest, RaycastReproducesTheLastFrameDepth) {
     MainEngineSettings s;
-    s.voxel_type = GetParam();
+    s.device = std::get<0>(GetParam());
+    s.voxel_type = std::get<1>(GetParam());
     s.scene.voxel_size_m = 0.01f;
     s.scene.mu_m = 0.04f;
     s.dense_offset = {-80, -80, -10};
@@ -44,7 +50,7 @@ TEST_P(MainEngineVoxelTest, RaycastReproducesTheLastFrameDepth) {
         last = test::renderView(world, intr, pose);
         const FrameResult r = engine->processFrame(toFrame(last, k), &pose);
         EXPECT_TRUE(r.fused);
-        ASSERT_EQ(r.stages.size(), 5u);
+        ASSERT_EQ(r.stages.size(), s.device == Device::CUDA ? 6u : 5u);
         EXPECT_GT(r.total_ms, 0.0);
     }
     Image<float> depth;
@@ -66,8 +72,11 @@ TEST_P(MainEngineVoxelTest, RaycastReproducesTheLastFrameDepth) {
 }
 
 INSTANTIATE_TEST_SUITE_P(AllVoxelTypes, MainEngineVoxelTest,
-                         ::testing::Values(VoxelType::S, VoxelType::F, VoxelType::SRgb, VoxelType::FRgb, VoxelType::SLabel, VoxelType::SRgbLabel),
-                         [](const auto& info) { return std::string(toString(info.param)); });
+                         ::testing::Combine(test::kAllDevices, ::testing::Values(VoxelType::S, VoxelType::F, VoxelType::SRgb, VoxelType::FRgb,
+                                                                                 VoxelType::SLabel, VoxelType::SRgbLabel)),
+                         [](const auto& info) {
+                             return std::string(deviceName(std::get<0>(info.param))) + "_" + toString(std::get<1>(info.param));
+                         });
 
 TEST(MainEngineTest, RejectsBadSettingsWithClearErrors) {
     RGBDCalib calib;

@@ -29,6 +29,9 @@ struct MainEngineSettings {
     SceneParams scene;
     VoxelType voxel_type = VoxelType::S;
     IndexType index_type = IndexType::Hash;
+    // Where the scene lives and allocation, integration and raycast run. With Device::CUDA the frame's
+    // images go up once per frame and the raycast comes down for tracking, which (like image
+    // processing and meshing) runs on the CPU until those engines have CUDA layers.
     Device device = Device::CPU;
     // Dense index: the box of voxels (grid units; the first camera looks along +z from the origin).
     Vec3i dense_offset{-256, -256, 0};
@@ -49,8 +52,8 @@ IndexType parseIndexType(const std::string& name);  // "dense" or "hash"; Config
 const char* toString(IndexType type);
 
 struct StageTime {
-    const char* stage;  // "depth", "track", "allocate", "integrate", "raycast"
-    double ms;
+    const char* stage;  // "depth", "track", "allocate", "integrate", "raycast", and on the GPU "download"
+    double ms;          // wall clock; on the GPU up to the end of the stage's queued work
 };
 
 struct FrameResult {

@@ -1,0 +1,96 @@
+#include "SyntheticSource.h"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include "CameraPath.h"
+#include "KinectDepthModel.h"
+#include "SyntheticScene.h"
+#include "voxfuse/core/EigenInterop.h"
+#include "voxfuse/core/Error.h"
+
+namespace voxfuse::app {
+namespace {
+constexpr float kDepthScale = 5000.f;  // raw depth = metres * 5000, as the bundled TUM-layout data
+constexpr double kFirstTimestamp = 1000.0;
+}  // namespace
+
+struct SyntheticSource::Renderer {
+    synth::SyntheticScene scene = synth::SyntheticScene::defaultRoom();
+    synth::PinholeCamera camera;
+    synth::CameraPath path;
+    synth::KinectDepthModel depth_model;
+    std::mt19937 colour_rng;
+    Renderer(int width, int height, unsigned seed)
+        : camera(synth::PinholeCamera::kinectV1(width, height)), depth_model(depthParams(camera), seed), colour_rng(seed + 1) {}
+    static synth::KinectDepthParams depthParams(const synth::PinholeCamera& camera) {
+        synth::KinectDepthParams p;
+        p.fx = camera.fx;
+        return p;
+    }
+};
+
+SyntheticSource::SyntheticSource(int frames, int width, int height, unsigned seed)
+    : renderer_(std::make_unique<Renderer>(width, height, seed)), frames_(frames) {
+    if (frames < 1 || width < 16 || height < 16) throw ConfigError("synthetic source: need at least one frame of 16x16 pixels or more");
+    const synth::PinholeCamera& c = renderer_->camera;
+    calib_.depth = calib_.rgb = Intrinsics{c.width, c.height, c.fx, c.fy, c.cx, c.cy};
+    calib_.disparity = DisparityCalib::affine(1.f / kDepthScale);
+    for (int i = 0; i < frames; ++i)
+        ground_truth_.push_back({kFirstTimestamp + i / synth::CameraPath::kFps, toMat4f(renderer_->path.pose(i).matrix())});
+}
+
+SyntheticSource::~SyntheticSource() = default;
+
+bool SyntheticSource::isSyntheticName(const std::string& path) { return path == "synthetic" || path.rfind("synthetic:", 0) == 0; }
+
+std::unique_ptr<SyntheticSource> SyntheticSource::open(const std::string& path) {
+    if (!isSyntheticName(path)) throw ConfigError("not a synthetic source: '" + path + "'");
+    int frames = 100;
+    if (path.size() > 10) {
+        std::size_t used = 0;
+        try {
+            frames = std::stoi(path.substr(10), &used);
+        } catch (const std::exception&) {
+            used = 0;
+        }
+        if (used != path.size() - 10 || frames < 1) throw ConfigError("synthetic source: '" + path + "' should be synthetic:N with N >= 1 frames");
+    }
+    return std::make_unique<SyntheticSource>(frames);
+}
+
+std::string SyntheticSource::description() const {
+    return "synthetic room rendered in memory (" + std::to_string(frames_) + " frames, " + std::to_string(calib_.depth.width) + "x" +
+           std::to_string(calib_.depth.height) + ")";
+}
+
+bool SyntheticSource::next(RGBDFrame& frame) {
+    if (next_ >= frames_) return false;
+    const int i = next_++;
+    Renderer& r = *renderer_;
+    Eigen::Isometry3f pose;
+    pose.matrix() = toEigen(ground_truth_[std::size_t(i)].T_world_camera);
+    const synth::RenderedFrame rendered = r.scene.render(r.camera, pose, 1);
+    const std::vector<float> depth = r.depth_model.apply(rendered.depth, rendered.cosIncidence, rendered.width, rendered.height);
+
+    frame = RGBDFrame();
+    frame.index = i;
+    frame.timestamp_s = ground_truth_[std::size_t(i)].timestamp_s;
+    frame.has_ground_truth = true;
+    frame.T_world_camera_gt = ground_truth_[std::size_t(i)].T_world_camera;
+    frame.depth_path = "synthetic frame " + std::to_string(i);
+    frame.depth_raw.resize(Vec2i{rendered.width, rendered.height});
+    frame.rgb.resize(Vec2i{rendered.width, rendered.height});
+    std::normal_distribution<float> noise(0.f, 1.5f);  // 8-bit colour sensor noise, as the bundled data
+    for (std::size_t p = 0; p < depth.size(); ++p) {
+        const float raw = std::round(depth[p] * kDepthScale);
+        frame.depth_raw.host()[p] = raw >= 1.f && raw <= 65535.f ? std::uint16_t(raw) : 0;
+        auto channel = [&](float v) { return std::uint8_t(std::clamp(std::round(v * 255.f + noise(r.colour_rng)), 0.f, 255.f)); };
+        const std::uint8_t red = channel(rendered.rgb[p].x()), green = channel(rendered.rgb[p].y()), blue = channel(rendered.rgb[p].z());
+        frame.rgb.host()[p] = Vec4u8{red, green, blue, 255};
+    }
+    return true;
+}
+
+}  // namespace voxfuse::app

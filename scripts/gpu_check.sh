@@ -1,0 +1,71 @@
+#!/usr/bin/env bash
+# The GPU check, run on a lent GPU machine from the bundle that scripts/gpu_bundle.sh built here:
+# the cuda-labelled tests (what only the GPU runs, and CPU-CUDA parity) and voxfuse_bench with
+# --device cuda on synthetic frames rendered in memory (no image files or codecs needed), then one
+# summary. Needs nothing on that machine but the NVIDIA driver and python3; takes a few minutes.
+#
+#   ./gpu_bundle/gpu_check.sh        (from the repository root; logs, XML and JSON go to $OUT or /tmp)
+set -uo pipefail
+here=$(cd "$(dirname "$0")" && pwd)
+if [ -x "$here/bin/voxfuse_bench" ]; then bundle=$here; else bundle=$(cd "${1:-gpu_bundle}" && pwd); fi
+out=${OUT:-/tmp/voxfuse_gpu_check}
+mkdir -p "$out"
+export LD_LIBRARY_PATH="$bundle/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
+# The machine's own C++ runtime first; the bundled copies only for what it lacks.
+if ldd "$bundle/bin/voxfuse_bench" | grep -q "not found"; then export LD_LIBRARY_PATH="$LD_LIBRARY_PATH:$bundle/fallback"; fi
+frames=${VOXFUSE_GPU_CHECK_FRAMES:-80}
+
+step() {  # step NAME SECONDS COMMAND...: runs with a time limit, output to $out/NAME.log
+  local name=$1 limit=$2
+  shift 2
+  echo "== $name: $*"
+  timeout "$limit" "$@" >"$out/$name.log" 2>&1
+  local rc=$?
+  echo "$name $rc" >>"$out/status.txt"
+  tail -n 4 "$out/$name.log"
+}
+
+: >"$out/status.txt"
+echo "== bundle of commit $(cat "$bundle/commit.txt" 2>/dev/null); $(nvidia-smi -L 2>&1 | head -n 1)"
+step cuda_tests 180 "$bundle/bin/voxfuse_cuda_tests" --gtest_brief=1 --gtest_output="xml:$out/cuda_tests.xml"
+step engine_cuda_tests 180 "$bundle/bin/voxfuse_core_tests" --gtest_brief=1 --gtest_filter='*cuda*' --gtest_output="xml:$out/engine_cuda_tests.xml"
+cd "$out"
+step bench_cuda_hash 120 "$bundle/bin/voxfuse_bench" "synthetic:$frames" --device cuda --poses groundtruth --json bench_cuda_hash.json
+step bench_cuda_dense 120 "$bundle/bin/voxfuse_bench" "synthetic:$frames" --device cuda --poses groundtruth --index dense --json bench_cuda_dense.json
+step bench_cuda_tracked 120 "$bundle/bin/voxfuse_bench" "synthetic:$frames" --device cuda --json bench_cuda_tracked.json
+step bench_cpu_hash 180 "$bundle/bin/voxfuse_bench" "synthetic:$frames" --device cpu --poses groundtruth --json bench_cpu_hash.json
+
+python3 - "$out" <<'PY'
+import json, os, sys, xml.etree.ElementTree as ET
+out = sys.argv[1]
+print("\n==== VoxFuse GPU check summary ====")
+status = dict(line.split() for line in open(os.path.join(out, "status.txt")) if line.strip())
+for name in ("cuda_tests", "engine_cuda_tests"):
+    path = os.path.join(out, name + ".xml")
+    if not os.path.exists(path):
+        print(f"{name}: no result (exit {status.get(name)})"); continue
+    root = ET.parse(path).getroot()
+    tests, failures, errors = int(root.get("tests", 0)), int(root.get("failures", 0)), int(root.get("errors", 0))
+    skipped = sum(1 for c in root.iter("testcase") if c.find("skipped") is not None)
+    print(f"{name}: {tests} tests, {failures + errors} failed, {skipped} skipped (exit {status.get(name)})")
+    for c in root.iter("testcase"):
+        if c.find("failure") is not None:
+            print("  FAILED", c.get("classname"), c.get("name"))
+stages = ("allocate", "integrate", "raycast", "download", "track", "depth", "total")
+print(f"\n{'run':<20}" + "".join(f"{s:>10}" for s in stages) + f"{'a+i+r':>10}{'ATE mm':>9}")
+for name in ("bench_cuda_hash", "bench_cuda_dense", "bench_cuda_tracked", "bench_cpu_hash"):
+    path = os.path.join(out, name + ".json")
+    if not os.path.exists(path):
+        print(f"{name:<20}no result (exit {status.get(name)})"); continue
+    j = json.load(open(path))
+    st = j.get("stages", {})
+    med = {s: st.get(s, {}).get("median_ms") for s in stages}
+    air = sum(med[s] for s in ("allocate", "integrate", "raycast") if med[s] is not None)
+    ate = j.get("ate_rmse_m")
+    row = "".join(f"{med[s]:>10.3f}" if med[s] is not None else f"{'-':>10}" for s in stages)
+    print(f"{name:<20}{row}{air:>10.3f}{(1000 * ate if ate is not None else float('nan')):>9.2f}")
+    if name == "bench_cuda_hash":
+        print(f"{'':<20}gpu: {j.get('gpu', '?')}; {j.get('frames')} frames, median ms per stage; blocks {j.get('blocks_allocated')}, "
+              f"allocation failures {j.get('allocation_failures')}")
+print("logs and JSON:", out)
+PY

@@ -1,0 +1,171 @@
+#pragma once
+// The launcher, primitives and atomics of a device type (CpuDevice, CudaDevice), each against a plain
+// serial answer. Included by tests/core/CpuDeviceTest.cpp and tests/cuda/CudaDeviceTest.cu, so that
+// both devices pass the same checks.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <random>
+#include <vector>
+
+#include "core/DeviceScratch.h"
+#include "voxfuse/core/Atomics.h"
+#include "voxfuse/core/MemoryBlock.h"
+
+namespace voxfuse::test {
+
+template <class T>
+MemoryBlock<T> blockOn(Device where, const std::vector<T>& values) {
+    MemoryBlock<T> b(values.size(), where == Device::CPU, where == Device::CUDA);
+    b.writeRange(where, 0, values.data(), values.size());
+    return b;
+}
+
+template <class T>
+std::vector<T> valuesOf(Device where, const MemoryBlock<T>& b, std::size_t count) {
+    std::vector<T> v(count);
+    b.readRange(where, 0, v.data(), count);
+    return v;
+}
+
+// Loop bodies of the checks (functors, as the engines' are).
+struct CountVisits {
+    int* visits;
+    VF_HOST_DEVICE void operator()(int i) const { atomicAddInt(&visits[i], 1); }
+};
+struct AddToOneCounter {
+    int* counter;
+    VF_HOST_DEVICE void operator()(int) const { atomicAddInt(counter, 1); }
+};
+struct ClaimSmallestIndex {
+    int* claim;
+    int buckets;
+    VF_HOST_DEVICE void operator()(int i) const { atomicMinInt(&claim[i % buckets], i); }
+};
+struct FloatMinMax {
+    const float* values;
+    float* min_max;
+    VF_HOST_DEVICE void operator()(int i) const {
+        atomicMinFloat(&min_max[0], values[i]);
+        atomicMaxFloat(&min_max[1], values[i]);
+    }
+};
+struct IsMultipleOf {
+    int k;
+    VF_HOST_DEVICE bool operator()(int i) const { return i % k == 0; }
+};
+
+template <class TDevice>
+void checkParallelForVisitsEveryElementOnce() {
+    constexpr Device where = TDevice::kind;
+    for (int n : {0, 1, 255, 256, 257, 100000}) {
+        MemoryBlock<int> visits = blockOn(where, std::vector<int>(std::size_t(n) + 1, 0));
+        TDevice::parallelFor(n, CountVisits{visits.data(where)});
+        const std::vector<int> v = valuesOf(where, visits, std::size_t(n) + 1);
+        for (int i = 0; i < n; ++i) ASSERT_EQ(v[std::size_t(i)], 1) << "element " << i << " of " << n;
+        ASSERT_EQ(v[std::size_t(n)], 0) << "nothing beyond n";
+    }
+}
+
+template <class TDevice>
+void checkAtomicsCombineExactly() {
+    constexpr Device where = TDevice::kind;
+    const int n = 200000;
+    MemoryBlock<int> counter = blockOn(where, std::vector<int>{0});
+    TDevice::parallelFor(n, AddToOneCounter{counter.data(where)});
+    EXPECT_EQ(valuesOf(where, counter, 1)[0], n);
+
+    const int buckets = 97;
+    MemoryBlock<int> claims = blockOn(where, std::vector<int>(buckets, 1 << 30));
+    TDevice::parallelFor(n, ClaimSmallestIndex{claims.data(where), buckets});
+    const std::vector<int> c = valuesOf(where, claims, buckets);
+    for (int b = 0; b < buckets; ++b) ASSERT_EQ(c[std::size_t(b)], b);
+
+    // Mixed signs: the GPU orders negative and positive floats through different integer atomics.
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> u(-5.f, 5.f);
+    std::vector<float> values(50000);
+    for (float& v : values) v = u(rng);
+    for (const std::vector<float>& start : {std::vector<float>{1e30f, -1e30f}, std::vector<float>{0.f, 0.f}}) {
+        MemoryBlock<float> in = blockOn(where, values), min_max = blockOn(where, start);
+        TDevice::parallelFor(int(values.size()), FloatMinMax{in.data(where), min_max.data(where)});
+        const std::vector<float> r = valuesOf(where, min_max, 2);
+        EXPECT_EQ(r[0], std::min(start[0], *std::min_element(values.begin(), values.end())));
+        EXPECT_EQ(r[1], std::max(start[1], *std::max_element(values.begin(), values.end())));
+    }
+}
+
+template <class TDevice>
+void checkExclusiveScan() {
+    constexpr Device where = TDevice::kind;
+    DeviceScratch scratch(where);
+    std::mt19937 rng(3);
+    for (int n : {1, 7, 1000, 300000}) {
+        std::vector<int> in(static_cast<std::size_t>(n));
+        for (int& v : in) v = int(rng() % 5);
+        MemoryBlock<int> a = blockOn(where, in), out(std::size_t(n), where == Device::CPU, where == Device::CUDA);
+        const int total = TDevice::exclusiveScan(a.data(where), out.data(where), n, scratch);
+        const std::vector<int> o = valuesOf(where, out, std::size_t(n));
+        int sum = 0;
+        for (int i = 0; i < n; ++i) {
+            ASSERT_EQ(o[std::size_t(i)], sum) << "n " << n << " i " << i;
+            sum += in[std::size_t(i)];
+        }
+        EXPECT_EQ(total, sum);
+        // In place, as the removal's bucket counts are scanned.
+        const int again = TDevice::exclusiveScan(a.data(where), a.data(where), n, scratch);
+        EXPECT_EQ(again, sum);
+        EXPECT_EQ(valuesOf(where, a, std::size_t(n)), o);
+    }
+}
+
+template <class TDevice>
+void checkSelectIndices() {
+    constexpr Device where = TDevice::kind;
+    DeviceScratch scratch(where);
+    for (int n : {1, 5000, 1200000}) {
+        MemoryBlock<int> out(std::size_t(n), where == Device::CPU, where == Device::CUDA);
+        const int count = TDevice::selectIndices(n, IsMultipleOf{3}, out.data(where), scratch);
+        ASSERT_EQ(count, (n + 2) / 3);
+        const std::vector<int> o = valuesOf(where, out, std::size_t(count));
+        for (int k = 0; k < count; ++k) ASSERT_EQ(o[std::size_t(k)], 3 * k) << "ascending and complete";
+    }
+}
+
+template <class TDevice>
+void checkSortUnique() {
+    constexpr Device where = TDevice::kind;
+    DeviceScratch scratch(where);
+    std::mt19937_64 rng(11);
+    for (int n : {1, 2, 1000, 500000}) {
+        std::vector<std::uint64_t> keys(static_cast<std::size_t>(n));
+        for (auto& k : keys) k = rng() % std::uint64_t(n / 3 + 1) * 0x100000001ull;  // many repeats, high bits used
+        if (n > 2) keys[1] = ~std::uint64_t(0);  // the largest key sorts last
+        MemoryBlock<std::uint64_t> b = blockOn(where, keys);
+        const int count = TDevice::sortUnique(b.data(where), n, scratch);
+        std::vector<std::uint64_t> expected = keys;
+        std::sort(expected.begin(), expected.end());
+        expected.erase(std::unique(expected.begin(), expected.end()), expected.end());
+        ASSERT_EQ(count, int(expected.size()));
+        EXPECT_EQ(valuesOf(where, b, std::size_t(count)), expected);
+    }
+}
+
+template <class TDevice>
+void checkReadAndWrite() {
+    constexpr Device where = TDevice::kind;
+    DeviceScratch scratch(where);
+    struct Pair {
+        int a;
+        float b;
+    };
+    MemoryBlock<Pair> p(1, where == Device::CPU, where == Device::CUDA);
+    TDevice::write(p.data(where), Pair{42, 2.5f});
+    const Pair back = TDevice::read(p.data(where), scratch);
+    EXPECT_EQ(back.a, 42);
+    EXPECT_EQ(back.b, 2.5f);
+}
+
+}  // namespace voxfuse::test

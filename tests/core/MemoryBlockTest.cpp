@@ -1,0 +1,72 @@
+// MemoryBlock: which copy is current, range copies and fills (host side; the device side is checked
+// in tests/cuda/CudaDeviceTest.cu), and the errors of misuse.
+
+#include <gtest/gtest.h>
+
+#include "voxfuse/core/Error.h"
+#include "voxfuse/core/Image.h"
+#include "voxfuse/core/MemoryBlock.h"
+
+namespace voxfuse {
+namespace {
+
+TEST(MemoryBlockTest, RangesAndFillsOnTheHost) {
+    MemoryBlock<int> m(10, true, false);
+    m.fill(-1);
+    const int values[3] = {4, 5, 6};
+    m.writeRange(Device::CPU, 2, values, 3);
+    m.fill(Device::CPU, 9, 8, 2);
+    int back[10];
+    m.readRange(Device::CPU, 0, back, 10);
+    const int expected[10] = {-1, -1, 4, 5, 6, -1, -1, -1, 9, 9};
+    for (int i = 0; i < 10; ++i) EXPECT_EQ(back[i], expected[i]) << i;
+
+    MemoryBlock<int> other(10, true, false);
+    other.fill(0);
+    other.copyRangeFrom(Device::CPU, m, 2, 0, 3);
+    EXPECT_EQ(other.host()[0], 4);
+    EXPECT_EQ(other.host()[2], 6);
+    EXPECT_EQ(other.host()[3], 0);
+    MemoryBlock<int> copy(10, true, false);
+    copyAcross(copy, Device::CPU, m, Device::CPU);
+    EXPECT_EQ(copy.host()[9], 9);
+}
+
+TEST(MemoryBlockTest, RangesOutsideTheBlockOrOnAMissingCopyAreRefused) {
+    MemoryBlock<int> m(10, true, false);
+    int v[4] = {};
+    EXPECT_THROW(m.writeRange(Device::CPU, 8, v, 4), Error);
+    EXPECT_THROW(m.readRange(Device::CPU, 11, v, 0), Error);
+    EXPECT_THROW(m.readRange(Device::CUDA, 0, v, 1), DeviceError) << "there is no device copy";
+    MemoryBlock<int> small(3, true, false);
+    EXPECT_THROW(copyAcross(small, Device::CPU, m, Device::CPU), Error) << "sizes differ";
+}
+
+TEST(MemoryBlockTest, AHostOnlyBlockIsAlwaysCurrentOnTheHost) {
+    MemoryBlock<float> m(4, true, false);
+    EXPECT_TRUE(m.isCurrent(Device::CPU));
+    EXPECT_FALSE(m.isCurrent(Device::CUDA));
+    m.host()[0] = 1.f;
+    EXPECT_TRUE(m.isCurrent(Device::CPU));
+    m.updateHost();  // nothing to do, nothing thrown
+    EXPECT_NO_THROW(m.releaseDevice());
+}
+
+TEST(MemoryBlockTest, ReallocationKeepsCopiesThatWereNotAskedForWhenTheSizeMatches) {
+    MemoryBlock<int> m(16, true, false, HostMemory::Pinned);
+    const int* before = m.host();
+    m.allocate(16, true, false);  // pageable asked: pinned (or its fallback) serves
+    EXPECT_EQ(m.host(), before);
+    m.allocate(17, true, false);
+    EXPECT_EQ(m.size(), 17u);
+}
+
+TEST(MemoryBlockTest, ImagesKeepTheirMemoryAcrossFramesOfOneSize) {
+    Image<float> image({64, 48});
+    const float* before = image.host();
+    image.resize({64, 48});
+    EXPECT_EQ(image.host(), before);
+}
+
+}  // namespace
+}  // namespace voxfuse

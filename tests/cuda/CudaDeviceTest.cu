@@ -1,0 +1,72 @@
+// What only the GPU runs: the CUDA launcher, the CUB primitives and the atomics in device code
+// (core/CudaDevice.cuh, core/Atomics.h), against the same checks the CPU layer passes
+// (tests/core/CpuDeviceTest.cpp); the marching-cubes table as device code reads it; device-side
+// fills and range copies of MemoryBlock. Skips visibly without a GPU.
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+
+#include "../core/DevicePrimitiveChecks.h"
+#include "core/CudaDevice.cuh"
+#include "voxfuse/core/MemoryBlock.h"
+#include "voxfuse/shared/MarchingCubes.h"
+
+namespace voxfuse {
+namespace {
+
+class CudaDeviceTest : public ::testing::Test {
+protected:
+    void SetUp() override {
+        if (!device_memory::cudaAvailable()) GTEST_SKIP() << "no usable GPU: " << device_memory::cudaDescription();
+    }
+};
+
+TEST_F(CudaDeviceTest, ParallelForVisitsEveryElementOnce) { test::checkParallelForVisitsEveryElementOnce<CudaDevice>(); }
+TEST_F(CudaDeviceTest, AtomicsCombineExactly) { test::checkAtomicsCombineExactly<CudaDevice>(); }
+TEST_F(CudaDeviceTest, ExclusiveScan) { test::checkExclusiveScan<CudaDevice>(); }
+TEST_F(CudaDeviceTest, SelectIndicesKeepsOrder) { test::checkSelectIndices<CudaDevice>(); }
+TEST_F(CudaDeviceTest, SortUnique) { test::checkSortUnique<CudaDevice>(); }
+TEST_F(CudaDeviceTest, ReadAndWriteOneElement) { test::checkReadAndWrite<CudaDevice>(); }
+
+struct CopyTable {
+    MarchingCubesTable* out;
+    VF_HOST_DEVICE void operator()(int) const { *out = marchingCubesTable(); }
+};
+
+TEST_F(CudaDeviceTest, MarchingCubesTableReadsTheSameInDeviceCode) {
+    MemoryBlock<MarchingCubesTable> table(1, true, true);
+    CudaDevice::parallelFor(1, CopyTable{table.device()});
+    table.updateHost();
+    EXPECT_EQ(0, std::memcmp(table.host(), &kMarchingCubesTable, sizeof(MarchingCubesTable)));
+}
+
+TEST_F(CudaDeviceTest, MemoryBlockFillsCopiesRangesAndKnowsTheCurrentCopy) {
+    struct Odd {  // 6 bytes: the device fill writes elements byte by byte
+        std::int16_t a, b, c;
+    };
+    MemoryBlock<Odd> m(1001, true, true);
+    m.fill(Device::CUDA, Odd{1, -2, 3}, 0, 1001);
+    EXPECT_FALSE(m.isCurrent(Device::CPU));
+    m.updateHost();
+    EXPECT_TRUE(m.isCurrent(Device::CPU));
+    for (int i = 0; i < 1001; ++i) ASSERT_TRUE(m.host()[i].a == 1 && m.host()[i].b == -2 && m.host()[i].c == 3);
+    const Odd values[3] = {{7, 8, 9}, {10, 11, 12}, {13, 14, 15}};
+    m.writeRange(Device::CUDA, 500, values, 3);
+    EXPECT_FALSE(m.isCurrent(Device::CPU));
+    Odd back[5];
+    m.readRange(Device::CUDA, 499, back, 5);
+    EXPECT_EQ(back[0].a, 1);
+    EXPECT_EQ(back[1].a, 7);
+    EXPECT_EQ(back[3].c, 15);
+    EXPECT_EQ(back[4].b, -2);
+
+    MemoryBlock<Odd> copy(1001, false, true);
+    copyAcross(copy, Device::CUDA, m, Device::CUDA);
+    MemoryBlock<Odd> host(1001, true, false);
+    copyAcross(host, Device::CPU, copy, Device::CUDA);
+    EXPECT_EQ(host.host()[502].c, 15);
+}
+
+}  // namespace
+}  // namespace voxfuse

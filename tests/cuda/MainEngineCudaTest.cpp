@@ -1,0 +1,69 @@
+// The pipeline with its scene on the GPU (--device cuda: allocation, integration and raycast in CUDA,
+// tracking on the CPU from the raycast brought back) against the same pipeline on the CPU, tracked
+// on synthetic frames: the same poses, the same blocks, the same mesh. Skips visibly without a GPU.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "DeviceTestSupport.h"
+#include "SyntheticViews.h"
+#include "voxfuse/engines/MainEngine.h"
+
+namespace voxfuse {
+namespace {
+
+RGBDFrame toFrame(const View& view, int index) {
+    RGBDFrame f;
+    f.index = index;
+    f.timestamp_s = index / 30.0;
+    f.depth_raw.resize(view.depth.size());
+    for (std::size_t i = 0; i < view.depth.pixelCount(); ++i) f.depth_raw.host()[i] = std::uint16_t(std::lround(view.depth.host()[i] * 1000.f));
+    f.rgb.resize(view.rgb.size());
+    for (std::size_t i = 0; i < view.rgb.pixelCount(); ++i) f.rgb.host()[i] = view.rgb.host()[i];
+    return f;
+}
+
+class MainEngineCudaTest : public ::testing::TestWithParam<IndexType> {
+protected:
+    void SetUp() override { VF_SKIP_IF_UNAVAILABLE(Device::CUDA); }
+};
+
+TEST_P(MainEngineCudaTest, TrackedRunMatchesTheCpuPipeline) {
+    MainEngineSettings s;
+    s.voxel_type = VoxelType::SRgb;
+    s.index_type = GetParam();
+    s.scene.voxel_size_m = 0.01f;
+    s.scene.mu_m = 0.04f;
+    s.dense_offset = {-100, -100, -20};
+    s.dense_size = {200, 200, 120};
+    const Intrinsics intr = test::kinectIntrinsics(320, 240);
+    RGBDCalib calib;
+    calib.depth = calib.rgb = intr;
+    calib.disparity = DisparityCalib::affine(0.001f);
+    auto on_cpu = MainEngine::create(s, calib);
+    s.device = Device::CUDA;
+    auto on_gpu = MainEngine::create(s, calib);
+
+    const synth::SyntheticScene world = synth::SyntheticScene::boxAndSphere();
+    for (int k = 0; k < 12; ++k) {
+        const Mat4f pose = test::lookAt({1.0f + 0.01f * k, -0.8f + 0.02f * k, 0.7f}, {0.3f, 0.f, 0.1f});
+        const RGBDFrame frame = toFrame(test::renderView(world, intr, pose), k);
+        const FrameResult a = on_cpu->processFrame(frame, nullptr), b = on_gpu->processFrame(frame, nullptr);
+        ASSERT_EQ(a.fused, b.fused) << "frame " << k;
+        EXPECT_EQ(a.allocation.blocks_allocated, b.allocation.blocks_allocated) << "frame " << k;
+        const Vec3f dt = a.T_world_camera.translation() - b.T_world_camera.translation();
+        EXPECT_LT(length(dt), 1e-3f) << "frame " << k << ": poses within 1 mm";
+    }
+    Mesh mc, mg;
+    on_cpu->extractMesh(mc);
+    on_gpu->extractMesh(mg);
+    EXPECT_GT(mc.triangles.size(), 1000u);
+    EXPECT_NEAR(double(mg.triangles.size()), double(mc.triangles.size()), 0.005 * double(mc.triangles.size()));
+}
+
+INSTANTIATE_TEST_SUITE_P(Indexes, MainEngineCudaTest, ::testing::Values(IndexType::Hash, IndexType::Dense),
+                         [](const auto& info) { return std::string(toString(info.param)); });
+
+}  // namespace
+}  // namespace voxfuse

@@ -1,0 +1,135 @@
+// The CUDA layers' launch shapes run on the CPU: the engine stages (src/engines/*_Impl.h) with one
+// item per element, as on the GPU (a pixel per stage-1 element, a voxel per integration element, a
+// ray per raycast element, the dense frustum box voxel by voxel), must give exactly what the CPU
+// layer's wide elements give. Together with the device-parametrised engine tests this runs every
+// loop body a CUDA kernel runs, in the normal test suite; what remains GPU-only is the launch, the
+// atomics' device branch and the CUB primitives (tests/cuda/CudaDeviceTest.cu).
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+
+#include "DeviceTestSupport.h"
+#include "SyntheticViews.h"
+#include "core/CpuDevice.h"
+#include "engines/AllocationEngine_Impl.h"
+#include "engines/IntegrationEngine_Impl.h"
+#include "engines/RaycastEngine_Impl.h"
+#include "voxfuse/objects/Voxel.h"
+
+namespace voxfuse {
+namespace {
+
+// The CPU launcher and memory with the GPU's launch shapes.
+struct CpuDeviceWithGpuShapes : CpuDevice {
+    static constexpr bool kOneThreadPerItem = true;
+};
+
+template <class TVoxel>
+class GpuShapesOnCpuTest : public ::testing::Test {};
+using VoxelTypes = ::testing::Types<VoxelS, VoxelFRgb, VoxelSRgbLabel>;
+TYPED_TEST_SUITE(GpuShapesOnCpuTest, VoxelTypes);
+
+SceneParams testParams() {
+    SceneParams p;
+    p.voxel_size_m = 0.01f;
+    p.mu_m = 0.04f;
+    p.view_frustum_max_m = 2.5f;
+    return p;
+}
+
+std::vector<Mat4f> poses() {
+    std::vector<Mat4f> v;
+    for (int k = 0; k < 3; ++k) v.push_back(test::lookAt({1.0f - 0.25f * k, -0.8f + 0.4f * k, 0.7f}, {0.3f, 0.f, 0.1f}));
+    return v;
+}
+
+View labelledView(const Mat4f& pose, int k) {
+    static const synth::SyntheticScene world = synth::SyntheticScene::boxAndSphere();
+    View view = test::renderView(world, test::kinectIntrinsics(160, 120), pose);
+    view.labels.resize(Vec2i{80, 60});
+    for (int v = 0; v < 60; ++v)
+        for (int u = 0; u < 80; ++u) view.labels.at(u, v) = ClassId(1 + (u / 20 + k) % 4);
+    return view;
+}
+
+template <class TVoxel>
+void expectSameVoxels(const MemoryBlock<TVoxel>& a, const MemoryBlock<TVoxel>& b) {
+    ASSERT_EQ(test::firstDifferentVoxel(a, b), -1) << "voxels differ";
+}
+
+void expectSameRaycast(const RenderState& a, const RenderState& b) {
+    ASSERT_EQ(0, std::memcmp(a.points_world.host(), b.points_world.host(), a.points_world.memory().bytes()));
+    ASSERT_EQ(0, std::memcmp(a.normals_world.host(), b.normals_world.host(), a.normals_world.memory().bytes()));
+    ASSERT_EQ(0, std::memcmp(a.depth_range.host(), b.depth_range.host(), a.depth_range.memory().bytes()));
+    int hits = 0;
+    for (std::size_t i = 0; i < a.points_world.pixelCount(); ++i) hits += a.points_world.host()[i].w > 0.f;
+    EXPECT_GT(hits, 3000);
+}
+
+TYPED_TEST(GpuShapesOnCpuTest, HashPipelineGivesTheSameTableVoxelsRaysAndRenders) {
+    using TVoxel = TypeParam;
+    const SceneParams params = testParams();
+    Scene<TVoxel, VoxelBlockHash> wide(params, VoxelBlockHash(), Device::CPU), narrow(params, VoxelBlockHash(), Device::CPU);
+    auto wide_allocation = makeAllocationEngineOn<CpuDevice, TVoxel, VoxelBlockHash>();
+    auto narrow_allocation = makeAllocationEngineOn<CpuDeviceWithGpuShapes, TVoxel, VoxelBlockHash>();
+    auto wide_integration = makeIntegrationEngineOn<CpuDevice, TVoxel, VoxelBlockHash>();
+    auto narrow_integration = makeIntegrationEngineOn<CpuDeviceWithGpuShapes, TVoxel, VoxelBlockHash>();
+    auto wide_raycast = makeRaycastEngineOn<CpuDevice, TVoxel, VoxelBlockHash>();
+    auto narrow_raycast = makeRaycastEngineOn<CpuDeviceWithGpuShapes, TVoxel, VoxelBlockHash>();
+    int k = 0;
+    for (const Mat4f& pose : poses()) {
+        const View view = labelledView(pose, k++);
+        const AllocationStats a = wide_allocation->allocate(wide, view, pose), b = narrow_allocation->allocate(narrow, view, pose);
+        EXPECT_EQ(a.blocks_allocated_this_frame, b.blocks_allocated_this_frame);
+        EXPECT_EQ(a.visible_blocks, b.visible_blocks);
+        wide_integration->integrate(wide, view, pose);
+        narrow_integration->integrate(narrow, view, pose);
+        RenderState ra, rb;
+        wide_raycast->raycast(wide, view.calib.depth, pose, ra);
+        narrow_raycast->raycast(narrow, view.calib.depth, pose, rb);
+        expectSameRaycast(ra, rb);
+        for (RenderMode mode : {RenderMode::Shaded, RenderMode::Color, RenderMode::Class}) {
+            Image<Vec4u8> ia, ib;
+            wide_raycast->render(wide, ra, mode, ia);
+            narrow_raycast->render(narrow, rb, mode, ib);
+            ASSERT_EQ(0, std::memcmp(ia.host(), ib.host(), ia.memory().bytes()));
+        }
+    }
+    EXPECT_EQ(wide_allocation->removeEmptyBlocks(wide), narrow_allocation->removeEmptyBlocks(narrow));
+    const VoxelBlockHash &ha = wide.index(), &hb = narrow.index();
+    ASSERT_EQ(test::firstDifferentEntry(ha, hb), -1) << "tables differ";
+    expectSameVoxels(wide.voxels(), narrow.voxels());
+
+    // A free viewpoint: the depth ranges come from every allocated block, not the visible list.
+    const Mat4f free_view = test::lookAt({0.2f, 1.1f, 0.9f}, {0.2f, 0.f, 0.1f});
+    RenderState ra, rb;
+    wide_raycast->raycast(wide, test::kinectIntrinsics(160, 120), free_view, ra);
+    narrow_raycast->raycast(narrow, test::kinectIntrinsics(160, 120), free_view, rb);
+    expectSameRaycast(ra, rb);
+}
+
+TYPED_TEST(GpuShapesOnCpuTest, DenseIntegrationVoxelByVoxelEqualsTheClippedRows) {
+    using TVoxel = TypeParam;
+    const SceneParams params = testParams();
+    const PlainVoxelArray index({-60, -60, -20}, {140, 120, 80});
+    Scene<TVoxel, PlainVoxelArray> rows(params, index, Device::CPU), voxels(params, index, Device::CPU);
+    auto row_integration = makeIntegrationEngineOn<CpuDevice, TVoxel, PlainVoxelArray>();
+    auto voxel_integration = makeIntegrationEngineOn<CpuDeviceWithGpuShapes, TVoxel, PlainVoxelArray>();
+    auto row_raycast = makeRaycastEngineOn<CpuDevice, TVoxel, PlainVoxelArray>();
+    auto voxel_raycast = makeRaycastEngineOn<CpuDeviceWithGpuShapes, TVoxel, PlainVoxelArray>();
+    int k = 0;
+    for (const Mat4f& pose : poses()) {
+        const View view = labelledView(pose, k++);
+        row_integration->integrate(rows, view, pose);
+        voxel_integration->integrate(voxels, view, pose);
+    }
+    expectSameVoxels(rows.voxels(), voxels.voxels());
+    RenderState ra, rb;
+    row_raycast->raycast(rows, test::kinectIntrinsics(160, 120), poses().back(), ra);
+    voxel_raycast->raycast(voxels, test::kinectIntrinsics(160, 120), poses().back(), rb);
+    expectSameRaycast(ra, rb);
+}
+
+}  // namespace
+}  // namespace voxfuse
