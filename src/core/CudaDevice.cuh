@@ -42,14 +42,14 @@ struct CudaDevice {
 
     static int exclusiveScan(const int* in, int* out, int n, DeviceScratch& scratch) {
         if (n <= 0) return 0;
+        // The total is the last offset plus the last input, read before an in-place scan overwrites it.
+        int* last = static_cast<int*>(scratch.hostResult(2 * sizeof(int)));
+        VF_CUDA_CHECK(cudaMemcpy(last + 1, in + n - 1, sizeof(int), cudaMemcpyDeviceToHost));
         std::size_t temp_bytes = 0;
         VF_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(nullptr, temp_bytes, in, out, n));
         void* temp = scratch.get(temp_bytes);
         VF_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(temp, temp_bytes, in, out, n));
-        // The total is the last offset plus the last input.
-        int* last = static_cast<int*>(scratch.hostResult(2 * sizeof(int)));
         VF_CUDA_CHECK(cudaMemcpy(last, out + n - 1, sizeof(int), cudaMemcpyDeviceToHost));
-        VF_CUDA_CHECK(cudaMemcpy(last + 1, in + n - 1, sizeof(int), cudaMemcpyDeviceToHost));
         return last[0] + last[1];
     }
 

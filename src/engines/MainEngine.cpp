@@ -32,10 +32,7 @@ public:
           tracker_(makeTracker(settings.tracker, Device::CPU)),
           meshing_(makeMeshingEngine<TVoxel, TIndex>(Device::CPU)) {
         view_.calib = calib;
-        if (onGpu()) {
-            // Pinned host memory: the frame's depth crosses the bus every frame.
-            view_.depth.resize(calib.depth.size(), true, true, HostMemory::Pinned);
-        }
+        if (onGpu()) view_.depth.resize(calib.depth.size(), true, true, frameImageMemory());
     }
 
     FrameResult processFrame(const RGBDFrame& frame, const Mat4f* T_world_camera_given) override {
@@ -142,6 +139,8 @@ public:
 
 private:
     bool onGpu() const { return settings_.device == Device::CUDA; }
+    // Frame images that go to the GPU every frame live in pinned host memory.
+    HostMemory frameImageMemory() const { return onGpu() ? HostMemory::Pinned : HostMemory::Pageable; }
 
     // A stage's wall-clock time; on the GPU once its queued work has finished.
     double stageMs(const Timer& t) const {
@@ -168,7 +167,7 @@ private:
             view_.rgb = Image<Vec4u8>();
             return;
         }
-        view_.rgb.resize(frame.rgb.size());
+        view_.rgb.resize(frame.rgb.size(), true, false, frameImageMemory());
         std::memcpy(static_cast<void*>(view_.rgb.host()), frame.rgb.host(), frame.rgb.pixelCount() * sizeof(Vec4u8));
     }
 
@@ -178,7 +177,7 @@ private:
             view_.labels = Image<ClassId>();
             return;
         }
-        view_.labels.resize(frame.labels.size());
+        view_.labels.resize(frame.labels.size(), true, false, frameImageMemory());
         std::memcpy(static_cast<void*>(view_.labels.host()), frame.labels.host(), frame.labels.pixelCount() * sizeof(ClassId));
     }
 

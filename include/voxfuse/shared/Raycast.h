@@ -226,41 +226,31 @@ struct RaycastDensePixel {
     }
 };
 
-// The voxel block hash, a run of `span` pixels of a row per element sharing one CachedHashView (the CPU
-// layer runs whole rows, the CUDA layer single pixels): castRayHash() within the pixel's expected depth
-// range.
+// The voxel block hash, one pixel per element: castRayHash() within the pixel's expected depth range,
+// through a CachedHashView of its own (consecutive steps of a ray mostly stay in one block).
 template <class TVoxel>
-struct RaycastHashPixels {
+struct RaycastHashPixel {
     const TVoxel* voxels;
     HashTableView table;
     RaycastCamera camera;
     const Vec2f* depth_range;
     Vec4f* points_world;
     Vec4f* normals_world;
-    int span;
 
-    VF_HOST_DEVICE int elementCount() const {
-        return ((camera.intrinsics.width + span - 1) / span) * camera.intrinsics.height;
-    }
-    VF_HOST_DEVICE void operator()(int element) const {
-        const int width = camera.intrinsics.width, spans_per_row = (width + span - 1) / span;
-        const int y = element / spans_per_row, x0 = (element % spans_per_row) * span;
-        const int x1 = x0 + span < width ? x0 + span : width;
+    VF_HOST_DEVICE void operator()(int i) const {
+        const int x = i % camera.intrinsics.width, y = i / camera.intrinsics.width;
+        points_world[i] = normals_world[i] = Vec4f{0.f, 0.f, 0.f, 0.f};
+        const float z_min = fmaxf(depth_range[i].x, camera.min_depth_m);
+        const float z_max = fminf(depth_range[i].y, camera.max_depth_m);
+        if (!(z_max > z_min)) return;  // no visible block projects here
+        float t_per_depth;
+        const Vec3f dir = camera.rayThroughPixel(x, y, t_per_depth);
         const CachedHashView view(table);
-        for (int x = x0; x < x1; ++x) {
-            const int i = x + y * width;
-            points_world[i] = normals_world[i] = Vec4f{0.f, 0.f, 0.f, 0.f};
-            const float z_min = fmaxf(depth_range[i].x, camera.min_depth_m);
-            const float z_max = fminf(depth_range[i].y, camera.max_depth_m);
-            if (!(z_max > z_min)) continue;  // no visible block projects here
-            float t_per_depth;
-            const Vec3f dir = camera.rayThroughPixel(x, y, t_per_depth);
-            Vec3f hit;
-            if (!castRayHash(hit, voxels, view, camera.origin_grid, dir, camera.min_depth_m * t_per_depth, z_min * t_per_depth,
-                             z_max * t_per_depth, camera.step_scale))
-                continue;
-            raycastHitOutputs(voxels, view, hit, camera.voxel_size_m, points_world[i], normals_world[i]);
-        }
+        Vec3f hit;
+        if (!castRayHash(hit, voxels, view, camera.origin_grid, dir, camera.min_depth_m * t_per_depth, z_min * t_per_depth,
+                         z_max * t_per_depth, camera.step_scale))
+            return;
+        raycastHitOutputs(voxels, view, hit, camera.voxel_size_m, points_world[i], normals_world[i]);
     }
 };
 
