@@ -28,14 +28,6 @@ protected:
 using VoxelTypes = ::testing::Types<VoxelS, VoxelF, VoxelSRgb, VoxelFRgb, VoxelSLabel, VoxelSRgbLabel>;
 TYPED_TEST_SUITE(EngineCudaParityTest, VoxelTypes);
 
-SceneParams parityParams() {
-    SceneParams p;
-    p.voxel_size_m = 0.01f;
-    p.mu_m = 0.04f;
-    p.view_frustum_max_m = 2.5f;
-    return p;
-}
-
 std::vector<Mat4f> cameraPath() {
     std::vector<Mat4f> poses;
     for (int k = 0; k < 6; ++k) poses.push_back(test::lookAt({1.0f - 0.15f * k, -0.8f + 0.3f * k, 0.8f - 0.04f * k}, {0.2f, 0.f, 0.1f}));
@@ -44,12 +36,7 @@ std::vector<Mat4f> cameraPath() {
 
 View frameView(const Mat4f& pose, int k) {
     static const synth::SyntheticScene world = synth::SyntheticScene::boxAndSphere();
-    View view = test::renderView(world, test::kinectIntrinsics(320, 240), pose);
-    // Four classes in quadrants that move with the frame, so that neighbouring voxels disagree.
-    view.labels.resize(Vec2i{160, 120});
-    for (int v = 0; v < 120; ++v)
-        for (int u = 0; u < 160; ++u) view.labels.at(u, v) = ClassId(1 + (u * 4 / 160 + k) % 4);
-    return view;
+    return test::labelledView(world, test::kinectIntrinsics(320, 240), pose, k);
 }
 
 // Voxel agreement over the voxels either device observed.
@@ -91,7 +78,7 @@ void expectRaycastsAgree(RenderState& cpu, RenderState& gpu) {
 
 TYPED_TEST(EngineCudaParityTest, HashAllocatesTheSameTableAndFusesAndRaycastsTheSameModel) {
     using TVoxel = TypeParam;
-    const SceneParams params = parityParams();
+    const SceneParams params = test::centimetreSceneParams();
     Scene<TVoxel, VoxelBlockHash> on_cpu(params, VoxelBlockHash(VoxelBlockHashSettings(), Device::CPU), Device::CPU);
     Scene<TVoxel, VoxelBlockHash> on_gpu(params, VoxelBlockHash(VoxelBlockHashSettings(), Device::CUDA), Device::CUDA);
     auto cpu_allocation = makeAllocationEngine<TVoxel, VoxelBlockHash>(Device::CPU);
@@ -143,7 +130,7 @@ TYPED_TEST(EngineCudaParityTest, HashAllocatesTheSameTableAndFusesAndRaycastsThe
 
 TYPED_TEST(EngineCudaParityTest, DenseFusesAndRaycastsTheSameModel) {
     using TVoxel = TypeParam;
-    const SceneParams params = parityParams();
+    const SceneParams params = test::centimetreSceneParams();
     const PlainVoxelArray index({-80, -80, -20}, {180, 160, 100});
     Scene<TVoxel, PlainVoxelArray> on_cpu(params, index, Device::CPU), on_gpu(params, index, Device::CUDA);
     auto cpu_integration = makeIntegrationEngine<TVoxel, PlainVoxelArray>(Device::CPU);
@@ -167,7 +154,7 @@ TYPED_TEST(EngineCudaParityTest, DenseFusesAndRaycastsTheSameModel) {
 // A frame whose blocks overflow a small table: both devices refuse the same blocks and count them alike.
 TEST(EngineCudaCapacityTest, FullTablesFailTheSameBlocks) {
     VF_SKIP_IF_UNAVAILABLE(Device::CUDA);
-    const SceneParams params = parityParams();
+    const SceneParams params = test::centimetreSceneParams();
     VoxelBlockHashSettings s;
     s.bucket_count = 64;
     s.excess_entry_count = 200;

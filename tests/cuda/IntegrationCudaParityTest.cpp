@@ -33,14 +33,8 @@ TYPED_TEST(IntegrationCudaParityTest, CpuAndCudaGiveTheSameVoxels) {
     const Intrinsics intr = test::kinectIntrinsics(320, 240);
     for (int k = 0; k < 4; ++k) {
         const Mat4f pose = test::lookAt({0.9f - 0.2f * k, -0.7f + 0.3f * k, 0.8f}, {0.2f, 0.f, 0.1f});
-        View view = test::renderView(world, intr, pose);
+        View view = test::labelledView(world, intr, pose, k);
         view.frame_index = k;
-        if constexpr (TVoxel::hasLabel) {
-            // Four classes in quadrants of the image, so that neighbouring voxels see different classes.
-            view.labels.resize(Vec2i{intr.width / 2, intr.height / 2});
-            for (int v = 0; v < view.labels.height(); ++v)
-                for (int u = 0; u < view.labels.width(); ++u) view.labels.at(u, v) = ClassId(1 + (u * 4 / view.labels.width() + k) % 4);
-        }
         cpu_engine->integrate(on_cpu, view, pose);
         gpu_engine->integrate(on_gpu, view, pose);
     }

@@ -13,17 +13,6 @@
 namespace voxfuse {
 namespace {
 
-RGBDFrame toFrame(const View& view, int index) {
-    RGBDFrame f;
-    f.index = index;
-    f.timestamp_s = index / 30.0;
-    f.depth_raw.resize(view.depth.size());
-    for (std::size_t i = 0; i < view.depth.pixelCount(); ++i) f.depth_raw.host()[i] = std::uint16_t(std::lround(view.depth.host()[i] * 1000.f));
-    f.rgb.resize(view.rgb.size());
-    for (std::size_t i = 0; i < view.rgb.pixelCount(); ++i) f.rgb.host()[i] = view.rgb.host()[i];
-    return f;
-}
-
 class MainEngineCudaTest : public ::testing::TestWithParam<IndexType> {
 protected:
     void SetUp() override { VF_SKIP_IF_UNAVAILABLE(Device::CUDA); }
@@ -48,7 +37,7 @@ TEST_P(MainEngineCudaTest, TrackedRunMatchesTheCpuPipeline) {
     const synth::SyntheticScene world = synth::SyntheticScene::boxAndSphere();
     for (int k = 0; k < 12; ++k) {
         const Mat4f pose = test::lookAt({1.0f + 0.01f * k, -0.8f + 0.02f * k, 0.7f}, {0.3f, 0.f, 0.1f});
-        const RGBDFrame frame = toFrame(test::renderView(world, intr, pose), k);
+        const RGBDFrame frame = test::toRgbdFrame(test::renderView(world, intr, pose), k);
         const FrameResult a = on_cpu->processFrame(frame, nullptr), b = on_gpu->processFrame(frame, nullptr);
         ASSERT_EQ(a.fused, b.fused) << "frame " << k;
         EXPECT_EQ(a.allocation.blocks_allocated, b.allocation.blocks_allocated) << "frame " << k;

@@ -29,13 +29,7 @@ using BlockSet = std::set<Key>;
 Key key(Vec3i b) { return {b.x, b.y, b.z}; }
 using HashScene = Scene<VoxelS, VoxelBlockHash>;
 
-SceneParams testParams() {
-    SceneParams p;
-    p.voxel_size_m = 0.01f;
-    p.mu_m = 0.04f;
-    p.view_frustum_max_m = 2.5f;
-    return p;
-}
+SceneParams testParams() { return test::centimetreSceneParams(); }
 
 HashScene makeScene(const SceneParams& params, Device device, VoxelBlockHashSettings s = VoxelBlockHashSettings()) {
     return HashScene(params, VoxelBlockHash(s, device), device);

@@ -30,14 +30,6 @@ class GpuShapesOnCpuTest : public ::testing::Test {};
 using VoxelTypes = ::testing::Types<VoxelS, VoxelFRgb, VoxelSRgbLabel>;
 TYPED_TEST_SUITE(GpuShapesOnCpuTest, VoxelTypes);
 
-SceneParams testParams() {
-    SceneParams p;
-    p.voxel_size_m = 0.01f;
-    p.mu_m = 0.04f;
-    p.view_frustum_max_m = 2.5f;
-    return p;
-}
-
 std::vector<Mat4f> poses() {
     std::vector<Mat4f> v;
     for (int k = 0; k < 3; ++k) v.push_back(test::lookAt({1.0f - 0.25f * k, -0.8f + 0.4f * k, 0.7f}, {0.3f, 0.f, 0.1f}));
@@ -46,11 +38,7 @@ std::vector<Mat4f> poses() {
 
 View labelledView(const Mat4f& pose, int k) {
     static const synth::SyntheticScene world = synth::SyntheticScene::boxAndSphere();
-    View view = test::renderView(world, test::kinectIntrinsics(160, 120), pose);
-    view.labels.resize(Vec2i{80, 60});
-    for (int v = 0; v < 60; ++v)
-        for (int u = 0; u < 80; ++u) view.labels.at(u, v) = ClassId(1 + (u / 20 + k) % 4);
-    return view;
+    return test::labelledView(world, test::kinectIntrinsics(160, 120), pose, k);
 }
 
 template <class TVoxel>
@@ -69,7 +57,7 @@ void expectSameRaycast(const RenderState& a, const RenderState& b) {
 
 TYPED_TEST(GpuShapesOnCpuTest, HashPipelineGivesTheSameTableVoxelsRaysAndRenders) {
     using TVoxel = TypeParam;
-    const SceneParams params = testParams();
+    const SceneParams params = test::centimetreSceneParams();
     Scene<TVoxel, VoxelBlockHash> wide(params, VoxelBlockHash(), Device::CPU), narrow(params, VoxelBlockHash(), Device::CPU);
     auto wide_allocation = makeAllocationEngineOn<CpuDevice, TVoxel, VoxelBlockHash>();
     auto narrow_allocation = makeAllocationEngineOn<CpuDeviceWithGpuShapes, TVoxel, VoxelBlockHash>();
@@ -111,7 +99,7 @@ TYPED_TEST(GpuShapesOnCpuTest, HashPipelineGivesTheSameTableVoxelsRaysAndRenders
 
 TYPED_TEST(GpuShapesOnCpuTest, DenseIntegrationVoxelByVoxelEqualsTheClippedRows) {
     using TVoxel = TypeParam;
-    const SceneParams params = testParams();
+    const SceneParams params = test::centimetreSceneParams();
     const PlainVoxelArray index({-60, -60, -20}, {140, 120, 80});
     Scene<TVoxel, PlainVoxelArray> rows(params, index, Device::CPU), voxels(params, index, Device::CPU);
     auto row_integration = makeIntegrationEngineOn<CpuDevice, TVoxel, PlainVoxelArray>();

@@ -15,6 +15,7 @@
 #include <tuple>
 #include <vector>
 
+#include "DeviceTestSupport.h"
 #include "SyntheticViews.h"
 #include "voxfuse/engines/AllocationEngine.h"
 #include "voxfuse/engines/IntegrationEngine.h"
@@ -27,13 +28,7 @@ namespace {
 
 using Key = std::tuple<int, int, int>;
 
-template <class TVoxel>
-bool sameVoxel(const TVoxel& a, const TVoxel& b) {
-    bool same = a.sdf == b.sdf && a.w_depth == b.w_depth;
-    if constexpr (TVoxel::hasColor) same = same && a.w_color == b.w_color && a.clr == b.clr;
-    if constexpr (TVoxel::hasLabel) same = same && a.w_label == b.w_label && a.label == b.label;
-    return same;
-}
+using test::sameVoxel;
 
 template <class TVoxel>
 class HashDenseParityTest : public ::testing::Test {

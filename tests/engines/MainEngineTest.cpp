@@ -13,16 +13,6 @@
 namespace voxfuse {
 namespace {
 
-RGBDFrame toFrame(const View& view, int index) {
-    RGBDFrame f;
-    f.index = index;
-    f.depth_raw.resize(view.depth.size());
-    for (std::size_t i = 0; i < view.depth.pixelCount(); ++i) f.depth_raw.host()[i] = std::uint16_t(std::lround(view.depth.host()[i] * 1000.f));
-    f.rgb.resize(view.rgb.size());
-    for (std::size_t i = 0; i < view.rgb.pixelCount(); ++i) f.rgb.host()[i] = view.rgb.host()[i];
-    return f;
-}
-
 class MainEngineVoxelTest : public ::testing::TestWithParam<std::tuple<Device, VoxelType>> {
 protected:
     void SetUp() override { VF_SKIP_IF_UNAVAILABLE(std::get<0>(GetParam())); }
@@ -48,7 +38,7 @@ TEST_P(MainEngineVoxelTest, RaycastReproducesTheLastFrameDepth) {
     for (int k = 0; k < 5; ++k) {
         pose = test::lookAt({1.0f + 0.05f * k, -0.8f + 0.1f * k, 0.7f}, {0.3f, 0.f, 0.1f});
         last = test::renderView(world, intr, pose);
-        const FrameResult r = engine->processFrame(toFrame(last, k), &pose);
+        const FrameResult r = engine->processFrame(test::toRgbdFrame(last, k), &pose);
         EXPECT_TRUE(r.fused);
         ASSERT_EQ(r.stages.size(), s.device == Device::CUDA ? 6u : 5u);
         EXPECT_GT(r.total_ms, 0.0);

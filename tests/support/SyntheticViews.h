@@ -6,6 +6,8 @@
 
 #include "SyntheticScene.h"
 #include "voxfuse/core/EigenInterop.h"
+#include "voxfuse/io/RGBDFrame.h"
+#include "voxfuse/objects/SceneParams.h"
 #include "voxfuse/objects/View.h"
 
 namespace voxfuse::test {
@@ -58,6 +60,38 @@ inline Mat4f lookAt(const Eigen::Vector3f& eye, const Eigen::Vector3f& target) {
     T.block<3, 1>(0, 2) = z;
     T.block<3, 1>(0, 3) = eye;
     return toMat4f(T);
+}
+
+// A view with classes too: `classes` classes in vertical stripes of the label image (half the view's
+// resolution), moved by `shift` stripes, so that neighbouring voxels and frames disagree.
+inline View labelledView(const synth::SyntheticScene& scene, const Intrinsics& intr, const Mat4f& T_world_camera, int shift,
+                         int classes = 4) {
+    View view = renderView(scene, intr, T_world_camera);
+    view.labels.resize(Vec2i{intr.width / 2, intr.height / 2});
+    for (int v = 0; v < view.labels.height(); ++v)
+        for (int u = 0; u < view.labels.width(); ++u) view.labels.at(u, v) = ClassId(1 + (u * classes / view.labels.width() + shift) % classes);
+    return view;
+}
+
+// The frame a source would deliver for `view`: depth in millimetres (affine 0.001), colour as is.
+inline RGBDFrame toRgbdFrame(const View& view, int index) {
+    RGBDFrame f;
+    f.index = index;
+    f.timestamp_s = index / 30.0;
+    f.depth_raw.resize(view.depth.size());
+    for (std::size_t i = 0; i < view.depth.pixelCount(); ++i) f.depth_raw.host()[i] = std::uint16_t(std::lround(view.depth.host()[i] * 1000.f));
+    f.rgb.resize(view.rgb.size());
+    for (std::size_t i = 0; i < view.rgb.pixelCount(); ++i) f.rgb.host()[i] = view.rgb.host()[i];
+    return f;
+}
+
+// 1 cm voxels and a 4 cm band: small synthetic scenes fuse in milliseconds.
+inline SceneParams centimetreSceneParams(float max_depth_m = 2.5f) {
+    SceneParams p;
+    p.voxel_size_m = 0.01f;
+    p.mu_m = 0.04f;
+    p.view_frustum_max_m = max_depth_m;
+    return p;
 }
 
 }  // namespace voxfuse::test
