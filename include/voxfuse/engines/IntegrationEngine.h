@@ -1,6 +1,7 @@
 #pragma once
-// Fusing a depth (and colour) frame into the scene. The device layers (src/cpu/IntegrationEngine_CPU.cpp,
-// cuda/IntegrationEngine_CUDA.cu) loop over voxels and call integrateVoxel() from shared/Integration.h.
+// Fusing a depth (and colour, and class) frame into the scene. Stages: src/engines/IntegrationEngine_Impl.h,
+// run by src/cpu/IntegrationEngine_CPU.cpp and cuda/IntegrationEngine_CUDA.cu; every voxel update is
+// integrateVoxel() from shared/Integration.h. An engine works on scenes of its own device.
 
 #include <memory>
 

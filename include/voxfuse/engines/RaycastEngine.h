@@ -1,6 +1,8 @@
 #pragma once
 // Raycasting the model from a viewpoint (for the tracker and for display) and rendering images from
-// the result. Device layers call castRay() and friends from shared/Raycast.h.
+// the result. Stages: src/engines/RaycastEngine_Impl.h, run by src/cpu/RaycastEngine_CPU.cpp and
+// cuda/RaycastEngine_CUDA.cu; per-ray and per-pixel work in shared/Raycast.h and shared/Render.h.
+// An engine works on scenes of its own device; its RenderState images live there too.
 
 #include <memory>
 
@@ -18,7 +20,7 @@ public:
     // Fills render_state's points and normals for every pixel of `intrinsics` seen from T_world_camera.
     virtual void raycast(const Scene<TVoxel, TIndex>& scene, const Intrinsics& intrinsics, const Mat4f& T_world_camera,
                          RenderState& render_state) = 0;
-    // An RGBA image of the last raycast.
+    // An RGBA image of the last raycast (a raycast of this engine's device), with its host copy up to date.
     virtual void render(const Scene<TVoxel, TIndex>& scene, const RenderState& render_state, RenderMode mode,
                         Image<Vec4u8>& image) = 0;
 };
