@@ -177,8 +177,11 @@ private:
         }
         // The blocks taken are the ones between the stack's old and new tops.
         const int inserted = free_before - hash.freeBlocks();
-        const ResetVoxelBlocks<TVoxel> reset{scene.voxelData(), hash.state().free_blocks + hash.freeBlocks()};
-        TDevice::parallelFor(inserted * kBlockVoxelCount, reset);
+        const int* taken = hash.state().free_blocks + hash.freeBlocks();
+        constexpr int kBlocksPerLaunch = (1 << 30) / kBlockVoxelCount;  // element indices are ints
+        for (int first = 0; first < inserted; first += kBlocksPerLaunch)
+            TDevice::parallelFor(std::min(kBlocksPerLaunch, inserted - first) * kBlockVoxelCount,
+                                 ResetVoxelBlocks<TVoxel>{scene.voxelData(), taken + first});
         stats.blocks_allocated_this_frame += inserted;
         return inserted;
     }

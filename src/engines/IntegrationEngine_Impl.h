@@ -88,7 +88,12 @@ public:
             throw Error("hash integration: the visible list is not for this view (run the allocation engine on it first)");
         const IntegrationFrame frame = inputs_.frame(kDevice, scene.params(), view, T_world_camera, scene.takeIntegrationNumber());
         using Body = IntegrateHashVoxels<TVoxel, TDevice::kOneThreadPerItem ? 1 : kBlockVoxelCount>;
-        TDevice::parallelFor(Body::elementCount(hash.visibleCount()), Body{scene.voxelData(), hash.data().entries, hash.visibleEntries(), frame});
+        // At most 2^30 elements per launch (element indices are ints).
+        const int blocks_per_launch = (1 << 30) / Body::kElementsPerBlock;
+        for (int first = 0; first < hash.visibleCount(); first += blocks_per_launch) {
+            const int blocks = std::min(blocks_per_launch, hash.visibleCount() - first);
+            TDevice::parallelFor(Body::elementCount(blocks), Body{scene.voxelData(), hash.data().entries, hash.visibleEntries() + first, frame});
+        }
     }
 
     // Frees every block and returns the voxel storage to its initial (empty) size.
