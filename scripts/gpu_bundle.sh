@@ -22,7 +22,7 @@ mkdir -p "$bundle/bin" "$bundle/lib" "$bundle/fallback"
 cp "$build/tests/voxfuse_core_tests" "$build/tests/voxfuse_cuda_tests" "$build/apps/voxfuse_bench" "$bundle/bin/"
 cp -P "$build"/src/libvoxfuse_core.so* "$bundle/lib/"
 # The GPU machine's own C++ runtime is used where it has one; these serve where it has not.
-for lib in libgomp.so.1 libstdc++.so.6 libgcc_s.so.1; do
+for lib in libgomp.so.1 libstdc++.so.6 libgcc_s.so.1 libz.so.1; do
   cp -L "$(g++ -print-file-name=$lib)" "$bundle/fallback/$lib"
 done
 strip --strip-unneeded "$bundle"/bin/* "$bundle"/lib/libvoxfuse_core.so.*.* 2>/dev/null || true

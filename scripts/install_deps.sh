@@ -9,6 +9,7 @@ packages=(
   libopencv-dev        # image codecs (PNG/JPEG), video decoding (iPhone rgb.mp4), undistortion maps
   libopenni2-dev       # optional: OpenNI2 cameras and .oni recordings (VOXFUSE_OPENNI2); pulls in its drivers
   libcli11-dev         # command-line parsing
+  zlib1g-dev           # checksums of map files
   libgtest-dev libgmock-dev
   liboctomap-dev       # optional: the OctoMap occupancy map (--occupancy)
   libglfw3-dev         # optional: the voxfuse_viewer demo

@@ -121,6 +121,8 @@ void writeSummaryJson(const std::string& path, const RunRecord& run) {
     j.value("blocks_allocated", run.allocation.blocks_allocated);
     j.value("allocation_failures", (long long)run.allocation.allocation_failures_total);
     j.value("blocks_removed", (long long)run.allocation.blocks_removed_total);
+    if (!run.map_loaded.empty()) j.value("map_loaded", run.map_loaded);
+    if (!run.map_saved.empty()) j.value("map_saved", run.map_saved);
     j.beginObject("settings");
     j.value("voxel", toString(run.settings.voxel_type));
     j.value("index", toString(run.settings.index_type));
@@ -153,7 +155,9 @@ std::string summaryText(const RunRecord& run, const std::string& out_dir) {
     std::snprintf(line, sizeof line, "  frames       %zu processed, %d fused, %d without pose, %d unreadable, %d dropped (live)\n",
                   run.frames.size(), fused, run.frames_without_pose, run.frames_unreadable, run.frames_dropped);
     s << line;
-    if (run.tracked) {
+    if (run.frames.empty()) {
+        // A map written out without frames: nothing was tracked.
+    } else if (run.tracked) {
         std::snprintf(line, sizeof line, "  tracking     %s tracker: %d good, %d poor, %d failed (not fused)\n", toString(run.settings.tracker.kind),
                       int(run.frames.size()) - countQuality(run, TrackingQuality::Poor) - countQuality(run, TrackingQuality::Failed),
                       countQuality(run, TrackingQuality::Poor), countQuality(run, TrackingQuality::Failed));
@@ -199,6 +203,9 @@ std::string summaryText(const RunRecord& run, const std::string& out_dir) {
         s << line;
     }
     s << "\n";
+    if (!run.map_loaded.empty() || !run.map_saved.empty())
+        s << "  map          " << (run.map_loaded.empty() ? "" : "continued " + run.map_loaded + (run.map_saved.empty() ? "" : ", "))
+          << (run.map_saved.empty() ? "" : "saved to " + run.map_saved) << "\n";
     std::snprintf(line, sizeof line, "  peak memory  %.0f MB\n", run.peak_rss_mb);
     s << line;
     s << "  outputs      " << out_dir << "/ (trajectory.txt, timings.json, summary.json, render_*.png and any map outputs)\n";

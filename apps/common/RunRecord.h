@@ -31,6 +31,8 @@ struct RunRecord {
     double scene_mb = 0.0;
     AllocationStats allocation;       // the index at the end (hash only)
     bool tracked = false;             // poses came from the tracker (not ground truth)
+    std::string map_loaded;           // the map file the run continued, if any
+    std::string map_saved;            // the map file the run wrote, if any
     bool has_trajectory_error = false;
     TrajectoryError trajectory_error; // against the source's ground truth, when it has one
 };

@@ -12,6 +12,18 @@ SequenceRunner::SequenceRunner(ImageSource& source, MainEngine& engine, PoseSour
         throw ConfigError("poses from ground truth need a source with ground truth, and '" + source_.description() + "' has none");
 }
 
+int SequenceRunner::skip(int count) {
+    int skipped = 0;
+    for (; skipped < count; ++skipped) {
+        try {
+            if (!source_.next(frame_)) break;
+        } catch (const IoError&) {
+            // An unreadable frame is skipped all the same.
+        }
+    }
+    return skipped;
+}
+
 bool SequenceRunner::step() {
     for (;;) {
         try {
@@ -29,7 +41,10 @@ bool SequenceRunner::step() {
                 continue;
             }
             if (!have_origin_) {
-                T_origin_world_ = rigidInverse(frame_.T_world_camera_gt);
+                // The world is the first frame's camera, or the one of the map the engine continues.
+                Mat4f T_source_world = frame_.T_world_camera_gt;
+                if (!engine_.sourceOrigin(T_source_world)) engine_.setSourceOrigin(T_source_world);
+                T_origin_world_ = rigidInverse(T_source_world);
                 have_origin_ = true;
             }
             pose = T_origin_world_ * frame_.T_world_camera_gt;

@@ -1,7 +1,8 @@
 #pragma once
 // Drives a MainEngine over an ImageSource one frame at a time, the way every front-end needs it:
 // unreadable frames are reported and skipped, ground-truth poses are re-expressed relative to the
-// first one (the first camera defines the world, as with tracking), and each frame's result is recorded.
+// first one (the first camera defines the world, as with tracking; a map the engine loaded keeps its
+// own world), and each frame's result is recorded.
 
 #include <functional>
 #include <string>
@@ -22,6 +23,9 @@ public:
     // be read, or that lack a ground-truth pose when poses come from ground truth, are counted in the
     // record and skipped (the call moves on to the next frame).
     bool step();
+    // Reads and drops the next `count` frames (a run that continues a map saved after them). Returns
+    // how many there were.
+    int skip(int count);
     // The frame last processed (valid after step() returned true).
     const RGBDFrame& frame() const { return frame_; }
     const FrameRecord& lastRecord() const { return record_.frames.back(); }

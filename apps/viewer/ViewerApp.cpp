@@ -19,7 +19,7 @@ namespace {
 
 constexpr float kBackgroundGrey = 0.15f;  // window behind the panels: tells the panels' edges from black model background
 
-constexpr const char* kKeysLine = "n next | space run | 1-5 mode | drag/wheel view | c camera | m mesh | p shot | r reset | q quit";
+constexpr const char* kKeysLine = "n next | space run | 1-5 mode | drag/wheel view | c camera | m mesh | s map | p shot | r reset | q quit";
 
 const char* modeName(RenderMode mode) {
     switch (mode) {
@@ -199,6 +199,7 @@ void ViewerApp::onKey(int key, int action, int /*mods*/) {
         status_ = "following the camera";
         break;
     case GLFW_KEY_M: saveMesh(); break;
+    case GLFW_KEY_S: saveMap(); break;
     case GLFW_KEY_P: screenshot_requested_ = true; break;
     case GLFW_KEY_R: resetMap(); break;
     default: return;
@@ -226,6 +227,19 @@ void ViewerApp::saveMesh() {
         // A failed save must not end the session: report it and carry on.
         status_ = "mesh NOT saved (see the terminal)";
         std::cerr << "voxfuse_viewer: cannot save the mesh: " << e.what() << "\n";
+    }
+}
+
+void ViewerApp::saveMap() {
+    const std::filesystem::path path = std::filesystem::path(options_.out_dir) / "map.vfm";
+    try {
+        std::filesystem::create_directories(options_.out_dir);
+        engine_->saveMap(path.string());
+        status_ = "map saved to " + path.string();
+        std::cerr << "voxfuse_viewer: map -> " << path.string() << " (continue it with --load-map)\n";
+    } catch (const std::exception& e) {
+        status_ = "map NOT saved (see the terminal)";
+        std::cerr << "voxfuse_viewer: cannot save the map: " << e.what() << "\n";
     }
 }
 

@@ -24,7 +24,7 @@ struct ViewerOptions {
     bool start_running = true;           // process continuously from the start (space toggles)
     std::string screenshot_path;         // save the window as PNG once processing stops
     bool exit_when_done = false;         // quit once processing stops (after the screenshot)
-    std::string out_dir = "voxfuse_out"; // where m writes mesh.ply and p screenshot.png
+    std::string out_dir = "voxfuse_out"; // where m writes mesh.ply, s map.vfm and p screenshot.png
     app::PoseSource poses = app::PoseSource::Tracker;
 };
 
@@ -49,6 +49,7 @@ private:
     void renderModel();
     void drawPanels();
     void saveMesh();
+    void saveMap();
     void saveScreenshot(const std::string& path);
     void resetMap();
     void setMode(RenderMode mode);

@@ -21,7 +21,7 @@ namespace {
 
 constexpr const char* kKeyHelp =
     "keys: n next frame | space run/pause | 1-5 shaded/colour/normals/depth/class (Tab cycles) | left-drag orbit, wheel zoom,\n"
-    "      c back to the camera | m save mesh | p screenshot | r reset the map | q/Esc quit\n";
+    "      c back to the camera | m save mesh | s save map | p screenshot | r reset the map | q/Esc quit\n";
 
 struct Options {
     std::string source;
@@ -31,6 +31,7 @@ struct Options {
     std::string device = "cpu";
     std::string poses = "track";
     std::string size;
+    std::string load_map;
     bool paused = false;
     MainEngineSettings engine;
     viewer::ViewerOptions viewer;
@@ -58,12 +59,22 @@ int run(Options& o) {
     if (!o.size.empty()) parseWindowSize(o.size, o.viewer);
     std::unique_ptr<ImageSource> source = openImageSource(o.source, o.source_options);
     MainEngineSettings& s = o.engine;
+    if (!o.load_map.empty()) {
+        // The map decides the voxel type, the index and the voxel size.
+        const MapFileInfo map = readMapFileInfo(o.load_map);
+        if (!o.labels.voxel.empty() && o.labels.voxel != map.voxel_type)
+            throw ConfigError(o.load_map + ": the map has '" + map.voxel_type + "' voxels; --voxel cannot change it");
+        o.labels.voxel = map.voxel_type;
+        o.index = map.hash ? "hash" : "dense";
+        s = settingsForMap(map, s);
+    }
     app::attachLabelInput(source, o.source, o.labels, s, "voxfuse_viewer");
     std::cerr << "voxfuse_viewer: " << source->description() << "\n";
 
     s.index_type = parseIndexType(o.index);
     s.device = o.device == "cuda" ? Device::CUDA : Device::CPU;
     std::unique_ptr<MainEngine> engine = MainEngine::create(s, source->calib());
+    if (!o.load_map.empty()) engine->loadMap(o.load_map);
 
     o.viewer.poses = o.poses == "track" ? app::PoseSource::Tracker : app::PoseSource::GroundTruth;
     o.viewer.start_running = !o.paused || o.viewer.exit_when_done;  // --exit waits for processing to stop
@@ -88,7 +99,8 @@ int main(int argc, char** argv) {
     cli.add_option("--device", o.device, "where the scene lives and allocation, integration and raycast run (tracking stays on the CPU)")->capture_default_str()->check(CLI::IsMember({"cpu", "cuda"}));
     cli.add_option("--poses", o.poses, "track the camera, or take the source's ground truth")
         ->capture_default_str()->check(CLI::IsMember({"track", "groundtruth"}));
-    cli.add_option("--out", o.viewer.out_dir, "folder for the mesh (m) and screenshot (p)")->capture_default_str();
+    cli.add_option("--out", o.viewer.out_dir, "folder for the mesh (m), the map (s) and screenshot (p)")->capture_default_str();
+    cli.add_option("--load-map", o.load_map, "continue the map in this file (.vfm; see voxfuse --save-map and key s)")->check(CLI::ExistingFile);
     cli.add_option("--frames", o.viewer.max_frames, "stop processing after N frames (0 = all)")->check(CLI::NonNegativeNumber);
     cli.add_flag("--paused", o.paused, "start paused (n steps, space runs)");
     cli.add_option("--size", o.size, "window size WIDTHxHEIGHT (default 1200x640)");

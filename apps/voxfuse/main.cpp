@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -21,6 +22,7 @@
 #include "voxfuse/engines/MeshLabels.h"
 #include "voxfuse/engines/PointCloudDownsampling.h"
 #include "voxfuse/io/ImageIO.h"
+#include "voxfuse/io/MapFile.h"
 #include "voxfuse/io/MeshIO.h"
 #include "voxfuse/io/OpenNISource.h"
 #include "voxfuse/io/ThreadedImageSource.h"
@@ -40,7 +42,8 @@ struct CliOptions {
     std::string source;
     SourceOptions source_options;
     std::string out_dir = "voxfuse_out";
-    int max_frames = 0;  // 0 = all
+    int max_frames = -1;  // -1 = all; 0 = none (with --load-map: the map's outputs only)
+    int skip_frames = 0;  // dropped from the start of the source
     int render_every = 25;
     std::string index = "hash";
     std::string device = "cpu";
@@ -64,6 +67,9 @@ struct CliOptions {
     std::vector<float> tracker_max_distance;
     std::vector<int> dense_size{512, 512, 512};
     std::vector<int> dense_offset{-256, -256, 0};
+    std::string save_map;                 // write the map here at the end
+    std::string load_map;                 // continue this map (its voxel type, index and voxel size)
+    std::vector<std::string> given;       // options given on the command line that a map also sets
     MainEngineSettings engine;
 };
 
@@ -152,18 +158,87 @@ void writeMapOutputs(MainEngine& engine, const CliOptions& o) {
     }
 }
 
-// render_XXXXXX.png, and render_class_XXXXXX.png for voxel types with classes.
-void saveRenders(MainEngine& engine, const std::string& out_dir, int frame_index) {
+// render_<name>.png, and render_class_<name>.png for voxel types with classes.
+void saveRenders(MainEngine& engine, const std::string& out_dir, const std::string& name) {
     const VoxelType type = engine.settings().voxel_type;
     Image<Vec4u8> image;
-    char name[64];
     engine.renderLast(voxelTypeHasColor(type) ? RenderMode::Color : RenderMode::Shaded, image);
-    std::snprintf(name, sizeof name, "render_%06d.png", frame_index);
-    writePNG((fs::path(out_dir) / name).string(), image);
+    writePNG((fs::path(out_dir) / ("render_" + name + ".png")).string(), image);
     if (!voxelTypeHasLabels(type)) return;
     engine.renderLast(RenderMode::Class, image);
-    std::snprintf(name, sizeof name, "render_class_%06d.png", frame_index);
-    writePNG((fs::path(out_dir) / name).string(), image);
+    writePNG((fs::path(out_dir) / ("render_class_" + name + ".png")).string(), image);
+}
+void saveRenders(MainEngine& engine, const std::string& out_dir, int frame_index) {
+    char name[16];
+    std::snprintf(name, sizeof name, "%06d", frame_index);
+    saveRenders(engine, out_dir, std::string(name));
+}
+
+// With --load-map the map decides the voxel type, the index and its settings, the voxel size and mu;
+// giving another on the command line is an error rather than silently ignored.
+void adoptMapSettings(CliOptions& o, const MapFileInfo& map) {
+    const MainEngineSettings adopted = settingsForMap(map, o.engine);
+    auto given = [&](const char* option) { return std::find(o.given.begin(), o.given.end(), option) != o.given.end(); };
+    auto conflict = [&](const char* option, const std::string& what) {
+        throw ConfigError(o.load_map + ": the map has " + what + "; " + option + " cannot change it (leave the option out)");
+    };
+    if (!o.labels.voxel.empty() && o.labels.voxel != map.voxel_type) conflict("--voxel", "'" + map.voxel_type + "' voxels");
+    if (given("--index") && o.index != (map.hash ? "hash" : "dense")) conflict("--index", std::string("the ") + (map.hash ? "hash" : "dense") + " index");
+    if (given("--voxel-size") && o.engine.scene.voxel_size_m != map.scene.voxel_size_m)
+        conflict("--voxel-size", std::to_string(map.scene.voxel_size_m) + " m voxels");
+    if (given("--mu") && o.engine.scene.mu_m != map.scene.mu_m) conflict("--mu", "mu " + std::to_string(map.scene.mu_m) + " m");
+    for (const char* option : {"--max-blocks", "--hash-buckets", "--hash-excess", "--volume-size", "--volume-offset"})
+        if (given(option)) conflict(option, "its own index settings");
+    o.labels.voxel = map.voxel_type;
+    o.index = map.hash ? "hash" : "dense";
+    o.engine = adopted;
+    o.dense_size = {adopted.dense_size.x, adopted.dense_size.y, adopted.dense_size.z};
+    o.dense_offset = {adopted.dense_offset.x, adopted.dense_offset.y, adopted.dense_offset.z};
+}
+
+void applyDeviceAndIndex(const CliOptions& o, MainEngineSettings& s) {
+    s.index_type = parseIndexType(o.index);
+    s.device = o.device == "cuda" ? Device::CUDA : Device::CPU;
+    s.dense_size = {o.dense_size[0], o.dense_size[1], o.dense_size[2]};
+    s.dense_offset = {o.dense_offset[0], o.dense_offset[1], o.dense_offset[2]};
+    s.tracker = trackerSettings(o);
+}
+
+void saveMapIfAsked(MainEngine& engine, const CliOptions& o, app::RunRecord& record) {
+    if (o.save_map.empty()) return;
+    const Timer t;
+    engine.saveMap(o.save_map);
+    record.map_saved = o.save_map;
+    std::cerr << "voxfuse: map saved in " << int(t.elapsedMs()) << " ms -> " << o.save_map << "\n";
+}
+
+// --load-map with --frames 0: no source, only what the map gives (mesh, cloud, a render from the
+// pose it was saved at, the map saved again).
+int runOnMapAlone(CliOptions& o, const MapFileInfo& map) {
+    if (!map.camera.valid()) throw ConfigError(o.load_map + ": the map has no camera to render from; give a SOURCE");
+    MainEngineSettings& s = o.engine;
+    s.voxel_type = parseVoxelType(map.voxel_type);
+    applyDeviceAndIndex(o, s);
+    RGBDCalib calib;
+    calib.depth = calib.rgb = map.camera;
+    std::unique_ptr<MainEngine> engine = MainEngine::create(s, calib);
+    const Timer wall;
+    engine->loadMap(o.load_map);
+    fs::create_directories(o.out_dir);
+    app::RunRecord record;
+    record.source = "map " + o.load_map + " (no frames)";
+    record.settings = s;
+    record.map_loaded = o.load_map;
+    saveRenders(*engine, o.out_dir, "map");
+    writeMapOutputs(*engine, o);
+    saveMapIfAsked(*engine, o, record);
+    record.wall_s = wall.elapsedMs() / 1000.0;
+    record.peak_rss_mb = app::peakRssMb();
+    record.scene_mb = double(engine->sceneBytes()) / (1024.0 * 1024.0);
+    record.allocation = engine->allocationStats();
+    app::writeSummaryJson((fs::path(o.out_dir) / "summary.json").string(), record);
+    std::cout << app::summaryText(record, o.out_dir);
+    return 0;
 }
 
 int run(CliOptions& o) {
@@ -172,6 +247,14 @@ int run(CliOptions& o) {
         std::cout << (uris.empty() ? "no OpenNI2 camera found\n" : "OpenNI2 cameras:\n");
         for (const auto& uri : uris) std::cout << "  " << uri << "\n";
         return 0;
+    }
+    MapFileInfo map;
+    if (!o.load_map.empty()) {
+        map = readMapFileInfo(o.load_map);
+        adoptMapSettings(o, map);
+        if (o.max_frames == 0) return runOnMapAlone(o, map);
+    } else if (o.max_frames == 0) {
+        throw ConfigError("--frames 0 processes no frame: it needs --load-map, a map to write outputs from");
     }
     std::unique_ptr<ImageSource> source;
     if (o.live) {
@@ -195,23 +278,23 @@ int run(CliOptions& o) {
     }
     std::cerr << "voxfuse: " << source->description() << "\n";
 
-    s.index_type = parseIndexType(o.index);
-    s.device = o.device == "cuda" ? Device::CUDA : Device::CPU;
-    s.dense_size = {o.dense_size[0], o.dense_size[1], o.dense_size[2]};
-    s.dense_offset = {o.dense_offset[0], o.dense_offset[1], o.dense_offset[2]};
-    s.tracker = trackerSettings(o);
+    applyDeviceAndIndex(o, s);
 
     std::unique_ptr<MainEngine> engine = MainEngine::create(s, source->calib());
+    app::RunRecord record;
+    if (!o.load_map.empty()) {
+        engine->loadMap(o.load_map);
+        record.map_loaded = o.load_map;
+    }
     fs::create_directories(o.out_dir);
 
-    app::RunRecord record;
     record.source = source->description();
     record.has_labels = labels != nullptr;
     record.settings = s;
     record.tracked = o.poses == "track";
     app::SequenceRunner runner(*source, *engine, record.tracked ? app::PoseSource::Tracker : app::PoseSource::GroundTruth, record);
-    const int total = o.max_frames > 0 && (source->frameCount() < 0 || o.max_frames < source->frameCount()) ? o.max_frames
-                                                                                                               : source->frameCount();
+    const int total = o.max_frames >= 0 && (source->frameCount() < 0 || o.max_frames < source->frameCount()) ? o.max_frames
+                                                                                                                : source->frameCount();
     // The occupancy map is built on its own thread; the loop hands it each fused frame and never waits.
     std::unique_ptr<OccupancyMapper> occupancy;
     if (o.occupancy_res_m > 0.f) {
@@ -219,10 +302,11 @@ int run(CliOptions& o) {
         os.resolution_m = o.occupancy_res_m;
         occupancy = std::make_unique<OccupancyMapper>(os);
     }
+    if (o.skip_frames > 0) std::cerr << "voxfuse: skipped the first " << runner.skip(o.skip_frames) << " frames\n";
     ProgressLine progress(total);
     const Timer wall;
     int last_rendered = -1;
-    while ((o.max_frames <= 0 || int(record.frames.size()) < o.max_frames) && runner.step()) {
+    while ((o.max_frames < 0 || int(record.frames.size()) < o.max_frames) && runner.step()) {
         const FrameResult& fr = runner.lastRecord().result;
         record.frames_with_labels += !runner.frame().labels.empty();
         if (occupancy && fr.fused) occupancy->submit(engine->view().depth, engine->view().calib.depth, fr.T_world_camera);
@@ -248,6 +332,7 @@ int run(CliOptions& o) {
     }
     writeTumTrajectory((fs::path(o.out_dir) / "trajectory.txt").string(), record.trajectory);
     writeMapOutputs(*engine, o);
+    saveMapIfAsked(*engine, o, record);
     if (occupancy) {
         const std::string path = (fs::path(o.out_dir) / "occupancy.bt").string();
         occupancy->write(path);  // drains the queue first
@@ -279,7 +364,15 @@ int main(int argc, char** argv) {
     cli.add_option("--depth", o.source_options.depth_pattern, "16-bit PGM depth file pattern, e.g. frames/%04i.pgm");
     cli.add_option("--calib", o.source_options.calib_path, "InfiniTAM calib.txt (overrides the source's own)");
     cli.add_option("--out", o.out_dir, "output folder")->capture_default_str();
-    cli.add_option("--frames", o.max_frames, "process at most N frames (0 = all)")->check(CLI::NonNegativeNumber);
+    cli.add_option("--frames", o.max_frames, "process at most N frames (default: all; 0 with --load-map: none, only the map's outputs)")
+        ->check(CLI::NonNegativeNumber);
+    cli.add_option("--skip", o.skip_frames, "drop the first N frames of the source (e.g. those a --load-map map already holds)")
+        ->check(CLI::NonNegativeNumber);
+    cli.add_option("--save-map", o.save_map, "write the map to this file (.vfm) at the end, to continue or export it later");
+    cli.add_option("--load-map", o.load_map,
+                   "continue the map in this file (.vfm): its voxel type, index and voxel size are used, tracking resumes where it was "
+                   "saved; with --frames 0 no SOURCE is read")
+        ->check(CLI::ExistingFile);
     cli.add_option("--render-every", o.render_every, "write render_XXXXXX.png every N frames (0 = only the last)")
         ->capture_default_str()->check(CLI::NonNegativeNumber);
     cli.add_option("--voxel-size", o.engine.scene.voxel_size_m, "voxel edge in metres")->capture_default_str()->check(CLI::PositiveNumber);
@@ -315,6 +408,8 @@ int main(int argc, char** argv) {
     cli.add_option("--tracker-iterations", o.tracker_iterations, "iterations per level, coarse to fine");
     cli.add_option("--tracker-max-distance", o.tracker_max_distance, "ICP outlier distance per level (m), coarse to fine");
     CLI11_PARSE(cli, argc, argv);
+    for (const char* option : {"--index", "--voxel-size", "--mu", "--max-blocks", "--hash-buckets", "--hash-excess", "--volume-size", "--volume-offset"})
+        if (cli.count(option) > 0) o.given.push_back(option);
 
     try {
         return run(o);

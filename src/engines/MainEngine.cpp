@@ -114,6 +114,43 @@ public:
         raycast_->render(scene_, free_view_, mode, image);
     }
 
+    void saveMap(const std::string& path) override {
+        MapFileInfo pose;
+        pose.T_world_camera = tracking_.T_world_camera;
+        pose.has_origin = has_source_origin_;
+        pose.T_source_world = T_source_world_;
+        pose.camera = view_.calib.depth;
+        if (onGpu()) writeMapFile(path, scene_.copyTo(Device::CPU), pose);
+        else writeMapFile(path, scene_, pose);
+    }
+
+    MapFileInfo loadMap(const std::string& path) override {
+        // Read into a new host scene first: a file that fails leaves the engine as it was.
+        Scene<TVoxel, TIndex> loaded(settings_.scene, newIndex(), Device::CPU);
+        const MapFileInfo info = readMapFile(path, loaded);
+        scene_ = onGpu() ? loaded.copyTo(Device::CUDA) : std::move(loaded);
+        if constexpr (std::is_same<TIndex, VoxelBlockHash>::value) allocation_stats_ = scene_.index().stats();
+        else allocation_stats_ = AllocationStats();
+        frames_fused_ = 0;
+        tracker_->reset();
+        tracking_ = TrackingState();
+        tracking_.T_world_camera = info.T_world_camera;
+        has_source_origin_ = info.has_origin;
+        T_source_world_ = info.T_source_world;
+        raycast_->raycast(scene_, view_.calib.depth, tracking_.T_world_camera, render_state_);
+        if (onGpu()) render_state_.updateHost();
+        return info;
+    }
+
+    void setSourceOrigin(const Mat4f& T_source_world) override {
+        T_source_world_ = T_source_world;
+        has_source_origin_ = true;
+    }
+    bool sourceOrigin(Mat4f& T_source_world) const override {
+        if (has_source_origin_) T_source_world = T_source_world_;
+        return has_source_origin_;
+    }
+
     void reset() override {
         resetScene();
         tracker_->reset();
@@ -139,6 +176,11 @@ public:
 
 private:
     bool onGpu() const { return settings_.device == Device::CUDA; }
+
+    TIndex newIndex() const {
+        if constexpr (std::is_same<TIndex, VoxelBlockHash>::value) return VoxelBlockHash(settings_.hash);
+        else return PlainVoxelArray(settings_.dense_offset, settings_.dense_size);
+    }
     // Frame images that go to the GPU every frame live in pinned host memory.
     HostMemory frameImageMemory() const { return onGpu() ? HostMemory::Pinned : HostMemory::Pageable; }
 
@@ -195,6 +237,8 @@ private:
     RenderState free_view_;
     AllocationStats allocation_stats_;
     int frames_fused_ = 0;
+    bool has_source_origin_ = false;
+    Mat4f T_source_world_ = Mat4f::identity();
 };
 
 template <class TVoxel>
@@ -242,6 +286,19 @@ std::unique_ptr<MainEngine> MainEngine::create(const MainEngineSettings& s, cons
     if (s.device == Device::CUDA && !device_memory::cudaAvailable())
         throw DeviceError("CUDA was requested but is not usable: " + device_memory::cudaDescription());
     return visitVoxelType(s.voxel_type, [&](auto tag) { return createForVoxel<typename decltype(tag)::Voxel>(s, calib); });
+}
+
+MainEngineSettings settingsForMap(const MapFileInfo& info, MainEngineSettings base) {
+    base.voxel_type = parseVoxelType(info.voxel_type);
+    base.index_type = info.hash ? IndexType::Hash : IndexType::Dense;
+    if (info.hash) base.hash = info.hash_settings;
+    else {
+        base.dense_offset = info.dense_offset;
+        base.dense_size = info.dense_size;
+    }
+    base.scene.voxel_size_m = info.scene.voxel_size_m;
+    base.scene.mu_m = info.scene.mu_m;
+    return base;
 }
 
 VoxelType parseVoxelType(const std::string& name) {

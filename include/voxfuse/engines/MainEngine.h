@@ -10,6 +10,7 @@
 #include "voxfuse/core/DeviceMemory.h"
 #include "voxfuse/engines/RaycastEngine.h"
 #include "voxfuse/engines/Tracker.h"
+#include "voxfuse/io/MapFile.h"
 #include "voxfuse/io/RGBDFrame.h"
 #include "voxfuse/objects/AllocationStats.h"
 #include "voxfuse/objects/Mesh.h"
@@ -98,6 +99,23 @@ public:
     virtual void extractMesh(Mesh& mesh) = 0;
     // The mesh's vertices only (one point per zero-crossing voxel edge): cheaper than extractMesh.
     virtual void extractPointCloud(PointCloud& cloud) = 0;
+
+    // Writes the map to a map file (io/MapFile.h) with the current pose, where tracking resumes. IoError
+    // naming the file on failure; a failed save leaves no half-written file.
+    virtual void saveMap(const std::string& path) = 0;
+    // Replaces the map with a map file's and resumes from the pose it was saved with: the model is
+    // raycast from there, so the next frame is tracked against the loaded map. The file must match this
+    // engine's voxel type, index settings, voxel size and mu (settingsForMap() makes settings that
+    // do); IoError naming the file and the mismatch otherwise. Returns the file's header.
+    virtual MapFileInfo loadMap(const std::string& path) = 0;
+    // With poses from a source's ground truth: the world frame's pose in the source's frame (its first
+    // frame, or what a loaded map says). SequenceRunner sets it; saveMap() stores it. False if unknown.
+    virtual void setSourceOrigin(const Mat4f& T_source_world) = 0;
+    virtual bool sourceOrigin(Mat4f& T_source_world) const = 0;
 };
+
+// `base` with the voxel type, index, index settings, voxel size and mu of a map file, so that an engine
+// created with them can load it; every other setting stays as in `base`.
+MainEngineSettings settingsForMap(const MapFileInfo& info, MainEngineSettings base);
 
 }  // namespace voxfuse

@@ -46,6 +46,9 @@ public:
     // Each call of an integration engine takes the next number (from 0). Label fusion draws its random
     // numbers from it: they differ from frame to frame whatever indices the caller gives its frames.
     std::uint32_t takeIntegrationNumber() { return integrations_++; }
+    std::uint32_t integrationCount() const { return integrations_; }
+    // A map read from a file continues the count it was saved with.
+    void setIntegrationCount(std::uint32_t count) { integrations_ = count; }
 
     // An independent copy of the whole scene (index, voxels, integration count) on `where`.
     Scene copyTo(Device where) const {

@@ -1,0 +1,474 @@
+// Map files: the format of io/MapFile.h, written field by field in little-endian order.
+
+#include "voxfuse/io/MapFile.h"
+
+#include <unistd.h>
+#include <zlib.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <utility>
+#include <vector>
+
+#include "voxfuse/core/Error.h"
+#include "voxfuse/engines/EnginePairs.h"
+#include "voxfuse/objects/Scene.h"
+#include "voxfuse/shared/HashAccess.h"
+#include "voxfuse/shared/HashUpdate.h"
+
+namespace voxfuse {
+namespace {
+
+constexpr char kMagic[8] = {'V', 'F', 'M', 'A', 'P', '\r', '\n', '\x1a'};
+constexpr char kEndMagic[8] = {'V', 'F', 'M', 'A', 'P', 'E', 'N', 'D'};
+constexpr std::size_t kVoxelTypeNameBytes = 16;
+constexpr std::size_t kChunkBytes = std::size_t(1) << 20;  // the body is streamed in pieces of about this size
+// Version 1's header: the voxel type name, 26 four-byte fields, 3 flags, 2 matrices, the record count.
+constexpr std::uint32_t kHeaderBytes = kVoxelTypeNameBytes + 4 * 26 + 3 + 2 * 64 + 8;
+
+// ---- Bytes out: little-endian fields into a buffer, flushed to the file in chunks, with a running CRC ----
+class FieldWriter {
+public:
+    FieldWriter(std::ofstream& out, const std::string& path) : out_(out), path_(path) {}
+    void u8(std::uint8_t v) { buffer_.push_back(v); }
+    void u16(std::uint16_t v) { bytes(v, 2); }
+    void i16(std::int16_t v) { u16(std::uint16_t(v)); }
+    void u32(std::uint32_t v) { bytes(v, 4); }
+    void i32(std::int32_t v) { u32(std::uint32_t(v)); }
+    void u64(std::uint64_t v) { bytes(v, 8); }
+    void f32(float v) {
+        std::uint32_t bits;
+        std::memcpy(&bits, &v, 4);
+        u32(bits);
+    }
+    void raw(const char* p, std::size_t n) { buffer_.insert(buffer_.end(), p, p + n); }
+    // Sends the buffered bytes to the file, adding them to the checksum first when `checksummed`.
+    void flush(bool checksummed = true) {
+        if (checksummed) crc_ = crc32(crc_, buffer_.data(), unsigned(buffer_.size()));
+        out_.write(reinterpret_cast<const char*>(buffer_.data()), std::streamsize(buffer_.size()));
+        if (!out_) throw IoError(path_, std::string("cannot write the map: ") + std::strerror(errno));
+        buffer_.clear();
+    }
+    void flushIfFull() {
+        if (buffer_.size() >= kChunkBytes) flush();
+    }
+    std::size_t buffered() const { return buffer_.size(); }
+    std::uint32_t crc() const { return std::uint32_t(crc_); }
+    void resetCrc() { crc_ = crc32(0L, Z_NULL, 0); }
+
+private:
+    void bytes(std::uint64_t v, int n) {
+        for (int i = 0; i < n; ++i) buffer_.push_back(std::uint8_t(v >> (8 * i)));
+    }
+    std::ofstream& out_;
+    std::string path_;
+    std::vector<std::uint8_t> buffer_;
+    uLong crc_ = crc32(0L, Z_NULL, 0);
+};
+
+// ---- Bytes in: little-endian fields from the file, read in chunks, with a running CRC ----
+class FieldReader {
+public:
+    FieldReader(std::ifstream& in, const std::string& path) : in_(in), path_(path) {}
+    std::uint8_t u8() { return take(1)[0]; }
+    std::uint16_t u16() { return std::uint16_t(bytes(2)); }
+    std::int16_t i16() { return std::int16_t(u16()); }
+    std::uint32_t u32() { return std::uint32_t(bytes(4)); }
+    std::int32_t i32() { return std::int32_t(u32()); }
+    std::uint64_t u64() { return bytes(8); }
+    float f32() {
+        const std::uint32_t bits = u32();
+        float v;
+        std::memcpy(&v, &bits, 4);
+        return v;
+    }
+    void raw(char* p, std::size_t n) { std::memcpy(p, take(n), n); }
+    // Makes `n` bytes available (from the file, in one piece) and counts them into the checksum.
+    const std::uint8_t* take(std::size_t n) {
+        if (pos_ + n > buffer_.size()) refill(n);
+        const std::uint8_t* p = buffer_.data() + pos_;
+        crc_ = crc32(crc_, p, unsigned(n));
+        pos_ += n;
+        return p;
+    }
+    std::uint32_t crc() const { return std::uint32_t(crc_); }
+    void resetCrc() { crc_ = crc32(0L, Z_NULL, 0); }
+    // True when every byte of the file has been taken.
+    bool atEnd() { return pos_ == buffer_.size() && in_.peek() == std::char_traits<char>::eof(); }
+    [[noreturn]] void fail(const std::string& reason) const { throw IoError(path_, reason); }
+
+private:
+    std::uint64_t bytes(int n) {
+        const std::uint8_t* p = take(std::size_t(n));
+        std::uint64_t v = 0;
+        for (int i = 0; i < n; ++i) v |= std::uint64_t(p[i]) << (8 * i);
+        return v;
+    }
+    void refill(std::size_t n) {
+        buffer_.erase(buffer_.begin(), buffer_.begin() + std::ptrdiff_t(pos_));
+        pos_ = 0;
+        const std::size_t want = std::max(n, kChunkBytes);
+        const std::size_t have = buffer_.size();
+        buffer_.resize(want);
+        in_.read(reinterpret_cast<char*>(buffer_.data() + have), std::streamsize(want - have));
+        buffer_.resize(have + std::size_t(in_.gcount()));
+        if (buffer_.size() < n) fail("truncated: the file ends inside the map (" + std::to_string(offset()) + " bytes read)");
+    }
+    std::uint64_t offset() const { return std::uint64_t(in_.tellg() < 0 ? 0 : std::uint64_t(in_.tellg())); }
+    std::ifstream& in_;
+    std::string path_;
+    std::vector<std::uint8_t> buffer_;
+    std::size_t pos_ = 0;
+    uLong crc_ = crc32(0L, Z_NULL, 0);
+};
+
+// ---- Voxel records ----
+
+template <class TVoxel>
+constexpr std::uint32_t voxelRecordBytes() {
+    return std::uint32_t(sizeof(TVoxel::initial().sdf)) + 1 + (TVoxel::hasColor ? 4 : 0) + (TVoxel::hasLabel ? 3 : 0);
+}
+
+template <class TVoxel>
+void writeVoxelRecord(FieldWriter& w, const TVoxel& v) {
+    if constexpr (sizeof(v.sdf) == 2) w.i16(v.sdf);
+    else w.f32(v.sdf);
+    w.u8(v.w_depth);
+    if constexpr (TVoxel::hasColor) {
+        w.u8(v.w_color);
+        w.u8(v.clr.x);
+        w.u8(v.clr.y);
+        w.u8(v.clr.z);
+    }
+    if constexpr (TVoxel::hasLabel) {
+        w.u16(v.label);
+        w.u8(v.w_label);
+    }
+}
+
+template <class TVoxel>
+TVoxel readVoxelRecord(FieldReader& r) {
+    TVoxel v = TVoxel::initial();
+    if constexpr (sizeof(v.sdf) == 2) {
+        v.sdf = r.i16();
+    } else {
+        v.sdf = r.f32();
+        if (!(std::fabs(v.sdf) <= 1.f)) r.fail("corrupt: a voxel's signed distance is not in [-1, 1]");
+    }
+    v.w_depth = r.u8();
+    if constexpr (TVoxel::hasColor) {
+        v.w_color = r.u8();
+        const std::uint8_t red = r.u8(), green = r.u8(), blue = r.u8();
+        v.clr = Vec3u8{red, green, blue};
+    }
+    if constexpr (TVoxel::hasLabel) {
+        v.label = r.u16();
+        v.w_label = r.u8();
+    }
+    return v;
+}
+
+// ---- Header ----
+
+void writeMat(FieldWriter& w, const Mat4f& m) {
+    for (float x : m.m) w.f32(x);
+}
+Mat4f readMat(FieldReader& r) {
+    Mat4f m;
+    for (float& x : m.m) x = r.f32();
+    return m;
+}
+
+void writeHeaderFields(FieldWriter& w, const MapFileInfo& info, std::uint32_t voxel_bytes) {
+    char name[kVoxelTypeNameBytes] = {};
+    std::strncpy(name, info.voxel_type.c_str(), kVoxelTypeNameBytes - 1);
+    w.raw(name, kVoxelTypeNameBytes);
+    w.u32(voxel_bytes);
+    w.u32(info.hash ? 1 : 0);
+    w.i32(info.hash_settings.bucket_count);
+    w.i32(info.hash_settings.entries_per_bucket);
+    w.i32(info.hash_settings.excess_entry_count);
+    w.i32(info.hash_settings.max_block_count);
+    w.i32(info.hash_settings.blocks_per_growth);
+    for (int a = 0; a < 3; ++a) w.i32(info.dense_offset[a]);
+    for (int a = 0; a < 3; ++a) w.i32(info.dense_size[a]);
+    w.f32(info.scene.voxel_size_m);
+    w.f32(info.scene.mu_m);
+    w.i32(info.scene.max_weight);
+    w.f32(info.scene.view_frustum_min_m);
+    w.f32(info.scene.view_frustum_max_m);
+    w.u8(info.scene.stop_integrating_at_max_weight ? 1 : 0);
+    w.u8(info.scene.label_update == LabelUpdate::Vote ? 1 : 0);
+    writeMat(w, info.T_world_camera);
+    w.u8(info.has_origin ? 1 : 0);
+    writeMat(w, info.T_source_world);
+    w.i32(info.camera.width);
+    w.i32(info.camera.height);
+    w.f32(info.camera.fx);
+    w.f32(info.camera.fy);
+    w.f32(info.camera.cx);
+    w.f32(info.camera.cy);
+    w.u32(info.integration_count);
+    w.u64(info.record_count);
+}
+
+bool finite(const Mat4f& m) {
+    return std::all_of(std::begin(m.m), std::end(m.m), [](float x) { return std::isfinite(x); });
+}
+
+// Reads magic, version and header, checking each; leaves the reader at the body.
+MapFileInfo readHeader(FieldReader& r) {
+    char magic[8];
+    r.raw(magic, 8);
+    if (std::memcmp(magic, kMagic, 8) != 0) r.fail("not a VoxFuse map file (no VFMAP signature)");
+    MapFileInfo info;
+    info.version = r.u32();
+    if (info.version == 0 || info.version > kMapFileVersion)
+        r.fail("map file version " + std::to_string(info.version) + " is not one this VoxFuse reads (up to " + std::to_string(kMapFileVersion) +
+               ")");
+    const std::uint32_t header_bytes = r.u32();
+    r.resetCrc();
+    char name[kVoxelTypeNameBytes + 1] = {};
+    r.raw(name, kVoxelTypeNameBytes);
+    info.voxel_type = name;
+    const std::uint32_t voxel_bytes = r.u32();
+    const std::uint32_t index = r.u32();
+    info.hash = index == 1;
+    info.hash_settings.bucket_count = r.i32();
+    info.hash_settings.entries_per_bucket = r.i32();
+    info.hash_settings.excess_entry_count = r.i32();
+    info.hash_settings.max_block_count = r.i32();
+    info.hash_settings.blocks_per_growth = r.i32();
+    for (int a = 0; a < 3; ++a) info.dense_offset[a] = r.i32();
+    for (int a = 0; a < 3; ++a) info.dense_size[a] = r.i32();
+    info.scene.voxel_size_m = r.f32();
+    info.scene.mu_m = r.f32();
+    info.scene.max_weight = r.i32();
+    info.scene.view_frustum_min_m = r.f32();
+    info.scene.view_frustum_max_m = r.f32();
+    info.scene.stop_integrating_at_max_weight = r.u8() != 0;
+    info.scene.label_update = r.u8() != 0 ? LabelUpdate::Vote : LabelUpdate::Probabilistic;
+    info.T_world_camera = readMat(r);
+    info.has_origin = r.u8() != 0;
+    info.T_source_world = readMat(r);
+    info.camera.width = r.i32();
+    info.camera.height = r.i32();
+    info.camera.fx = r.f32();
+    info.camera.fy = r.f32();
+    info.camera.cx = r.f32();
+    info.camera.cy = r.f32();
+    info.integration_count = r.u32();
+    info.record_count = r.u64();
+    const std::uint32_t computed = r.crc();
+    if (r.u32() != computed) r.fail("corrupt: the header's checksum does not match");
+    if (header_bytes != kHeaderBytes) r.fail("corrupt: header size " + std::to_string(header_bytes) + " is not version 1's");
+    if (index > 1) r.fail("corrupt: unknown index type " + std::to_string(index));
+    bool known = false;
+#define VF_KNOWN_VOXEL(TVoxel, TIndex) \
+    if (info.voxel_type == TVoxel::name) known = known || voxel_bytes == voxelRecordBytes<TVoxel>();
+    VF_FOR_EACH_ENGINE_PAIR(VF_KNOWN_VOXEL)
+#undef VF_KNOWN_VOXEL
+    if (!known) r.fail("unknown voxel type '" + info.voxel_type + "' with " + std::to_string(voxel_bytes) + "-byte records");
+    if (!(info.scene.voxel_size_m > 0.f) || !(info.scene.mu_m > info.scene.voxel_size_m) || info.scene.max_weight < 1 ||
+        info.scene.max_weight > 255 || !finite(info.T_world_camera) || !finite(info.T_source_world) || info.camera.width < 0 ||
+        info.camera.height < 0 || info.camera.width > 1 << 16 || info.camera.height > 1 << 16 ||
+        !(std::isfinite(info.camera.fx) && std::isfinite(info.camera.fy) && std::isfinite(info.camera.cx) && std::isfinite(info.camera.cy)))
+        r.fail("corrupt: the scene settings, poses or camera are out of range");
+    return info;
+}
+
+// ---- Index-specific bodies ----
+
+template <class TVoxel>
+void writeBody(FieldWriter& w, const Scene<TVoxel, VoxelBlockHash>& scene) {
+    const VoxelBlockHash& hash = scene.index();
+    std::vector<std::pair<std::uint64_t, int>> blocks;  // (key, voxel block), in (z, y, x) order
+    for (int i = 0; i < hash.entryCount(); ++i) {
+        const HashEntry& e = hash.entry(i);
+        if (e.ptr >= 0) blocks.push_back({blockKey({e.pos.x, e.pos.y, e.pos.z}), e.ptr});
+    }
+    std::sort(blocks.begin(), blocks.end());
+    const TVoxel* voxels = scene.voxels().host();
+    for (const auto& [key, ptr] : blocks) {
+        const Vec3i b = blockFromKey(key);
+        w.i16(std::int16_t(b.x));
+        w.i16(std::int16_t(b.y));
+        w.i16(std::int16_t(b.z));
+        for (int v = 0; v < kBlockVoxelCount; ++v) writeVoxelRecord(w, voxels[std::size_t(ptr) * kBlockVoxelCount + std::size_t(v)]);
+        w.flushIfFull();
+    }
+}
+
+template <class TVoxel>
+void writeBody(FieldWriter& w, const Scene<TVoxel, PlainVoxelArray>& scene) {
+    const TVoxel* voxels = scene.voxels().host();
+    for (std::size_t i = 0; i < scene.voxels().size(); ++i) {
+        writeVoxelRecord(w, voxels[i]);
+        w.flushIfFull();
+    }
+}
+
+template <class TVoxel>
+std::uint64_t recordCount(const Scene<TVoxel, VoxelBlockHash>& scene) {
+    return std::uint64_t(scene.index().blocksInUse());
+}
+template <class TVoxel>
+std::uint64_t recordCount(const Scene<TVoxel, PlainVoxelArray>& scene) {
+    return std::uint64_t(scene.voxels().size());
+}
+
+template <class TVoxel>
+void readBody(FieldReader& r, const MapFileInfo& info, Scene<TVoxel, VoxelBlockHash>& scene) {
+    VoxelBlockHash& hash = scene.index();
+    if (info.record_count > std::uint64_t(hash.settings().max_block_count))
+        r.fail("corrupt: " + std::to_string(info.record_count) + " blocks, more than the map's maximum of " +
+               std::to_string(hash.settings().max_block_count));
+    scene.reserveVoxelBlocks(int(info.record_count));
+    std::uint64_t previous_key = 0;
+    for (std::uint64_t k = 0; k < info.record_count; ++k) {
+        Vec3i b;
+        b.x = r.i16();
+        b.y = r.i16();
+        b.z = r.i16();
+        const std::uint64_t key = blockKey(b);
+        if (key == kOutOfRangeBlockKey) r.fail("corrupt: block " + std::to_string(k) + " lies outside the storable coordinates");
+        if (k > 0 && key <= previous_key) r.fail("corrupt: blocks are not in (z, y, x) order, or one is listed twice");
+        previous_key = key;
+        int entry;
+        if (hash.insert(b, &entry) != VoxelBlockHash::InsertResult::Inserted)
+            r.fail("the map's blocks do not fit its hash settings (block " + std::to_string(k) + ")");
+        TVoxel* block = scene.voxels().host() + std::size_t(hash.entry(entry).ptr) * kBlockVoxelCount;
+        for (int v = 0; v < kBlockVoxelCount; ++v) block[v] = readVoxelRecord<TVoxel>(r);
+    }
+    hash.stats().blocks_allocated = hash.blocksInUse();
+    hash.stats().block_capacity = hash.blockCapacity();
+}
+
+template <class TVoxel>
+void readBody(FieldReader& r, const MapFileInfo& info, Scene<TVoxel, PlainVoxelArray>& scene) {
+    if (info.record_count != scene.voxels().size())
+        r.fail("corrupt: " + std::to_string(info.record_count) + " voxels for a " + std::to_string(scene.voxels().size()) + "-voxel volume");
+    TVoxel* voxels = scene.voxels().host();
+    for (std::size_t i = 0; i < scene.voxels().size(); ++i) voxels[i] = readVoxelRecord<TVoxel>(r);
+}
+
+template <class TVoxel>
+void describeIndex(MapFileInfo& info, const Scene<TVoxel, VoxelBlockHash>& scene) {
+    info.hash = true;
+    info.hash_settings = scene.index().settings();
+}
+template <class TVoxel>
+void describeIndex(MapFileInfo& info, const Scene<TVoxel, PlainVoxelArray>& scene) {
+    info.hash = false;
+    info.dense_offset = scene.index().data().offset;
+    info.dense_size = scene.index().data().size;
+}
+
+// The header fields a scene must agree with before its map is read into it.
+template <class TVoxel, class TIndex>
+void requireFits(FieldReader& r, const MapFileInfo& file, const Scene<TVoxel, TIndex>& scene) {
+    MapFileInfo mine;
+    describeIndex(mine, scene);
+    if (file.voxel_type != TVoxel::name) r.fail("the map holds '" + file.voxel_type + "' voxels, not '" + TVoxel::name + "'");
+    if (file.hash != mine.hash) r.fail(std::string("the map uses the ") + (file.hash ? "hash" : "dense") + " index");
+    if (file.hash) {
+        const VoxelBlockHashSettings &a = file.hash_settings, &b = mine.hash_settings;
+        if (a.bucket_count != b.bucket_count || a.entries_per_bucket != b.entries_per_bucket || a.excess_entry_count != b.excess_entry_count ||
+            a.max_block_count != b.max_block_count)
+            r.fail("the map's hash settings differ from the scene's");
+    } else if (file.dense_offset != mine.dense_offset || file.dense_size != mine.dense_size) {
+        r.fail("the map's dense volume differs from the scene's");
+    }
+    if (file.scene.voxel_size_m != scene.params().voxel_size_m || file.scene.mu_m != scene.params().mu_m)
+        r.fail("the map's voxel size and mu differ from the scene's");
+}
+
+}  // namespace
+
+MapFileInfo readMapFileInfo(const std::string& path) {
+    if (std::filesystem::is_directory(path)) throw IoError(path, "is a folder, not a map file");
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw IoError(path, std::string("cannot open the map file: ") + std::strerror(errno));
+    FieldReader r(in, path);
+    return readHeader(r);
+}
+
+template <class TVoxel, class TIndex>
+void writeMapFile(const std::string& path, const Scene<TVoxel, TIndex>& scene, const MapFileInfo& pose) {
+    if (scene.location() != Device::CPU) throw DeviceError("writeMapFile: the scene must be in host memory (Scene::copyTo(Device::CPU))");
+    MapFileInfo info = pose;
+    info.version = kMapFileVersion;
+    info.voxel_type = TVoxel::name;
+    describeIndex(info, scene);
+    info.scene = scene.params();
+    info.integration_count = scene.integrationCount();
+    info.record_count = recordCount(scene);
+
+    // A temporary name in the target's folder (rename stays within one file system), renamed at the end.
+    const std::filesystem::path target(path);
+    if (std::filesystem::is_directory(target)) throw IoError(path, "is a folder, not a map file");
+    const std::string temporary = path + ".tmp" + std::to_string(::getpid());
+    try {
+        std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
+        if (!out) throw IoError(path, std::string("cannot create the map file: ") + std::strerror(errno));
+        FieldWriter w(out, path);
+        w.raw(kMagic, 8);
+        w.u32(info.version);
+        w.u32(kHeaderBytes);
+        w.flush(false);
+        w.resetCrc();
+        writeHeaderFields(w, info, voxelRecordBytes<TVoxel>());
+        w.flush();
+        w.u32(w.crc());
+        w.flush(false);
+        w.resetCrc();
+        writeBody(w, scene);
+        w.flush();
+        w.u32(w.crc());
+        w.raw(kEndMagic, 8);
+        w.flush(false);
+        out.close();
+        if (!out) throw IoError(path, std::string("cannot finish the map file: ") + std::strerror(errno));
+        std::error_code ec;
+        std::filesystem::rename(temporary, target, ec);
+        if (ec) throw IoError(path, "cannot move the finished map into place: " + ec.message());
+    } catch (...) {
+        std::error_code ignored;
+        std::filesystem::remove(temporary, ignored);
+        throw;
+    }
+}
+
+template <class TVoxel, class TIndex>
+MapFileInfo readMapFile(const std::string& path, Scene<TVoxel, TIndex>& scene) {
+    if (scene.location() != Device::CPU) throw DeviceError("readMapFile: the scene must be in host memory");
+    if (std::filesystem::is_directory(path)) throw IoError(path, "is a folder, not a map file");
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw IoError(path, std::string("cannot open the map file: ") + std::strerror(errno));
+    FieldReader r(in, path);
+    const MapFileInfo info = readHeader(r);
+    requireFits(r, info, scene);
+    r.resetCrc();
+    readBody(r, info, scene);
+    const std::uint32_t computed = r.crc();
+    if (r.u32() != computed) r.fail("corrupt: the checksum of the map's voxels does not match");
+    char end[8];
+    r.raw(end, 8);
+    if (std::memcmp(end, kEndMagic, 8) != 0) r.fail("corrupt: no end marker after the voxels");
+    if (!r.atEnd()) r.fail("corrupt: bytes after the end marker");
+    scene.setIntegrationCount(info.integration_count);
+    return info;
+}
+
+#define VF_INSTANTIATE(TVoxel, TIndex)                                                                                         \
+    template void writeMapFile<TVoxel, TIndex>(const std::string&, const Scene<TVoxel, TIndex>&, const MapFileInfo&); \
+    template MapFileInfo readMapFile<TVoxel, TIndex>(const std::string&, Scene<TVoxel, TIndex>&);
+VF_FOR_EACH_ENGINE_PAIR(VF_INSTANTIATE)
+#undef VF_INSTANTIATE
+
+}  // namespace voxfuse

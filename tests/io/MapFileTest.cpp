@@ -1,0 +1,261 @@
+// Map files: a saved map loads back voxel for voxel and saves to the same bytes; a loaded map meshes
+// as the original and carries a run on; bad files are refused with the file and the reason named.
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <vector>
+
+#include "DeviceTestSupport.h"
+#include "SyntheticViews.h"
+#include "voxfuse/core/Error.h"
+#include "voxfuse/engines/AllocationEngine.h"
+#include "voxfuse/engines/IntegrationEngine.h"
+#include "voxfuse/engines/MainEngine.h"
+#include "voxfuse/engines/MeshingEngine.h"
+#include "voxfuse/io/MapFile.h"
+#include "voxfuse/objects/Voxel.h"
+
+namespace fs = std::filesystem;
+
+namespace voxfuse {
+namespace {
+
+std::string tempPath(const std::string& name) {
+    const fs::path dir = fs::temp_directory_path() / "voxfuse_map_file_test";
+    fs::create_directories(dir);
+    return (dir / name).string();
+}
+
+std::vector<char> bytesOf(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::vector<char>(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+void writeBytes(const std::string& path, const std::vector<char>& bytes) {
+    std::ofstream out(path, std::ios::binary | std::ios::trunc);
+    out.write(bytes.data(), std::streamsize(bytes.size()));
+}
+
+// A small fused scene: a few views of the box-and-sphere world, classes and colour included.
+template <class TVoxel, class TIndex>
+Scene<TVoxel, TIndex> fusedScene(TIndex index) {
+    Scene<TVoxel, TIndex> scene(test::centimetreSceneParams(), std::move(index), Device::CPU);
+    auto allocation = makeAllocationEngine<TVoxel, TIndex>(Device::CPU);
+    auto integration = makeIntegrationEngine<TVoxel, TIndex>(Device::CPU);
+    const synth::SyntheticScene world = synth::SyntheticScene::boxAndSphere();
+    for (int k = 0; k < 3; ++k) {
+        const Mat4f pose = test::lookAt({1.0f - 0.3f * k, -0.8f + 0.5f * k, 0.7f}, {0.3f, 0.f, 0.1f});
+        const View view = test::labelledView(world, test::kinectIntrinsics(160, 120), pose, k);
+        allocation->allocate(scene, view, pose);
+        integration->integrate(scene, view, pose);
+    }
+    return scene;
+}
+
+MapFileInfo somePose() {
+    MapFileInfo pose;
+    pose.T_world_camera = test::lookAt({0.5f, 0.2f, 0.9f}, {0.f, 0.f, 0.f});
+    pose.has_origin = true;
+    pose.T_source_world = test::lookAt({2.f, 1.f, 1.5f}, {0.f, 0.f, 0.f});
+    pose.camera = test::kinectIntrinsics(160, 120);
+    return pose;
+}
+
+template <class TVoxel>
+class MapFileRoundTrip : public ::testing::Test {};
+using VoxelTypes = ::testing::Types<VoxelS, VoxelF, VoxelSRgb, VoxelFRgb, VoxelSLabel, VoxelSRgbLabel>;
+TYPED_TEST_SUITE(MapFileRoundTrip, VoxelTypes);
+
+TYPED_TEST(MapFileRoundTrip, HashMapLoadsVoxelForVoxelAndSavesToTheSameBytes) {
+    using TVoxel = TypeParam;
+    const auto scene = fusedScene<TVoxel>(VoxelBlockHash());
+    const std::string first = tempPath(std::string("hash_") + TVoxel::name + ".vfm"), second = first + ".again";
+    writeMapFile(first, scene, somePose());
+
+    const MapFileInfo info = readMapFileInfo(first);
+    EXPECT_EQ(info.voxel_type, TVoxel::name);
+    EXPECT_TRUE(info.hash);
+    EXPECT_EQ(info.record_count, std::uint64_t(scene.index().blocksInUse()));
+    EXPECT_EQ(info.integration_count, 3u);
+    EXPECT_TRUE(info.has_origin);
+    EXPECT_EQ(info.camera.width, 160);
+
+    Scene<TVoxel, VoxelBlockHash> loaded(test::centimetreSceneParams(), VoxelBlockHash(), Device::CPU);
+    const MapFileInfo read = readMapFile(first, loaded);
+    EXPECT_EQ(0, std::memcmp(read.T_world_camera.m, somePose().T_world_camera.m, sizeof(Mat4f)));
+    EXPECT_EQ(loaded.integrationCount(), 3u);
+    ASSERT_EQ(loaded.index().blocksInUse(), scene.index().blocksInUse());
+    const VoxelBlockHash& a = scene.index();
+    const VoxelBlockHash& b = loaded.index();
+    for (int i = 0; i < a.entryCount(); ++i) {
+        const HashEntry& e = a.entry(i);
+        if (e.ptr < 0) continue;
+        const int j = b.findEntry({e.pos.x, e.pos.y, e.pos.z});
+        ASSERT_GE(j, 0);
+        for (int v = 0; v < kBlockVoxelCount; ++v)
+            ASSERT_TRUE(test::sameVoxel(scene.voxels().host()[std::size_t(e.ptr) * kBlockVoxelCount + v],
+                                        loaded.voxels().host()[std::size_t(b.entry(j).ptr) * kBlockVoxelCount + v]));
+    }
+    writeMapFile(second, loaded, read);
+    EXPECT_EQ(bytesOf(first), bytesOf(second)) << "save, load, save gives the same bytes";
+}
+
+TEST(MapFileTest, DenseMapRoundTripsAndMeshesLikeTheOriginal) {
+    const PlainVoxelArray index({-60, -60, -20}, {140, 120, 80});
+    const auto scene = fusedScene<VoxelSRgb>(index);
+    const std::string path = tempPath("dense.vfm");
+    writeMapFile(path, scene, somePose());
+    Scene<VoxelSRgb, PlainVoxelArray> loaded(test::centimetreSceneParams(), index, Device::CPU);
+    readMapFile(path, loaded);
+    ASSERT_EQ(test::firstDifferentVoxel(scene.voxels(), loaded.voxels()), -1);
+    auto meshing = makeMeshingEngine<VoxelSRgb, PlainVoxelArray>(Device::CPU);
+    Mesh original, again;
+    meshing->extractMesh(scene, original);
+    meshing->extractMesh(loaded, again);
+    ASSERT_GT(original.triangles.size(), 1000u);
+    EXPECT_EQ(original.vertices.size(), again.vertices.size());
+    EXPECT_EQ(original.triangles.size(), again.triangles.size());
+    for (std::size_t i = 0; i < original.vertices.size(); ++i) ASSERT_TRUE(original.vertices[i] == again.vertices[i]);
+}
+
+// The error a bad file gets, or "" when it loads.
+std::string loadError(const std::string& path) {
+    Scene<VoxelS, VoxelBlockHash> scene(test::centimetreSceneParams(), VoxelBlockHash(), Device::CPU);
+    try {
+        readMapFile(path, scene);
+    } catch (const IoError& e) {
+        EXPECT_EQ(e.file(), path);
+        return e.what();
+    }
+    return "";
+}
+
+TEST(MapFileTest, BadFilesAreRefusedWithTheReason) {
+    const auto scene = fusedScene<VoxelS>(VoxelBlockHash());
+    const std::string good = tempPath("good.vfm"), bad = tempPath("bad.vfm");
+    writeMapFile(good, scene, somePose());
+    const std::vector<char> bytes = bytesOf(good);
+    ASSERT_GT(bytes.size(), 10000u);
+    EXPECT_EQ(loadError(good), "");
+
+    auto expectRefused = [&](std::vector<char> b, const std::string& reason) {
+        writeBytes(bad, b);
+        const std::string error = loadError(bad);
+        EXPECT_NE(error.find(reason), std::string::npos) << "expected '" << reason << "', got '" << error << "'";
+    };
+    for (std::size_t cut : {std::size_t(0), std::size_t(5), std::size_t(100), bytes.size() / 2, bytes.size() - 9, bytes.size() - 1}) {
+        std::vector<char> b(bytes.begin(), bytes.begin() + std::ptrdiff_t(cut));
+        expectRefused(b, "truncated");
+    }
+    {
+        std::vector<char> b = bytes;
+        b[bytes.size() / 2] ^= 0x10;
+        expectRefused(b, "checksum of the map's voxels does not match");
+    }
+    {
+        std::vector<char> b = bytes;
+        b[40] ^= 0x01;  // inside the header
+        expectRefused(b, "header's checksum does not match");
+    }
+    {
+        std::vector<char> b = bytes;
+        b[0] = 'X';
+        expectRefused(b, "not a VoxFuse map file");
+    }
+    {
+        std::vector<char> b = bytes;
+        b[8] = 99;  // version
+        expectRefused(b, "map file version 99");
+    }
+    {
+        std::vector<char> b = bytes;
+        b.push_back('!');
+        expectRefused(b, "bytes after the end marker");
+    }
+    writeBytes(bad, std::vector<char>{'h', 'e', 'l', 'l', 'o'});
+    EXPECT_NE(loadError(bad).find("truncated"), std::string::npos);
+    EXPECT_NE(loadError(fs::temp_directory_path().string()).find("is a folder"), std::string::npos);
+    EXPECT_NE(loadError(tempPath("missing.vfm")).find("cannot open"), std::string::npos);
+}
+
+TEST(MapFileTest, AMapOfOtherSettingsIsRefusedByName) {
+    const auto scene = fusedScene<VoxelSRgb>(VoxelBlockHash());
+    const std::string path = tempPath("rgb.vfm");
+    writeMapFile(path, scene, somePose());
+    EXPECT_NE(loadError(path).find("holds 's_rgb' voxels, not 's'"), std::string::npos);
+    VoxelBlockHashSettings other;
+    other.bucket_count = 4096;
+    Scene<VoxelSRgb, VoxelBlockHash> smaller(test::centimetreSceneParams(), VoxelBlockHash(other), Device::CPU);
+    try {
+        readMapFile(path, smaller);
+        ADD_FAILURE() << "other hash settings were accepted";
+    } catch (const IoError& e) {
+        EXPECT_NE(std::string(e.what()).find("hash settings differ"), std::string::npos) << e.what();
+    }
+}
+
+TEST(MapFileTest, AFailedWriteLeavesNothingBehind) {
+    const auto scene = fusedScene<VoxelS>(VoxelBlockHash());
+    const std::string nowhere = tempPath("no_such_folder/map.vfm");
+    try {
+        writeMapFile(nowhere, scene, somePose());
+        ADD_FAILURE() << "wrote into a missing folder";
+    } catch (const IoError& e) {
+        EXPECT_NE(std::string(e.what()).find("cannot create the map file"), std::string::npos) << e.what();
+    }
+    const std::string kept = tempPath("kept.vfm");
+    writeBytes(kept, {'o', 'l', 'd'});
+    EXPECT_THROW(writeMapFile(fs::temp_directory_path().string(), scene, somePose()), IoError) << "a folder is no map file";
+    EXPECT_EQ(bytesOf(kept), (std::vector<char>{'o', 'l', 'd'}));
+    for (const auto& entry : fs::directory_iterator(fs::path(kept).parent_path()))
+        EXPECT_EQ(entry.path().string().find(".tmp"), std::string::npos) << "temporary file left: " << entry.path();
+}
+
+// The main engine: a run saved half way and continued from the file tracks and fuses on; on each device.
+class MapFileEngineTest : public ::testing::TestWithParam<Device> {
+protected:
+    void SetUp() override { VF_SKIP_IF_UNAVAILABLE(GetParam()); }
+};
+
+TEST_P(MapFileEngineTest, ARunContinuedFromItsMapTracksOn) {
+    MainEngineSettings s;
+    s.device = GetParam();
+    s.voxel_type = VoxelType::SRgb;
+    s.scene = test::centimetreSceneParams();
+    const Intrinsics intr = test::kinectIntrinsics(160, 120);
+    RGBDCalib calib;
+    calib.depth = calib.rgb = intr;
+    calib.disparity = DisparityCalib::affine(0.001f);
+    const synth::SyntheticScene world = synth::SyntheticScene::boxAndSphere();
+    auto pose = [](int k) { return test::lookAt({1.0f + 0.01f * k, -0.8f + 0.02f * k, 0.7f}, {0.3f, 0.f, 0.1f}); };
+    const std::string path = tempPath(std::string("engine_") + deviceName(GetParam()) + ".vfm");
+
+    auto first = MainEngine::create(s, calib);
+    for (int k = 0; k < 8; ++k) first->processFrame(test::toRgbdFrame(test::renderView(world, intr, pose(k)), k), nullptr);
+    first->saveMap(path);
+    Mesh saved_mesh;
+    first->extractMesh(saved_mesh);
+
+    auto second = MainEngine::create(settingsForMap(readMapFileInfo(path), s), calib);
+    second->loadMap(path);
+    Mesh loaded_mesh;
+    second->extractMesh(loaded_mesh);
+    EXPECT_EQ(saved_mesh.triangles.size(), loaded_mesh.triangles.size());
+    // Tracking resumes at the saved pose: the next frames track against the loaded map.
+    for (int k = 8; k < 14; ++k) {
+        const FrameResult r = second->processFrame(test::toRgbdFrame(test::renderView(world, intr, pose(k)), k), nullptr);
+        EXPECT_TRUE(r.fused) << "frame " << k;
+        // The world is the first frame's camera: the truth is pose(0)^-1 * pose(k).
+        const Mat4f truth = rigidInverse(pose(0)) * pose(k);
+        EXPECT_LT(length(r.T_world_camera.translation() - truth.translation()), 0.005f) << "frame " << k;
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(Devices, MapFileEngineTest, test::kAllDevices, test::DeviceName());
+
+}  // namespace
+}  // namespace voxfuse
