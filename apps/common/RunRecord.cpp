@@ -80,6 +80,11 @@ void writeTimingsJson(const std::string& path, const RunRecord& run) {
             j.value("visible_blocks", f.result.allocation.visible_blocks);
             j.value("allocation_failures", f.result.allocation.allocation_failures_this_frame);
         }
+        if (run.settings.swap.enabled) {
+            j.value("swapped_in", f.result.allocation.blocks_swapped_in_this_frame);
+            j.value("swapped_out", f.result.allocation.blocks_swapped_out_this_frame);
+            j.value("blocks_stored", f.result.allocation.blocks_stored);
+        }
         j.endObject();
     }
     j.endArray();
@@ -121,6 +126,24 @@ void writeSummaryJson(const std::string& path, const RunRecord& run) {
     j.value("blocks_allocated", run.allocation.blocks_allocated);
     j.value("allocation_failures", (long long)run.allocation.allocation_failures_total);
     j.value("blocks_removed", (long long)run.allocation.blocks_removed_total);
+    if (run.settings.swap.enabled) {
+        int most_in = 0, most_out = 0;
+        long long moved = 0;
+        for (const auto& f : run.frames) {
+            most_in = std::max(most_in, f.result.allocation.blocks_swapped_in_this_frame);
+            most_out = std::max(most_out, f.result.allocation.blocks_swapped_out_this_frame);
+            moved += f.result.allocation.blocks_swapped_in_this_frame + f.result.allocation.blocks_swapped_out_this_frame;
+        }
+        j.beginObject("swapping");
+        j.value("blocks_stored", run.allocation.blocks_stored);
+        j.value("active_block_limit", run.settings.hash.max_block_count);
+        j.value("blocks_per_frame_limit", run.settings.swap.blocks_per_frame);
+        j.value("most_swapped_in_per_frame", most_in);
+        j.value("most_swapped_out_per_frame", most_out);
+        j.value("blocks_moved", moved);
+        j.value("swap_file", run.settings.swap.swap_file);
+        j.endObject();
+    }
     if (!run.map_loaded.empty()) j.value("map_loaded", run.map_loaded);
     if (!run.map_saved.empty()) j.value("map_saved", run.map_saved);
     j.beginObject("settings");
@@ -189,6 +212,12 @@ std::string summaryText(const RunRecord& run, const std::string& out_dir) {
     std::snprintf(line, sizeof line, "  speed        %.1f ms per frame (median, engine only), %.1f frames/s overall\n",
                   medianTotalMs(run), framesPerSecond(run));
     s << line;
+    if (run.settings.swap.enabled) {
+        std::snprintf(line, sizeof line, "  swapping     %d blocks stored in %s, at most %d active, at most %d moved each way per frame\n",
+                      run.allocation.blocks_stored, run.settings.swap.swap_file.empty() ? "memory" : run.settings.swap.swap_file.c_str(),
+                      run.settings.hash.max_block_count, run.settings.swap.blocks_per_frame);
+        s << line;
+    }
     if (run.settings.index_type == IndexType::Hash) {
         std::snprintf(line, sizeof line, "  hash         %d blocks in use (%d backed by memory), %lld removed, %lld could not be allocated%s\n",
                       run.allocation.blocks_allocated, run.allocation.block_capacity, run.allocation.blocks_removed_total,

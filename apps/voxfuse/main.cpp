@@ -44,6 +44,7 @@ struct CliOptions {
     std::string out_dir = "voxfuse_out";
     int max_frames = -1;  // -1 = all; 0 = none (with --load-map: the map's outputs only)
     int skip_frames = 0;  // dropped from the start of the source
+    int active_blocks = 0;  // > 0: swapping with an active voxel array of this many blocks
     int render_every = 25;
     std::string index = "hash";
     std::string device = "cpu";
@@ -198,6 +199,8 @@ void adoptMapSettings(CliOptions& o, const MapFileInfo& map) {
 
 void applyDeviceAndIndex(const CliOptions& o, MainEngineSettings& s) {
     s.index_type = parseIndexType(o.index);
+    if (o.active_blocks > 0 || !s.swap.swap_file.empty()) s.swap.enabled = true;
+    if (o.active_blocks > 0) s.hash.max_block_count = o.active_blocks;
     s.device = o.device == "cuda" ? Device::CUDA : Device::CPU;
     s.dense_size = {o.dense_size[0], o.dense_size[1], o.dense_size[2]};
     s.dense_offset = {o.dense_offset[0], o.dense_offset[1], o.dense_offset[2]};
@@ -366,6 +369,14 @@ int main(int argc, char** argv) {
     cli.add_option("--out", o.out_dir, "output folder")->capture_default_str();
     cli.add_option("--frames", o.max_frames, "process at most N frames (default: all; 0 with --load-map: none, only the map's outputs)")
         ->check(CLI::NonNegativeNumber);
+    cli.add_flag("--swap", o.engine.swap.enabled,
+                 "swapping: only the map near the view stays in the voxel array (--active-blocks), the rest goes to host memory "
+                 "or --swap-file");
+    cli.add_option("--active-blocks", o.active_blocks, "swapping: blocks the active voxel array holds at most (implies --swap)")
+        ->check(CLI::PositiveNumber);
+    cli.add_option("--swap-file", o.engine.swap.swap_file, "swapping: keep the swapped-out map in this file instead of memory (implies --swap)");
+    cli.add_option("--swap-blocks-per-frame", o.engine.swap.blocks_per_frame, "swapping: blocks moved each way per frame at most")
+        ->capture_default_str()->check(CLI::PositiveNumber);
     cli.add_option("--skip", o.skip_frames, "drop the first N frames of the source (e.g. those a --load-map map already holds)")
         ->check(CLI::NonNegativeNumber);
     cli.add_option("--save-map", o.save_map, "write the map to this file (.vfm) at the end, to continue or export it later");

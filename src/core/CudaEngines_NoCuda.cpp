@@ -1,5 +1,6 @@
 // The CUDA engine factories in a build without CUDA: asking for one is a clear error. One stub per
-// engine of VF_FOR_EACH_CUDA_ENGINE and voxel/index pair of VF_FOR_EACH_ENGINE_PAIR.
+// engine of VF_FOR_EACH_CUDA_ENGINE and voxel/index pair of VF_FOR_EACH_ENGINE_PAIR, and per voxel type
+// for swapping (hash only).
 
 #include <string>
 
@@ -8,6 +9,7 @@
 #include "voxfuse/engines/EnginePairs.h"
 #include "voxfuse/engines/IntegrationEngine.h"
 #include "voxfuse/engines/RaycastEngine.h"
+#include "voxfuse/engines/SwappingEngine.h"
 
 namespace voxfuse::cuda {
 namespace {
@@ -26,5 +28,13 @@ namespace {
 VF_FOR_EACH_CUDA_ENGINE(VF_STUB)
 #undef VF_STUB
 #undef VF_INSTANTIATE_STUB
+
+template <class TVoxel>
+std::unique_ptr<SwappingEngine<TVoxel>> makeSwappingEngine() {
+    noCuda("SwappingEngine");
+}
+#define VF_INSTANTIATE_SWAPPING(TVoxel) template std::unique_ptr<SwappingEngine<TVoxel>> makeSwappingEngine<TVoxel>();
+VF_FOR_EACH_VOXEL(VF_INSTANTIATE_SWAPPING)
+#undef VF_INSTANTIATE_SWAPPING
 
 }  // namespace voxfuse::cuda

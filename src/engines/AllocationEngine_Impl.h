@@ -18,6 +18,7 @@
 #include "voxfuse/shared/Allocation.h"
 #include "voxfuse/shared/BlockProjection.h"
 #include "voxfuse/shared/HashUpdate.h"
+#include "voxfuse/shared/Swapping.h"
 
 namespace voxfuse {
 
@@ -62,6 +63,7 @@ public:
                 break;
             }
         }
+        stats.blocks_activated_this_frame = hash.storedBlocks() > 0 ? activateStoredBlocks(scene, stats) : 0;
         buildVisibleList(hash, scene.params(), view, T_world_camera);
 
         stats.allocation_failures_this_frame +=
@@ -81,7 +83,7 @@ public:
         grow(freed_blocks_, buckets);
         grow(freed_excess_, buckets);
         const HashTableState table = hash.state();
-        TDevice::parallelFor(entries, MarkEmptyBlocks<TVoxel>{table.entries, scene.voxelData(), on(remove_)});
+        TDevice::parallelFor(entries, MarkEmptyBlocks<TVoxel>{table.entries, table.stored_slot, scene.voxelData(), on(remove_)});
         const BucketRemoval count_pass{table, on(remove_), on(freed_blocks_), on(freed_excess_), hash.freeBlocks(), hash.freeExcessEntries()};
         TDevice::parallelFor(buckets, CountBucketRemovals{count_pass});
         const int freed_blocks = TDevice::exclusiveScan(on(freed_blocks_), on(freed_blocks_), buckets, scratch_);
@@ -177,13 +179,37 @@ private:
         }
         // The blocks taken are the ones between the stack's old and new tops.
         const int inserted = free_before - hash.freeBlocks();
-        const int* taken = hash.state().free_blocks + hash.freeBlocks();
-        constexpr int kBlocksPerLaunch = (1 << 30) / kBlockVoxelCount;  // element indices are ints
-        for (int first = 0; first < inserted; first += kBlocksPerLaunch)
-            TDevice::parallelFor(std::min(kBlocksPerLaunch, inserted - first) * kBlockVoxelCount,
-                                 ResetVoxelBlocks<TVoxel>{scene.voxelData(), taken + first});
+        resetBlocks(scene, hash.state().free_blocks + hash.freeBlocks(), inserted);
         stats.blocks_allocated_this_frame += inserted;
         return inserted;
+    }
+
+    // Swapping: stored blocks the depth needs get voxel blocks again (merge pending), in entry order,
+    // while the voxel array has blocks; the others stay stored and out of view (counted as blocks full).
+    // Returns how many were activated.
+    int activateStoredBlocks(Scene<TVoxel, VoxelBlockHash>& scene, AllocationStats& stats) {
+        VoxelBlockHash& hash = scene.index();
+        grow(activation_, std::size_t(hash.entryCount()));
+        const HashTableState before = hash.state();
+        const int count = TDevice::selectIndices(hash.entryCount(), EntryNeedsActivation{before.entries, before.entry_visibility},
+                                                 on(activation_), scratch_);
+        if (count == 0) return 0;
+        if (count > hash.freeBlocks()) scene.reserveVoxelBlocks(hash.blocksInUse() + count);
+        const int free = hash.freeBlocks();
+        TDevice::parallelFor(count, ActivateStoredBlocks{hash.state(), on(activation_), free});
+        const int activated = std::min(count, free);
+        hash.popFreeStacks(activated, 0);
+        stats.failures_blocks_full_this_frame += count - activated;
+        resetBlocks(scene, hash.state().free_blocks + hash.freeBlocks(), activated);
+        return activated;
+    }
+
+    // Blocks come off the free stack with old contents: the `count` blocks listed at `taken` start afresh.
+    static void resetBlocks(Scene<TVoxel, VoxelBlockHash>& scene, const int* taken, int count) {
+        constexpr int kBlocksPerLaunch = (1 << 30) / kBlockVoxelCount;  // element indices are ints
+        for (int first = 0; first < count; first += kBlocksPerLaunch)
+            TDevice::parallelFor(std::min(kBlocksPerLaunch, count - first) * kBlockVoxelCount,
+                                 ResetVoxelBlocks<TVoxel>{scene.voxelData(), taken + first});
     }
 
     // Stage 3: the visible list, in entry order.
@@ -204,6 +230,7 @@ private:
     MemoryBlock<int> target_, claim_, excess_wanted_, excess_rank_, block_wanted_, block_rank_;
     MemoryBlock<std::uint8_t> outcome_, needs_excess_;
     MemoryBlock<InsertRoundCounts> counts_;
+    MemoryBlock<int> activation_;  // stored entries the depth needs
     // Removal.
     MemoryBlock<std::uint8_t> remove_;
     MemoryBlock<int> freed_blocks_, freed_excess_;

@@ -12,13 +12,18 @@
 #include "voxfuse/engines/LowLevelEngine.h"
 #include "voxfuse/engines/MeshingEngine.h"
 #include "voxfuse/engines/RaycastEngine.h"
+#include "voxfuse/engines/SwappingEngine.h"
+#include "voxfuse/objects/GlobalCache.h"
 #include "voxfuse/objects/Scene.h"
+#include "voxfuse/shared/Swapping.h"
 
 namespace voxfuse {
 namespace {
 
 template <class TVoxel, class TIndex>
 class MainEngineT final : public MainEngine {
+    static constexpr bool kHash = std::is_same<TIndex, VoxelBlockHash>::value;
+
 public:
     MainEngineT(const MainEngineSettings& settings, const RGBDCalib& calib, TIndex index)
         : settings_(settings),
@@ -33,6 +38,12 @@ public:
           meshing_(makeMeshingEngine<TVoxel, TIndex>(Device::CPU)) {
         view_.calib = calib;
         if (onGpu()) view_.depth.resize(calib.depth.size(), true, true, frameImageMemory());
+        if constexpr (kHash) {
+            if (settings.swap.enabled) {
+                swapping_ = makeSwappingEngine<TVoxel>(settings.device);
+                cache_ = std::make_unique<GlobalCache>(sizeof(TVoxel) * kBlockVoxelCount, settings.swap.swap_file);
+            }
+        }
     }
 
     FrameResult processFrame(const RGBDFrame& frame, const Mat4f* T_world_camera_given) override {
@@ -76,6 +87,13 @@ public:
         allocation_stats_ = allocation_->allocate(scene_, view_, tracking_.T_world_camera);
         result.stages.push_back({"allocate", stageMs(t)});
 
+        if (swapping_) {
+            // Stored copies of the blocks this frame needs come back before it is fused.
+            t = Timer();
+            if constexpr (kHash) allocation_stats_.blocks_swapped_in_this_frame = swapping_->swapIn(scene_, *cache_, settings_.swap.blocks_per_frame);
+            result.stages.push_back({"swap_in", stageMs(t)});
+        }
+
         t = Timer();
         integration_->integrate(scene_, view_, tracking_.T_world_camera);
         result.fused = true;
@@ -91,10 +109,26 @@ public:
             result.stages.push_back({"download", stageMs(t)});
         }
 
+        if (swapping_) {
+            // Blocks that left the view go to the cache.
+            t = Timer();
+            if constexpr (kHash) allocation_stats_.blocks_swapped_out_this_frame = swapping_->swapOut(scene_, *cache_, settings_.swap.blocks_per_frame);
+            result.stages.push_back({"swap_out", stageMs(t)});
+        }
+
         // Between frames, so that no stage holds voxel pointers.
         if (settings_.remove_empty_blocks_every > 0 && ++frames_fused_ % settings_.remove_empty_blocks_every == 0) {
             allocation_->removeEmptyBlocks(scene_);
-            if constexpr (std::is_same<TIndex, VoxelBlockHash>::value) allocation_stats_ = scene_.index().stats();
+            if constexpr (kHash) {
+                const AllocationStats frame = allocation_stats_;
+                allocation_stats_ = scene_.index().stats();
+                allocation_stats_.blocks_swapped_in_this_frame = frame.blocks_swapped_in_this_frame;
+                allocation_stats_.blocks_swapped_out_this_frame = frame.blocks_swapped_out_this_frame;
+            }
+        }
+        if constexpr (kHash) {
+            allocation_stats_.blocks_allocated = scene_.index().blocksInUse();
+            allocation_stats_.blocks_stored = scene_.index().storedBlocks();
         }
 
         result.allocation = allocation_stats_;
@@ -120,14 +154,17 @@ public:
         pose.has_origin = has_source_origin_;
         pose.T_source_world = T_source_world_;
         pose.camera = view_.calib.depth;
-        if (onGpu()) writeMapFile(path, scene_.copyTo(Device::CPU), pose);
-        else writeMapFile(path, scene_, pose);
+        if (onGpu()) writeMapFile(path, scene_.copyTo(Device::CPU), pose, cache_.get());
+        else writeMapFile(path, scene_, pose, cache_.get());
     }
 
     MapFileInfo loadMap(const std::string& path) override {
         // Read into a new host scene first: a file that fails leaves the engine as it was.
         Scene<TVoxel, TIndex> loaded(settings_.scene, newIndex(), Device::CPU);
-        const MapFileInfo info = readMapFile(path, loaded);
+        std::unique_ptr<GlobalCache> cache;
+        if (swapping_) cache = std::make_unique<GlobalCache>(sizeof(TVoxel) * kBlockVoxelCount, settings_.swap.swap_file);
+        const MapFileInfo info = readMapFile(path, loaded, cache.get());
+        if (swapping_) cache_ = std::move(cache);
         scene_ = onGpu() ? loaded.copyTo(Device::CUDA) : std::move(loaded);
         if constexpr (std::is_same<TIndex, VoxelBlockHash>::value) allocation_stats_ = scene_.index().stats();
         else allocation_stats_ = AllocationStats();
@@ -164,18 +201,54 @@ public:
     }
     AllocationStats allocationStats() const override { return allocation_stats_; }
     const TrackerStats& trackerStats() const override { return tracker_->lastStats(); }
-    // Meshing runs on the CPU: a map on the GPU is meshed from a host copy taken for the purpose.
+    // Meshing runs on the CPU: a map on the GPU is meshed from a host copy taken for the purpose, a map
+    // with swapped blocks from a host copy with every block in it.
     void extractMesh(Mesh& mesh) override {
-        if (onGpu()) meshing_->extractMesh(scene_.copyTo(Device::CPU), mesh);
+        if (onGpu() || hasStoredBlocks()) meshing_->extractMesh(completeHostCopy(), mesh);
         else meshing_->extractMesh(scene_, mesh);
     }
     void extractPointCloud(PointCloud& cloud) override {
-        if (onGpu()) meshing_->extractPointCloud(scene_.copyTo(Device::CPU), cloud);
+        if (onGpu() || hasStoredBlocks()) meshing_->extractPointCloud(completeHostCopy(), cloud);
         else meshing_->extractPointCloud(scene_, cloud);
     }
 
 private:
     bool onGpu() const { return settings_.device == Device::CUDA; }
+
+    bool hasStoredBlocks() const {
+        if constexpr (kHash) return scene_.index().storedBlocks() > 0;
+        return false;
+    }
+
+    // The whole map in host memory: stored blocks read from the cache and waiting copies merged in,
+    // in a voxel array as large as the map needs (it may exceed the active budget).
+    Scene<TVoxel, TIndex> completeHostCopy() const {
+        Scene<TVoxel, TIndex> host = scene_.copyTo(Device::CPU);
+        if constexpr (kHash) {
+            if (host.index().storedBlocks() == 0) return host;
+            VoxelBlockHashSettings unbounded = settings_.hash;
+            unbounded.max_block_count = 1 << 22;
+            Scene<TVoxel, TIndex> whole(settings_.scene, VoxelBlockHash(unbounded), Device::CPU);
+            whole.reserveVoxelBlocks(host.index().blocksInUse() + host.index().storedBlocks());
+            const VoxelBlockHash& from = host.index();
+            std::vector<TVoxel> stored(kBlockVoxelCount);
+            for (int i = 0; i < from.entryCount(); ++i) {
+                const HashEntry& e = from.entry(i);
+                if (e.ptr < 0 && e.ptr != kEntrySwappedOut) continue;
+                int entry;
+                whole.index().insert({e.pos.x, e.pos.y, e.pos.z}, &entry);
+                TVoxel* block = whole.voxels().host() + std::size_t(whole.index().entry(entry).ptr) * kBlockVoxelCount;
+                if (e.ptr >= 0) std::copy_n(host.voxels().host() + std::size_t(e.ptr) * kBlockVoxelCount, kBlockVoxelCount, block);
+                else std::fill_n(block, kBlockVoxelCount, TVoxel::initial());
+                const int slot = from.storedSlots()[i];
+                if (slot == kNoStoredCopy) continue;
+                cache_->read(slot, stored.data());
+                for (int v = 0; v < kBlockVoxelCount; ++v) mergeStoredVoxel(block[v], stored[std::size_t(v)], settings_.scene.max_weight);
+            }
+            return whole;
+        }
+        return host;
+    }
 
     TIndex newIndex() const {
         if constexpr (std::is_same<TIndex, VoxelBlockHash>::value) return VoxelBlockHash(settings_.hash);
@@ -200,6 +273,7 @@ private:
     void resetScene() {
         if constexpr (std::is_same<TIndex, VoxelBlockHash>::value) scene_.clearVoxelBlocks();
         else integration_->resetScene(scene_);
+        if (cache_) cache_ = std::make_unique<GlobalCache>(sizeof(TVoxel) * kBlockVoxelCount, settings_.swap.swap_file);
         allocation_stats_ = AllocationStats();
         frames_fused_ = 0;
     }
@@ -239,6 +313,8 @@ private:
     int frames_fused_ = 0;
     bool has_source_origin_ = false;
     Mat4f T_source_world_ = Mat4f::identity();
+    std::unique_ptr<SwappingEngine<TVoxel>> swapping_;  // with SwapSettings::enabled (hash only)
+    std::unique_ptr<GlobalCache> cache_;
 };
 
 template <class TVoxel>
@@ -283,6 +359,8 @@ std::unique_ptr<MainEngine> MainEngine::create(const MainEngineSettings& s, cons
                           " m, mu " + std::to_string(s.scene.mu_m) + " m)");
     if (s.scene.max_weight < 1 || s.scene.max_weight > 255) throw ConfigError("max weight must be in 1..255");
     if (s.dense_size.x <= 0 || s.dense_size.y <= 0 || s.dense_size.z <= 0) throw ConfigError("dense volume size must be positive");
+    if (s.swap.enabled && s.index_type != IndexType::Hash) throw ConfigError("swapping needs the hash index (--index hash)");
+    if (s.swap.enabled && s.swap.blocks_per_frame < 1) throw ConfigError("swapping moves at least one block per frame");
     if (s.device == Device::CUDA && !device_memory::cudaAvailable())
         throw DeviceError("CUDA was requested but is not usable: " + device_memory::cudaDescription());
     return visitVoxelType(s.voxel_type, [&](auto tag) { return createForVoxel<typename decltype(tag)::Voxel>(s, calib); });

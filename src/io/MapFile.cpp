@@ -17,9 +17,11 @@
 
 #include "voxfuse/core/Error.h"
 #include "voxfuse/engines/EnginePairs.h"
+#include "voxfuse/objects/GlobalCache.h"
 #include "voxfuse/objects/Scene.h"
 #include "voxfuse/shared/HashAccess.h"
 #include "voxfuse/shared/HashUpdate.h"
+#include "voxfuse/shared/Swapping.h"
 
 namespace voxfuse {
 namespace {
@@ -284,28 +286,45 @@ MapFileInfo readHeader(FieldReader& r) {
 
 // ---- Index-specific bodies ----
 
+// Every block of a hash map, active or stored, as (key, entry) in (z, y, x) order.
 template <class TVoxel>
-void writeBody(FieldWriter& w, const Scene<TVoxel, VoxelBlockHash>& scene) {
+std::vector<std::pair<std::uint64_t, int>> mapBlocks(const Scene<TVoxel, VoxelBlockHash>& scene, const GlobalCache* cache) {
     const VoxelBlockHash& hash = scene.index();
-    std::vector<std::pair<std::uint64_t, int>> blocks;  // (key, voxel block), in (z, y, x) order
+    if (hash.storedBlocks() > 0 && !cache) throw Error("writeMapFile: the map has swapped blocks; give its global cache");
+    std::vector<std::pair<std::uint64_t, int>> blocks;
     for (int i = 0; i < hash.entryCount(); ++i) {
         const HashEntry& e = hash.entry(i);
-        if (e.ptr >= 0) blocks.push_back({blockKey({e.pos.x, e.pos.y, e.pos.z}), e.ptr});
+        if (e.ptr >= 0 || e.ptr == kEntrySwappedOut) blocks.push_back({blockKey({e.pos.x, e.pos.y, e.pos.z}), i});
     }
     std::sort(blocks.begin(), blocks.end());
+    return blocks;
+}
+
+template <class TVoxel>
+void writeBody(FieldWriter& w, const Scene<TVoxel, VoxelBlockHash>& scene, const GlobalCache* cache) {
+    const VoxelBlockHash& hash = scene.index();
     const TVoxel* voxels = scene.voxels().host();
-    for (const auto& [key, ptr] : blocks) {
+    const int* stored_slot = hash.storedSlots();
+    std::vector<TVoxel> block(kBlockVoxelCount), stored(kBlockVoxelCount);
+    for (const auto& [key, entry] : mapBlocks(scene, cache)) {
         const Vec3i b = blockFromKey(key);
         w.i16(std::int16_t(b.x));
         w.i16(std::int16_t(b.y));
         w.i16(std::int16_t(b.z));
-        for (int v = 0; v < kBlockVoxelCount; ++v) writeVoxelRecord(w, voxels[std::size_t(ptr) * kBlockVoxelCount + std::size_t(v)]);
+        const int ptr = hash.entry(entry).ptr, slot = stored_slot[entry];
+        if (ptr >= 0) std::copy(voxels + std::size_t(ptr) * kBlockVoxelCount, voxels + std::size_t(ptr + 1) * kBlockVoxelCount, block.begin());
+        else std::fill(block.begin(), block.end(), TVoxel::initial());
+        if (slot != kNoStoredCopy) {
+            cache->read(slot, stored.data());
+            for (int v = 0; v < kBlockVoxelCount; ++v) mergeStoredVoxel(block[std::size_t(v)], stored[std::size_t(v)], scene.params().max_weight);
+        }
+        for (const TVoxel& v : block) writeVoxelRecord(w, v);
         w.flushIfFull();
     }
 }
 
 template <class TVoxel>
-void writeBody(FieldWriter& w, const Scene<TVoxel, PlainVoxelArray>& scene) {
+void writeBody(FieldWriter& w, const Scene<TVoxel, PlainVoxelArray>& scene, const GlobalCache*) {
     const TVoxel* voxels = scene.voxels().host();
     for (std::size_t i = 0; i < scene.voxels().size(); ++i) {
         writeVoxelRecord(w, voxels[i]);
@@ -314,21 +333,22 @@ void writeBody(FieldWriter& w, const Scene<TVoxel, PlainVoxelArray>& scene) {
 }
 
 template <class TVoxel>
-std::uint64_t recordCount(const Scene<TVoxel, VoxelBlockHash>& scene) {
-    return std::uint64_t(scene.index().blocksInUse());
+std::uint64_t recordCount(const Scene<TVoxel, VoxelBlockHash>& scene, const GlobalCache* cache) {
+    return std::uint64_t(mapBlocks(scene, cache).size());
 }
 template <class TVoxel>
-std::uint64_t recordCount(const Scene<TVoxel, PlainVoxelArray>& scene) {
+std::uint64_t recordCount(const Scene<TVoxel, PlainVoxelArray>& scene, const GlobalCache*) {
     return std::uint64_t(scene.voxels().size());
 }
 
 template <class TVoxel>
-void readBody(FieldReader& r, const MapFileInfo& info, Scene<TVoxel, VoxelBlockHash>& scene) {
+void readBody(FieldReader& r, const MapFileInfo& info, Scene<TVoxel, VoxelBlockHash>& scene, GlobalCache* cache) {
     VoxelBlockHash& hash = scene.index();
-    if (info.record_count > std::uint64_t(hash.settings().max_block_count))
-        r.fail("corrupt: " + std::to_string(info.record_count) + " blocks, more than the map's maximum of " +
-               std::to_string(hash.settings().max_block_count));
-    scene.reserveVoxelBlocks(int(info.record_count));
+    if (!cache && info.record_count > std::uint64_t(hash.settings().max_block_count))
+        r.fail(std::to_string(info.record_count) + " blocks, more than the voxel array's maximum of " +
+               std::to_string(hash.settings().max_block_count) + " (continue it with swapping, or a larger --max-blocks)");
+    if (!cache) scene.reserveVoxelBlocks(int(info.record_count));
+    std::vector<TVoxel> block(kBlockVoxelCount);
     std::uint64_t previous_key = 0;
     for (std::uint64_t k = 0; k < info.record_count; ++k) {
         Vec3i b;
@@ -339,18 +359,26 @@ void readBody(FieldReader& r, const MapFileInfo& info, Scene<TVoxel, VoxelBlockH
         if (key == kOutOfRangeBlockKey) r.fail("corrupt: block " + std::to_string(k) + " lies outside the storable coordinates");
         if (k > 0 && key <= previous_key) r.fail("corrupt: blocks are not in (z, y, x) order, or one is listed twice");
         previous_key = key;
+        for (TVoxel& v : block) v = readVoxelRecord<TVoxel>(r);
         int entry;
-        if (hash.insert(b, &entry) != VoxelBlockHash::InsertResult::Inserted)
-            r.fail("the map's blocks do not fit its hash settings (block " + std::to_string(k) + ")");
-        TVoxel* block = scene.voxels().host() + std::size_t(hash.entry(entry).ptr) * kBlockVoxelCount;
-        for (int v = 0; v < kBlockVoxelCount; ++v) block[v] = readVoxelRecord<TVoxel>(r);
+        if (cache) {
+            int slot;
+            cache->store(block.data(), 1, &slot);
+            if (hash.insertStored(b, slot, &entry) != VoxelBlockHash::InsertResult::Inserted)
+                r.fail("the map's blocks do not fit its hash settings (block " + std::to_string(k) + ")");
+        } else {
+            if (hash.insert(b, &entry) != VoxelBlockHash::InsertResult::Inserted)
+                r.fail("the map's blocks do not fit its hash settings (block " + std::to_string(k) + ")");
+            std::copy(block.begin(), block.end(), scene.voxels().host() + std::size_t(hash.entry(entry).ptr) * kBlockVoxelCount);
+        }
     }
     hash.stats().blocks_allocated = hash.blocksInUse();
     hash.stats().block_capacity = hash.blockCapacity();
+    hash.stats().blocks_stored = hash.storedBlocks();
 }
 
 template <class TVoxel>
-void readBody(FieldReader& r, const MapFileInfo& info, Scene<TVoxel, PlainVoxelArray>& scene) {
+void readBody(FieldReader& r, const MapFileInfo& info, Scene<TVoxel, PlainVoxelArray>& scene, GlobalCache*) {
     if (info.record_count != scene.voxels().size())
         r.fail("corrupt: " + std::to_string(info.record_count) + " voxels for a " + std::to_string(scene.voxels().size()) + "-voxel volume");
     TVoxel* voxels = scene.voxels().host();
@@ -399,7 +427,7 @@ MapFileInfo readMapFileInfo(const std::string& path) {
 }
 
 template <class TVoxel, class TIndex>
-void writeMapFile(const std::string& path, const Scene<TVoxel, TIndex>& scene, const MapFileInfo& pose) {
+void writeMapFile(const std::string& path, const Scene<TVoxel, TIndex>& scene, const MapFileInfo& pose, const GlobalCache* cache) {
     if (scene.location() != Device::CPU) throw DeviceError("writeMapFile: the scene must be in host memory (Scene::copyTo(Device::CPU))");
     MapFileInfo info = pose;
     info.version = kMapFileVersion;
@@ -407,7 +435,7 @@ void writeMapFile(const std::string& path, const Scene<TVoxel, TIndex>& scene, c
     describeIndex(info, scene);
     info.scene = scene.params();
     info.integration_count = scene.integrationCount();
-    info.record_count = recordCount(scene);
+    info.record_count = recordCount(scene, cache);
 
     // A temporary name in the target's folder (rename stays within one file system), renamed at the end.
     const std::filesystem::path target(path);
@@ -427,7 +455,7 @@ void writeMapFile(const std::string& path, const Scene<TVoxel, TIndex>& scene, c
         w.u32(w.crc());
         w.flush(false);
         w.resetCrc();
-        writeBody(w, scene);
+        writeBody(w, scene, cache);
         w.flush();
         w.u32(w.crc());
         w.raw(kEndMagic, 8);
@@ -445,7 +473,7 @@ void writeMapFile(const std::string& path, const Scene<TVoxel, TIndex>& scene, c
 }
 
 template <class TVoxel, class TIndex>
-MapFileInfo readMapFile(const std::string& path, Scene<TVoxel, TIndex>& scene) {
+MapFileInfo readMapFile(const std::string& path, Scene<TVoxel, TIndex>& scene, GlobalCache* cache) {
     if (scene.location() != Device::CPU) throw DeviceError("readMapFile: the scene must be in host memory");
     if (std::filesystem::is_directory(path)) throw IoError(path, "is a folder, not a map file");
     std::ifstream in(path, std::ios::binary);
@@ -454,7 +482,7 @@ MapFileInfo readMapFile(const std::string& path, Scene<TVoxel, TIndex>& scene) {
     const MapFileInfo info = readHeader(r);
     requireFits(r, info, scene);
     r.resetCrc();
-    readBody(r, info, scene);
+    readBody(r, info, scene, cache);
     const std::uint32_t computed = r.crc();
     if (r.u32() != computed) r.fail("corrupt: the checksum of the map's voxels does not match");
     char end[8];
@@ -466,8 +494,8 @@ MapFileInfo readMapFile(const std::string& path, Scene<TVoxel, TIndex>& scene) {
 }
 
 #define VF_INSTANTIATE(TVoxel, TIndex)                                                                                         \
-    template void writeMapFile<TVoxel, TIndex>(const std::string&, const Scene<TVoxel, TIndex>&, const MapFileInfo&); \
-    template MapFileInfo readMapFile<TVoxel, TIndex>(const std::string&, Scene<TVoxel, TIndex>&);
+    template void writeMapFile<TVoxel, TIndex>(const std::string&, const Scene<TVoxel, TIndex>&, const MapFileInfo&, const GlobalCache*); \
+    template MapFileInfo readMapFile<TVoxel, TIndex>(const std::string&, Scene<TVoxel, TIndex>&, GlobalCache*);
 VF_FOR_EACH_ENGINE_PAIR(VF_INSTANTIATE)
 #undef VF_INSTANTIATE
 

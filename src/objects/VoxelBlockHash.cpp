@@ -44,6 +44,7 @@ VoxelBlockHash::VoxelBlockHash(const Settings& settings, Device location, bool a
     const std::size_t entries = std::size_t(settings_.bucket_count) * settings_.entries_per_bucket + settings_.excess_entry_count;
     allocateOn(entries_, entries, location_);
     allocateOn(entry_visibility_, entries, location_);
+    allocateOn(stored_slot_, entries, location_);
     allocateOn(free_excess_, std::size_t(settings_.excess_entry_count), location_);
     allocateOn(free_blocks_, std::size_t(settings_.max_block_count), location_);
     allocateOn(visible_entries_, std::size_t(settings_.max_block_count), location_);
@@ -54,6 +55,7 @@ void VoxelBlockHash::moveTo(Device where) {
     if (where == location_) return;
     keepOnly(entries_, where);
     keepOnly(entry_visibility_, where);
+    keepOnly(stored_slot_, where);
     keepOnly(free_excess_, where);
     keepOnly(free_blocks_, where);
     keepOnly(visible_entries_, where);
@@ -64,17 +66,20 @@ VoxelBlockHash VoxelBlockHash::copyTo(Device where) const {
     VoxelBlockHash copy(settings_, where, false);
     allocateOn(copy.entries_, entries_.size(), where);
     allocateOn(copy.entry_visibility_, entry_visibility_.size(), where);
+    allocateOn(copy.stored_slot_, stored_slot_.size(), where);
     allocateOn(copy.free_excess_, free_excess_.size(), where);
     allocateOn(copy.free_blocks_, free_blocks_.size(), where);
     allocateOn(copy.visible_entries_, visible_entries_.size(), where);
     copyAcross(copy.entries_, where, entries_, location_);
     copyAcross(copy.entry_visibility_, where, entry_visibility_, location_);
+    copyAcross(copy.stored_slot_, where, stored_slot_, location_);
     copyAcross(copy.free_excess_, where, free_excess_, location_);
     copyAcross(copy.free_blocks_, where, free_blocks_, location_);
     copyAcross(copy.visible_entries_, where, visible_entries_, location_);
     copy.free_block_count_ = free_block_count_;
     copy.free_excess_count_ = free_excess_count_;
     copy.block_capacity_ = block_capacity_;
+    copy.stored_block_count_ = stored_block_count_;
     copy.visible_count_ = visible_count_;
     copy.visible_valid_ = visible_valid_;
     copy.visible_T_world_camera_ = visible_T_world_camera_;
@@ -89,15 +94,22 @@ VoxelBlockHash::Data VoxelBlockHash::data() const {
 }
 
 HashTableState VoxelBlockHash::state() {
-    return HashTableState{entries_.data(location_),     free_blocks_.data(location_), free_excess_.data(location_),
-                          entry_visibility_.data(location_), entryCount(),            settings_.bucket_count,
-                          settings_.entries_per_bucket, settings_.bucket_count * settings_.entries_per_bucket,
+    return HashTableState{entries_.data(location_),
+                          free_blocks_.data(location_),
+                          free_excess_.data(location_),
+                          entry_visibility_.data(location_),
+                          stored_slot_.data(location_),
+                          entryCount(),
+                          settings_.bucket_count,
+                          settings_.entries_per_bucket,
+                          settings_.bucket_count * settings_.entries_per_bucket,
                           settings_.excess_entry_count};
 }
 
 void VoxelBlockHash::clearBlocks() {
     entries_.fill(location_, HashEntry::empty(), 0, entries_.size());
     entry_visibility_.fill(location_, kEntryNotVisible, 0, entry_visibility_.size());
+    stored_slot_.fill(location_, kNoStoredCopy, 0, stored_slot_.size());
     // Popped from the top: excess entry 0 is used first.
     std::vector<int> excess(std::size_t(settings_.excess_entry_count));
     for (int i = 0; i < settings_.excess_entry_count; ++i) excess[std::size_t(i)] = settings_.excess_entry_count - 1 - i;
@@ -105,6 +117,7 @@ void VoxelBlockHash::clearBlocks() {
     free_excess_count_ = settings_.excess_entry_count;
     block_capacity_ = 0;
     free_block_count_ = 0;
+    stored_block_count_ = 0;
     visible_count_ = 0;
     visible_valid_ = false;
     stats_ = AllocationStats();
@@ -162,12 +175,35 @@ VoxelBlockHash::InsertResult VoxelBlockHash::insert(Vec3i block, int* entry_out)
         if (entry_out) *entry_out = found;
         return InsertResult::AlreadyPresent;
     }
+    if (free_block_count_ == 0) return InsertResult::NoVoxelBlock;
+    if (!insertEntry(target, block, free_blocks_.host()[free_block_count_ - 1], entry_out)) return InsertResult::NoHashEntry;
+    --free_block_count_;
+    ++stats_.blocks_allocated;
+    return InsertResult::Inserted;
+}
+
+VoxelBlockHash::InsertResult VoxelBlockHash::insertStored(Vec3i block, int slot, int* entry_out) {
+    requireHost("insertStored()");
+    if (!blockIsAddressable(block)) return InsertResult::OutOfRange;
+    int target;
+    const int found = findHashEntry(data(), block, target);
+    if (found >= 0) {
+        if (entry_out) *entry_out = found;
+        return InsertResult::AlreadyPresent;
+    }
+    int entry;
+    if (!insertEntry(target, block, kEntrySwappedOut, &entry)) return InsertResult::NoHashEntry;
+    stored_slot_.host()[entry] = slot;
+    ++stored_block_count_;
+    if (entry_out) *entry_out = entry;
+    return InsertResult::Inserted;
+}
+
+bool VoxelBlockHash::insertEntry(int target, Vec3i block, int ptr, int* entry_out) {
     HashEntry* entries = entries_.host();
     const bool into_bucket = target < data().ordered_entry_count && entries[target].ptr == kEntryFree;
-    if (free_block_count_ == 0) return InsertResult::NoVoxelBlock;
-    if (!into_bucket && free_excess_count_ == 0) return InsertResult::NoHashEntry;
+    if (!into_bucket && free_excess_count_ == 0) return false;
     const Vec3<std::int16_t> pos{std::int16_t(block.x), std::int16_t(block.y), std::int16_t(block.z)};
-    const int ptr = free_blocks_.host()[--free_block_count_];
     int index = target;
     if (into_bucket) {
         entries[target].pos = pos;  // keeps `next`: a bucket's last entry may carry its chain
@@ -178,9 +214,8 @@ VoxelBlockHash::InsertResult VoxelBlockHash::insert(Vec3i block, int* entry_out)
         entries[index] = HashEntry{pos, kEndOfChain, ptr};
         entries[target].next = excess;
     }
-    ++stats_.blocks_allocated;
     if (entry_out) *entry_out = index;
-    return InsertResult::Inserted;
+    return true;
 }
 
 int VoxelBlockHash::removeBlocks(const std::vector<Vec3i>& blocks) {
@@ -190,7 +225,8 @@ int VoxelBlockHash::removeBlocks(const std::vector<Vec3i>& blocks) {
     int removed = 0;
     for (const Vec3i& b : blocks) {
         const int e = findEntry(b);
-        if (e < 0 || entries_.host()[e].ptr < 0 || remove[std::size_t(e)]) continue;
+        // Active blocks only: a block with a stored copy is not dropped here.
+        if (e < 0 || entries_.host()[e].ptr < 0 || stored_slot_.host()[e] != kNoStoredCopy || remove[std::size_t(e)]) continue;
         remove[std::size_t(e)] = 1;
         buckets.insert(hashBucket(b, settings_.bucket_count));
         ++removed;

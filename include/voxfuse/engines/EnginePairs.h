@@ -28,6 +28,15 @@
     MACRO(ARG, VoxelSRgbLabel, VoxelBlockHash)
 #define VF_APPLY_ENGINE_PAIR(MACRO, TVoxel, TIndex) MACRO(TVoxel, TIndex)
 
+// The voxel types, for the engines of the voxel block hash alone (swapping).
+#define VF_FOR_EACH_VOXEL(MACRO) \
+    MACRO(VoxelS)                \
+    MACRO(VoxelF)                \
+    MACRO(VoxelSRgb)             \
+    MACRO(VoxelFRgb)             \
+    MACRO(VoxelSLabel)           \
+    MACRO(VoxelSRgbLabel)
+
 // The templated engines with a CUDA layer (cuda/<Engine>_CUDA.cu), as their factory names them:
 // make<Engine>() in namespace voxfuse::cuda.
 #define VF_FOR_EACH_CUDA_ENGINE(MACRO) \

@@ -26,6 +26,15 @@
 
 namespace voxfuse {
 
+// Swapping of the voxel block hash (engines/SwappingEngine.h). The active voxel array holds at most
+// MainEngineSettings::hash.max_block_count blocks (on the GPU with Device::CUDA); the rest of the map
+// is stored in host memory, or in `swap_file`.
+struct SwapSettings {
+    bool enabled = false;
+    std::string swap_file;          // "" = the global cache in host memory
+    int blocks_per_frame = 4096;    // blocks moved each way per frame at most (the transfer buffers' size)
+};
+
 struct MainEngineSettings {
     SceneParams scene;
     VoxelType voxel_type = VoxelType::S;
@@ -43,6 +52,8 @@ struct MainEngineSettings {
     int remove_empty_blocks_every = 10;
     // How the pose of each frame is estimated when none is given.
     TrackerSettings tracker;
+    // Hash only: only the part of the map near the view stays in the voxel array.
+    SwapSettings swap;
 };
 
 VoxelType parseVoxelType(const std::string& name);  // "s", "f", "s_rgb", "f_rgb", "s_label", "s_rgb_label"; ConfigError otherwise
@@ -106,7 +117,9 @@ public:
     // Replaces the map with a map file's and resumes from the pose it was saved with: the model is
     // raycast from there, so the next frame is tracked against the loaded map. The file must match this
     // engine's voxel type, index settings, voxel size and mu (settingsForMap() makes settings that
-    // do); IoError naming the file and the mismatch otherwise. Returns the file's header.
+    // do); IoError naming the file and the mismatch otherwise. With swapping every block of the map
+    // starts stored in the global cache. A file that fails leaves the engine as it was. Returns the
+    // file's header.
     virtual MapFileInfo loadMap(const std::string& path) = 0;
     // With poses from a source's ground truth: the world frame's pose in the source's frame (its first
     // frame, or what a loaded map says). SequenceRunner sets it; saveMap() stores it. False if unknown.

@@ -36,6 +36,7 @@ namespace voxfuse {
 
 template <class TVoxel, class TIndex>
 class Scene;
+class GlobalCache;
 
 constexpr std::uint32_t kMapFileVersion = 1;
 
@@ -59,13 +60,16 @@ struct MapFileInfo {
 // version this build reads.
 MapFileInfo readMapFileInfo(const std::string& path);
 
-// Writes `scene` (in host memory) with the pose and camera fields of `info`; the others come from the scene.
+// Writes `scene` (in host memory) with the pose and camera fields of `info`; the others come from the
+// scene. A hash with swapped blocks needs its global cache: stored blocks are read from it and copies
+// waiting to be merged are merged on the way (engines/SwappingEngine.h).
 template <class TVoxel, class TIndex>
-void writeMapFile(const std::string& path, const Scene<TVoxel, TIndex>& scene, const MapFileInfo& info);
+void writeMapFile(const std::string& path, const Scene<TVoxel, TIndex>& scene, const MapFileInfo& info, const GlobalCache* cache = nullptr);
 
 // Reads the map into `scene` (in host memory, empty, with the file's voxel type, index settings and
-// voxel size: see readMapFileInfo) and returns the header.
+// voxel size: see readMapFileInfo) and returns the header. With a global cache (a hash with swapping),
+// every block goes into the cache, stored, whatever the size of the voxel array.
 template <class TVoxel, class TIndex>
-MapFileInfo readMapFile(const std::string& path, Scene<TVoxel, TIndex>& scene);
+MapFileInfo readMapFile(const std::string& path, Scene<TVoxel, TIndex>& scene, GlobalCache* cache = nullptr);
 
 }  // namespace voxfuse

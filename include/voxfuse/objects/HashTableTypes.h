@@ -20,7 +20,9 @@ constexpr int kBlockVoxelCount = kBlockSide * kBlockSide * kBlockSide;  // 512, 
 
 // HashEntry::ptr values that are not a voxel block.
 constexpr int kEntryFree = -1;        // the entry holds no block
-constexpr int kEntrySwappedOut = -2;  // reserved for swapping: the block exists but is not in the voxel array
+constexpr int kEntrySwappedOut = -2;  // the block exists, stored in the global cache only (not in the voxel array)
+// HashTableState::stored_slot of an entry whose block has no copy in the global cache.
+constexpr int kNoStoredCopy = -1;
 // HashEntry::next at the end of a chain.
 constexpr int kEndOfChain = -1;
 
@@ -61,14 +63,20 @@ struct HashTableView {
     int excess_entry_count;
 };
 
-// What the device layers of allocation and removal change: the tables themselves, on their device.
-// The free stacks are popped from the top: the next free voxel block is free_blocks[free_block_count - 1]
-// (the counts are kept by VoxelBlockHash on the host).
+// What the device layers of allocation, removal and swapping change: the tables themselves, on their
+// device. The free stacks are popped from the top: the next free voxel block is
+// free_blocks[free_block_count - 1] (the counts are kept by VoxelBlockHash on the host).
+// With swapping (engines/SwappingEngine.h) an entry's block is in one of three states:
+//   active         ptr >= 0, stored_slot == kNoStoredCopy: in the voxel array only;
+//   stored         ptr == kEntrySwappedOut, stored_slot >= 0: in the global cache only;
+//   merge pending  ptr >= 0, stored_slot >= 0: back in the voxel array (fusing new frames) while its
+//                  stored copy waits to be merged in.
 struct HashTableState {
     HashEntry* entries;
     int* free_blocks;                // stack of free voxel block indices below the block capacity
     int* free_excess;                // stack of free excess-list indices
     std::uint8_t* entry_visibility;  // one of kEntryNotVisible / kEntrySeenThisFrame / kEntryVisible per entry
+    int* stored_slot;                // per entry: the global cache slot of its stored copy, or kNoStoredCopy
     int entry_count;
     int bucket_count;
     int entries_per_bucket;

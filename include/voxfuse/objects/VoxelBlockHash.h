@@ -61,11 +61,15 @@ public:
     std::size_t voxelCount() const { return std::size_t(block_capacity_) * kBlockVoxelCount; }
     // Memory of the index itself (entry table, free stacks, visibility, visible list); fixed by the settings.
     std::size_t tableBytes() const {
-        return entries_.bytes() + free_blocks_.bytes() + free_excess_.bytes() + entry_visibility_.bytes() + visible_entries_.bytes();
+        return entries_.bytes() + free_blocks_.bytes() + free_excess_.bytes() + entry_visibility_.bytes() + stored_slot_.bytes() +
+               visible_entries_.bytes();
     }
     // After a device layer took blocks and excess entries from the tops of the free stacks (negative:
     // pushed back), keeps the stack sizes and the statistics in step.
     void popFreeStacks(int blocks, int excess_entries);
+    // Blocks with a copy in the global cache (stored, or merge pending): kept by the swapping engine.
+    int storedBlocks() const { return stored_block_count_; }
+    void addStoredBlocks(int count) { stored_block_count_ += count; }
 
     // ---- Host-side table operations (serial; a hash on the GPU throws DeviceError) ----
     const HashEntry& entry(int i) const;
@@ -74,6 +78,9 @@ public:
     // Inserts `block` with a voxel block from the free stack; `entry_out` receives its entry. The block's
     // voxels are whatever the array holds: the caller resets them (the allocation engine does).
     InsertResult insert(Vec3i block, int* entry_out = nullptr);
+    // Inserts `block` as stored in the global cache at `slot` (no voxel block; reading a map that is
+    // larger than the voxel array).
+    InsertResult insertStored(Vec3i block, int slot, int* entry_out = nullptr);
     // Removes the given blocks (absent ones are skipped) with the removal of shared/HashUpdate.h: voxel
     // blocks and excess entries go back to their free stacks, chains stay linked, and the visible list
     // keeps the blocks that remain. Returns how many were removed.
@@ -86,6 +93,8 @@ public:
     int visibleCount() const { return visible_count_; }
     // Per entry: kEntryVisible for the entries of the visible list (kept between frames), on location().
     const std::uint8_t* entryVisibility() const { return entry_visibility_.data(location_); }
+    // Per entry: the global cache slot of its stored copy or kNoStoredCopy, on location().
+    const int* storedSlots() const { return stored_slot_.data(location_); }
     // Host-side: makes `entries` the visible list (tests and tools; a hash on the GPU throws DeviceError).
     void setVisibleEntries(const std::vector<int>& entries, const Mat4f& T_world_camera, const Intrinsics& intrinsics);
     // After a device layer wrote `count` entries to visibleEntriesForWriting() and their visibility:
@@ -116,9 +125,13 @@ private:
     MemoryBlock<int> free_blocks_;  // stack of free voxel block indices below block_capacity_
     MemoryBlock<int> free_excess_;  // stack of free excess-list indices
     MemoryBlock<std::uint8_t> entry_visibility_;
+    MemoryBlock<int> stored_slot_;  // per entry, see HashTableState
     int free_block_count_ = 0;
     int free_excess_count_ = 0;
     int block_capacity_ = 0;
+    int stored_block_count_ = 0;
+    // Insertion into `target` (findHashEntry's) of a new entry with this ptr; false when the excess list is full.
+    bool insertEntry(int target, Vec3i block, int ptr, int* entry_out);
 
     MemoryBlock<int> visible_entries_;
     int visible_count_ = 0;

@@ -176,15 +176,17 @@ VF_HOST_DEVICE inline bool blockIsEmpty(const TVoxel* block_voxels) {
     return true;
 }
 
-// Per entry: remove[i] = 1 for an allocated block that is empty.
+// Per entry: remove[i] = 1 for an active block that is empty (a block whose stored copy waits to be
+// merged in holds information even while its voxels are empty).
 template <class TVoxel>
 struct MarkEmptyBlocks {
     const HashEntry* entries;
+    const int* stored_slot;
     const TVoxel* voxels;
     std::uint8_t* remove;
     VF_HOST_DEVICE void operator()(int i) const {
         const int ptr = entries[i].ptr;
-        remove[i] = ptr >= 0 && blockIsEmpty(voxels + (long long)ptr * kBlockVoxelCount) ? 1 : 0;
+        remove[i] = ptr >= 0 && stored_slot[i] == kNoStoredCopy && blockIsEmpty(voxels + (long long)ptr * kBlockVoxelCount) ? 1 : 0;
     }
 };
 

@@ -169,7 +169,7 @@ struct ReleaseInsertClaims {
 
 // ---- Removal per bucket ----
 
-// The arrays of a removal pass. `remove` marks entries to delete (allocated entries only).
+// The arrays of a removal pass. `remove` marks entries to delete (active blocks without a stored copy).
 struct BucketRemoval {
     HashTableState table;
     const std::uint8_t* remove;
@@ -216,6 +216,7 @@ struct RemoveBucketEntries {
                 t.entries[prev].next = e.next;
                 t.entries[index] = HashEntry::empty();
                 t.entry_visibility[index] = kEntryNotVisible;
+                t.stored_slot[index] = kNoStoredCopy;
             } else {
                 prev = index;
             }
@@ -229,16 +230,20 @@ struct RemoveBucketEntries {
             if (head == kEndOfChain) {
                 t.entries[k].ptr = kEntryFree;  // `next` stays: only the last entry links a chain
                 t.entry_visibility[k] = kEntryNotVisible;
+                t.stored_slot[k] = kNoStoredCopy;
                 continue;
             }
+            // The head moves with everything kept per entry (visibility, stored copy).
             const int head_index = t.ordered_entry_count + head;
             const HashEntry moved = t.entries[head_index];
             t.entries[k].pos = moved.pos;
             t.entries[k].ptr = moved.ptr;
             t.entries[last].next = moved.next;
             t.entry_visibility[k] = t.entry_visibility[head_index];
+            t.stored_slot[k] = t.stored_slot[head_index];
             t.entries[head_index] = HashEntry::empty();
             t.entry_visibility[head_index] = kEntryNotVisible;
+            t.stored_slot[head_index] = kNoStoredCopy;
             *excess_out++ = head;
         }
     }
