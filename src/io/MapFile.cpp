@@ -406,9 +406,9 @@ void requireFits(FieldReader& r, const MapFileInfo& file, const Scene<TVoxel, TI
     if (file.hash != mine.hash) r.fail(std::string("the map uses the ") + (file.hash ? "hash" : "dense") + " index");
     if (file.hash) {
         const VoxelBlockHashSettings &a = file.hash_settings, &b = mine.hash_settings;
-        if (a.bucket_count != b.bucket_count || a.entries_per_bucket != b.entries_per_bucket || a.excess_entry_count != b.excess_entry_count ||
-            a.max_block_count != b.max_block_count)
-            r.fail("the map's hash settings differ from the scene's");
+        // The table's shape must match; the voxel array's size need not (a map can outgrow it, with swapping).
+        if (a.bucket_count != b.bucket_count || a.entries_per_bucket != b.entries_per_bucket || a.excess_entry_count != b.excess_entry_count)
+            r.fail("the map's hash table settings differ from the scene's");
     } else if (file.dense_offset != mine.dense_offset || file.dense_size != mine.dense_size) {
         r.fail("the map's dense volume differs from the scene's");
     }

@@ -194,7 +194,7 @@ TEST(MapFileTest, AMapOfOtherSettingsIsRefusedByName) {
         readMapFile(path, smaller);
         ADD_FAILURE() << "other hash settings were accepted";
     } catch (const IoError& e) {
-        EXPECT_NE(std::string(e.what()).find("hash settings differ"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("hash table settings differ"), std::string::npos) << e.what();
     }
 }
 

@@ -1,0 +1,250 @@
+// Swapping: blocks that go to the global cache and come back are bit-identical; a run whose active
+// voxel array is smaller than its map fuses the same map as a run without swapping when every stored
+// copy arrives in the frame that needs it, and tracks alike when copies wait; no frame moves more
+// blocks than its bound; maps larger than the active array save, load and mesh. On each device.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <map>
+#include <tuple>
+#include <vector>
+
+#include "DeviceTestSupport.h"
+#include "SyntheticViews.h"
+#include "voxfuse/engines/AllocationEngine.h"
+#include "voxfuse/engines/IntegrationEngine.h"
+#include "voxfuse/engines/MainEngine.h"
+#include "voxfuse/engines/SwappingEngine.h"
+#include "voxfuse/objects/GlobalCache.h"
+#include "voxfuse/objects/Voxel.h"
+
+namespace fs = std::filesystem;
+
+namespace voxfuse {
+namespace {
+
+using Key = std::tuple<int, int, int>;
+
+class SwappingEngineTest : public ::testing::TestWithParam<Device> {
+protected:
+    void SetUp() override { VF_SKIP_IF_UNAVAILABLE(device()); }
+    Device device() const { return GetParam(); }
+};
+
+const synth::SyntheticScene& world() {
+    static const synth::SyntheticScene scene = synth::SyntheticScene::boxAndSphere();
+    return scene;
+}
+const Intrinsics kIntr = test::kinectIntrinsics(160, 120);
+
+// A camera swinging around the scene, 60 degrees to either side and back in `frames` steps: blocks
+// leave the view at one end and come back.
+Mat4f orbitPose(int k, int frames) {
+    const float a = 1.0471976f * std::sin(6.2831853f * float(k) / float(frames));
+    return test::lookAt({0.3f + 1.1f * std::cos(a), 1.1f * std::sin(a), 0.8f}, {0.3f, 0.f, 0.1f});
+}
+
+// Every non-empty block of a host scene, by position.
+std::map<Key, std::vector<VoxelSRgb>> blocksOf(const Scene<VoxelSRgb, VoxelBlockHash>& host) {
+    std::map<Key, std::vector<VoxelSRgb>> blocks;
+    for (int i = 0; i < host.index().entryCount(); ++i) {
+        const HashEntry& e = host.index().entry(i);
+        if (e.ptr < 0) continue;
+        const VoxelSRgb* b = host.voxels().host() + std::size_t(e.ptr) * kBlockVoxelCount;
+        blocks[{e.pos.x, e.pos.y, e.pos.z}].assign(b, b + kBlockVoxelCount);
+    }
+    return blocks;
+}
+
+bool sameBlock(const std::vector<VoxelSRgb>& a, const VoxelSRgb* b) {
+    for (int v = 0; v < kBlockVoxelCount; ++v)
+        if (!test::sameVoxel(a[std::size_t(v)], b[v])) return false;
+    return true;
+}
+
+TEST_P(SwappingEngineTest, BlocksSwappedOutAndBackInAreBitIdentical) {
+    Scene<VoxelSRgb, VoxelBlockHash> scene(test::centimetreSceneParams(), VoxelBlockHash(VoxelBlockHashSettings(), device()), device());
+    auto allocation = makeAllocationEngine<VoxelSRgb, VoxelBlockHash>(device());
+    auto integration = makeIntegrationEngine<VoxelSRgb, VoxelBlockHash>(device());
+    auto swapping = makeSwappingEngine<VoxelSRgb>(device());
+    GlobalCache cache(sizeof(VoxelSRgb) * kBlockVoxelCount);
+    const Mat4f here = orbitPose(0, 8);
+    const View view = test::renderView(world(), kIntr, here);
+    for (int k = 0; k < 3; ++k) {
+        allocation->allocate(scene, view, here);
+        integration->integrate(scene, view, here);
+    }
+    const auto original = blocksOf(test::onHost(scene));
+    ASSERT_GT(original.size(), 200u);
+
+    // Looking away with no depth: nothing is visible, every block with data goes out.
+    View empty = test::renderView(world(), kIntr, here);
+    empty.depth.memory().fill(0.f);
+    const Mat4f away = test::lookAt({0.3f, 0.f, 3.f}, {0.3f, 0.f, 5.f});
+    allocation->allocate(scene, empty, away);
+    const int out = swapping->swapOut(scene, cache, 1 << 20);
+    EXPECT_GT(out, 200);
+    EXPECT_EQ(scene.index().storedBlocks(), out);
+    EXPECT_EQ(cache.storedBlocks(), out);
+    {
+        const auto host = test::onHost(scene);
+        std::vector<VoxelSRgb> stored(kBlockVoxelCount);
+        int checked = 0;
+        for (int i = 0; i < host.index().entryCount(); ++i) {
+            const HashEntry& e = host.index().entry(i);
+            if (e.ptr != kEntrySwappedOut) continue;
+            cache.read(host.index().storedSlots()[i], stored.data());
+            ASSERT_TRUE(sameBlock(original.at({e.pos.x, e.pos.y, e.pos.z}), stored.data())) << "stored copy of entry " << i;
+            ++checked;
+        }
+        EXPECT_EQ(checked, out);
+    }
+
+    // Back to the view: the blocks its depth needs come back, bit-identical, before anything is fused.
+    allocation->allocate(scene, view, here);
+    const int in = swapping->swapIn(scene, cache, 1 << 20);
+    EXPECT_GT(in, 100);
+    EXPECT_EQ(scene.index().storedBlocks(), out - in);
+    const auto back = test::onHost(scene);
+    int compared = 0;
+    for (int i = 0; i < back.index().entryCount(); ++i) {
+        const HashEntry& e = back.index().entry(i);
+        if (e.ptr < 0 || !original.count({e.pos.x, e.pos.y, e.pos.z})) continue;
+        ASSERT_EQ(back.index().storedSlots()[i], kNoStoredCopy);
+        ASSERT_TRUE(sameBlock(original.at({e.pos.x, e.pos.y, e.pos.z}), back.voxels().host() + std::size_t(e.ptr) * kBlockVoxelCount));
+        ++compared;
+    }
+    EXPECT_GE(compared, in);
+}
+
+// ---- Whole runs through the main engine ----
+
+struct RunResult {
+    std::vector<Mat4f> poses;
+    std::vector<AllocationStats> stats;
+    std::vector<char> map_body;  // the saved map without its header (which names the active array's size)
+    std::size_t mesh_triangles = 0;
+};
+
+std::vector<char> mapBody(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    std::vector<char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (bytes.size() < 16) return {};
+    std::uint32_t header = 0;
+    for (int i = 0; i < 4; ++i) header |= std::uint32_t(std::uint8_t(bytes[12 + std::size_t(i)])) << (8 * i);
+    return std::vector<char>(bytes.begin() + 16 + std::ptrdiff_t(header), bytes.end());
+}
+
+RunResult runOrbit(Device device, bool tracked, const SwapSettings& swap, int active_blocks, int frames = 40) {
+    MainEngineSettings s;
+    s.device = device;
+    s.voxel_type = VoxelType::SRgb;
+    s.scene = test::centimetreSceneParams();
+    s.swap = swap;
+    if (active_blocks > 0) s.hash.max_block_count = active_blocks;
+    s.hash.blocks_per_growth = 256;
+    RGBDCalib calib;
+    calib.depth = calib.rgb = kIntr;
+    calib.disparity = DisparityCalib::affine(0.001f);
+    auto engine = MainEngine::create(s, calib);
+    RunResult r;
+    for (int k = 0; k < frames; ++k) {
+        const Mat4f truth = rigidInverse(orbitPose(0, frames)) * orbitPose(k, frames);
+        const FrameResult f = engine->processFrame(test::toRgbdFrame(test::renderView(world(), kIntr, orbitPose(k, frames)), k),
+                                                   tracked ? nullptr : &truth);
+        r.poses.push_back(f.T_world_camera);
+        r.stats.push_back(f.allocation);
+    }
+    const std::string path = (fs::temp_directory_path() / ("voxfuse_swap_" + std::string(deviceName(device)) + ".vfm")).string();
+    engine->saveMap(path);
+    r.map_body = mapBody(path);
+    Mesh mesh;
+    engine->extractMesh(mesh);
+    r.mesh_triangles = mesh.triangles.size();
+    return r;
+}
+
+float ateRmse(const std::vector<Mat4f>& poses, int frames) {
+    double sum = 0.0;
+    for (int k = 0; k < int(poses.size()); ++k) {
+        const Mat4f truth = rigidInverse(orbitPose(0, frames)) * orbitPose(k, frames);
+        const Vec3f d = poses[std::size_t(k)].translation() - truth.translation();
+        sum += double(dot(d, d));
+    }
+    return float(std::sqrt(sum / double(poses.size())));
+}
+
+TEST_P(SwappingEngineTest, AnActiveArraySmallerThanTheMapFusesTheSameMapWhenNothingWaits) {
+    const RunResult plain = runOrbit(device(), false, SwapSettings(), 0);
+    int map_blocks = 0;
+    for (const AllocationStats& st : plain.stats) map_blocks = std::max(map_blocks, st.blocks_allocated);
+    SwapSettings swap;
+    swap.enabled = true;
+    swap.blocks_per_frame = 1 << 20;
+    const int active = map_blocks * 2 / 3;
+    const RunResult swapped = runOrbit(device(), false, swap, active);
+    int stored = 0;
+    for (const AllocationStats& st : swapped.stats) {
+        stored = std::max(stored, st.blocks_stored);
+        EXPECT_LE(st.blocks_allocated, active);
+        EXPECT_EQ(st.allocation_failures_this_frame, 0);
+    }
+    EXPECT_GT(stored, map_blocks / 4) << "the map did not outgrow the active array";
+    ASSERT_FALSE(plain.map_body.empty());
+    EXPECT_TRUE(plain.map_body == swapped.map_body) << "the same voxels, bit for bit";
+    EXPECT_EQ(plain.mesh_triangles, swapped.mesh_triangles);
+
+    swap.swap_file = (fs::temp_directory_path() / "voxfuse_swap_test.bin").string();
+    const RunResult on_disk = runOrbit(device(), false, swap, active);
+    EXPECT_TRUE(plain.map_body == on_disk.map_body) << "a swap file holds the same";
+}
+
+TEST_P(SwappingEngineTest, ATightBoundMovesNoMoreBlocksPerFrameAndTracksAlike) {
+    const int frames = 120;  // at most 3 degrees a frame
+    const RunResult plain = runOrbit(device(), true, SwapSettings(), 0, frames);
+    int map_blocks = 0;
+    for (const AllocationStats& st : plain.stats) map_blocks = std::max(map_blocks, st.blocks_allocated);
+    SwapSettings swap;
+    swap.enabled = true;
+    swap.blocks_per_frame = 24;
+    const RunResult swapped = runOrbit(device(), true, swap, map_blocks * 2 / 3, frames);
+    bool waited = false;
+    for (const AllocationStats& st : swapped.stats) {
+        EXPECT_LE(st.blocks_swapped_in_this_frame, 24);
+        EXPECT_LE(st.blocks_swapped_out_this_frame, 24);
+        waited = waited || st.blocks_activated_this_frame > st.blocks_swapped_in_this_frame;
+    }
+    EXPECT_TRUE(waited) << "some stored copies waited for a later frame";
+    const float plain_ate = ateRmse(plain.poses, frames), swapped_ate = ateRmse(swapped.poses, frames);
+    EXPECT_LT(plain_ate, 0.01f) << "the run without swapping tracks (1 cm voxels, 160x120)";
+    EXPECT_NEAR(swapped_ate, plain_ate, 0.0005f) << "ATE within 0.5 mm of the run without swapping";
+}
+
+TEST_P(SwappingEngineTest, AMapLargerThanTheActiveArrayLoadsAndMeshes) {
+    const RunResult plain = runOrbit(device(), false, SwapSettings(), 0, 24);
+    const std::string path = (fs::temp_directory_path() / ("voxfuse_swap_" + std::string(deviceName(device())) + ".vfm")).string();
+    const MapFileInfo info = readMapFileInfo(path);
+    MainEngineSettings s = settingsForMap(info, MainEngineSettings());
+    s.device = device();
+    s.swap.enabled = true;
+    s.hash.max_block_count = int(info.record_count / 3);  // the map is three times the active array
+    RGBDCalib calib;
+    calib.depth = calib.rgb = kIntr;
+    auto engine = MainEngine::create(s, calib);
+    engine->loadMap(path);
+    Mesh mesh;
+    engine->extractMesh(mesh);
+    EXPECT_EQ(mesh.triangles.size(), plain.mesh_triangles);
+    const std::string again = path + ".again";
+    engine->saveMap(again);
+    EXPECT_TRUE(mapBody(again) == plain.map_body);
+}
+
+INSTANTIATE_TEST_SUITE_P(Devices, SwappingEngineTest, test::kAllDevices, test::DeviceName());
+
+}  // namespace
+}  // namespace voxfuse
