@@ -5,6 +5,7 @@
 // source of a build without I/O (VOXFUSE_IO=OFF), such as the GPU bundle of scripts/gpu_bundle.sh.
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -106,6 +107,13 @@ int main(int argc, char** argv) {
         ->check(CLI::PositiveNumber);
     cli.add_option("--occupancy-pixel-step", occupancy_settings.pixel_step, "occupancy: every Nth pixel in x and y")
         ->capture_default_str()->check(CLI::PositiveNumber);
+    int active_blocks = 0;
+    cli.add_flag("--swap", s.swap.enabled, "swapping: only the map near the view stays in the voxel array, the rest in memory or --swap-file");
+    cli.add_option("--active-blocks", active_blocks, "swapping: blocks the active voxel array holds at most (implies --swap)")
+        ->check(CLI::PositiveNumber);
+    cli.add_option("--swap-file", s.swap.swap_file, "swapping: keep the swapped-out map in this file (implies --swap)");
+    cli.add_option("--swap-blocks-per-frame", s.swap.blocks_per_frame, "swapping: blocks moved each way per frame at most")
+        ->capture_default_str()->check(CLI::PositiveNumber);
     cli.add_option("--json", json_path, "where to write the JSON report")->capture_default_str();
     CLI11_PARSE(cli, argc, argv);
 
@@ -119,6 +127,8 @@ int main(int argc, char** argv) {
 #endif
         s.index_type = parseIndexType(index);
         s.device = device == "cuda" ? Device::CUDA : Device::CPU;
+        if (active_blocks > 0 || !s.swap.swap_file.empty()) s.swap.enabled = true;
+        if (active_blocks > 0) s.hash.max_block_count = active_blocks;
         auto engine = MainEngine::create(s, source->calib());
         std::unique_ptr<OccupancyMapper> occupancy;
         if (occupancy_settings.resolution_m > 0.f) occupancy = std::make_unique<OccupancyMapper>(occupancy_settings);
@@ -195,6 +205,27 @@ int main(int argc, char** argv) {
         std::printf("\n  engine frames/s (1000 / median total): %.1f\n  wall frames/s (incl. decoding): %.1f\n  peak RSS: %.0f MB, scene: %.0f MB\n",
                     engine_fps, app::framesPerSecond(record), record.peak_rss_mb, record.scene_mb);
 
+        // Swapping: blocks moved per frame (each way) and what stayed active.
+        std::vector<double> swapped_in, swapped_out;
+        int most_active = 0;
+        for (std::size_t i = 0; i < record.frames.size(); ++i) {
+            const AllocationStats& a = record.frames[i].result.allocation;
+            swapped_in.push_back(a.blocks_swapped_in_this_frame);
+            swapped_out.push_back(a.blocks_swapped_out_this_frame);
+            most_active = std::max(most_active, a.blocks_allocated);
+        }
+        const auto most = [](const std::vector<double>& v) { return v.empty() ? 0.0 : *std::max_element(v.begin(), v.end()); };
+        const auto mean = [](const std::vector<double>& v) {
+            double sum = 0.0;
+            for (double x : v) sum += x;
+            return v.empty() ? 0.0 : sum / double(v.size());
+        };
+        if (s.swap.enabled)
+            std::printf("  swapping: %d blocks stored in %s; per frame in %.1f (max %.0f), out %.1f (max %.0f), limit %d; "
+                        "at most %d of %d blocks active\n",
+                        record.allocation.blocks_stored, s.swap.swap_file.empty() ? "memory" : s.swap.swap_file.c_str(), mean(swapped_in),
+                        most(swapped_in), mean(swapped_out), most(swapped_out), s.swap.blocks_per_frame, most_active, s.hash.max_block_count);
+
         app::MeshingBench meshing;
         app::CloudBench cloud_bench;
         if (mesh) {
@@ -241,6 +272,19 @@ int main(int argc, char** argv) {
         j.value("peak_rss_mb", record.peak_rss_mb);
         j.value("scene_mb", record.scene_mb);
         j.value("blocks_allocated", record.allocation.blocks_allocated);
+        if (s.swap.enabled) {
+            j.beginObject("swapping");
+            j.value("swap_file", s.swap.swap_file);
+            j.value("active_block_limit", s.hash.max_block_count);
+            j.value("most_blocks_active", most_active);
+            j.value("blocks_stored", record.allocation.blocks_stored);
+            j.value("blocks_per_frame_limit", s.swap.blocks_per_frame);
+            j.value("mean_swapped_in_per_frame", mean(swapped_in));
+            j.value("most_swapped_in_per_frame", most(swapped_in));
+            j.value("mean_swapped_out_per_frame", mean(swapped_out));
+            j.value("most_swapped_out_per_frame", most(swapped_out));
+            j.endObject();
+        }
         j.value("allocation_failures", (long long)record.allocation.allocation_failures_total);
         if (mesh) app::writeMeshingJson(j, meshing);
         if (cloud || cloud_voxel_m > 0.f) app::writeCloudJson(j, cloud_bench);

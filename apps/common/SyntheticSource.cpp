@@ -14,16 +14,19 @@ namespace voxfuse::app {
 namespace {
 constexpr float kDepthScale = 5000.f;  // raw depth = metres * 5000, as the bundled TUM-layout data
 constexpr double kFirstTimestamp = 1000.0;
+constexpr float kCorridorLength = 20.f;
 }  // namespace
 
 struct SyntheticSource::Renderer {
-    synth::SyntheticScene scene = synth::SyntheticScene::defaultRoom();
+    synth::SyntheticScene scene;
     synth::PinholeCamera camera;
-    synth::CameraPath path;
     synth::KinectDepthModel depth_model;
     std::mt19937 colour_rng;
-    Renderer(int width, int height, unsigned seed)
-        : camera(synth::PinholeCamera::kinectV1(width, height)), depth_model(depthParams(camera), seed), colour_rng(seed + 1) {}
+    Renderer(Kind kind, int width, int height, unsigned seed)
+        : scene(kind == Kind::Corridor ? synth::SyntheticScene::corridor(kCorridorLength) : synth::SyntheticScene::defaultRoom()),
+          camera(synth::PinholeCamera::kinectV1(width, height)),
+          depth_model(depthParams(camera), seed),
+          colour_rng(seed + 1) {}
     static synth::KinectDepthParams depthParams(const synth::PinholeCamera& camera) {
         synth::KinectDepthParams p;
         p.fx = camera.fx;
@@ -31,37 +34,49 @@ struct SyntheticSource::Renderer {
     }
 };
 
-SyntheticSource::SyntheticSource(int frames, int width, int height, unsigned seed)
-    : renderer_(std::make_unique<Renderer>(width, height, seed)), frames_(frames) {
+SyntheticSource::SyntheticSource(Kind kind, int frames, int width, int height, unsigned seed)
+    : renderer_(std::make_unique<Renderer>(kind, width, height, seed)), kind_(kind), frames_(frames) {
     if (frames < 1 || width < 16 || height < 16) throw ConfigError("synthetic source: need at least one frame of 16x16 pixels or more");
     const synth::PinholeCamera& c = renderer_->camera;
     calib_.depth = calib_.rgb = Intrinsics{c.width, c.height, c.fx, c.fy, c.cx, c.cy};
     calib_.disparity = DisparityCalib::affine(1.f / kDepthScale);
-    for (int i = 0; i < frames; ++i)
-        ground_truth_.push_back({kFirstTimestamp + i / synth::CameraPath::kFps, toMat4f(renderer_->path.pose(i).matrix())});
+    const synth::CameraPath room_path;
+    const synth::CorridorWalk corridor_walk(kCorridorLength, frames);
+    for (int i = 0; i < frames; ++i) {
+        const Eigen::Isometry3f pose = kind == Kind::Corridor ? corridor_walk.pose(i) : room_path.pose(i);
+        ground_truth_.push_back({kFirstTimestamp + i / synth::CameraPath::kFps, toMat4f(pose.matrix())});
+    }
 }
 
 SyntheticSource::~SyntheticSource() = default;
 
-bool SyntheticSource::isSyntheticName(const std::string& path) { return path == "synthetic" || path.rfind("synthetic:", 0) == 0; }
+bool SyntheticSource::isSyntheticName(const std::string& path) {
+    for (const std::string name : {"synthetic", "synthetic-corridor"})
+        if (path == name || path.rfind(name + ":", 0) == 0) return true;
+    return false;
+}
 
 std::unique_ptr<SyntheticSource> SyntheticSource::open(const std::string& path) {
     if (!isSyntheticName(path)) throw ConfigError("not a synthetic source: '" + path + "'");
-    int frames = 100;
-    if (path.size() > 10) {
+    const Kind kind = path.rfind("synthetic-corridor", 0) == 0 ? Kind::Corridor : Kind::Room;
+    int frames = kind == Kind::Corridor ? 1200 : 100;
+    const std::size_t colon = path.find(':');
+    if (colon != std::string::npos) {
         std::size_t used = 0;
         try {
-            frames = std::stoi(path.substr(10), &used);
+            frames = std::stoi(path.substr(colon + 1), &used);
         } catch (const std::exception&) {
             used = 0;
         }
-        if (used != path.size() - 10 || frames < 1) throw ConfigError("synthetic source: '" + path + "' should be synthetic:N with N >= 1 frames");
+        if (used == 0 || used != path.size() - colon - 1 || frames < 1)
+            throw ConfigError("synthetic source: '" + path + "' should be NAME:N with N >= 1 frames");
     }
-    return std::make_unique<SyntheticSource>(frames);
+    return std::make_unique<SyntheticSource>(kind, frames);
 }
 
 std::string SyntheticSource::description() const {
-    return "synthetic room rendered in memory (" + std::to_string(frames_) + " frames, " + std::to_string(calib_.depth.width) + "x" +
+    return std::string(kind_ == Kind::Corridor ? "synthetic corridor walk" : "synthetic room") + " rendered in memory (" +
+           std::to_string(frames_) + " frames, " + std::to_string(calib_.depth.width) + "x" +
            std::to_string(calib_.depth.height) + ")";
 }
 

@@ -1,7 +1,10 @@
 #pragma once
-// The synthetic room (apps/synth) as an ImageSource rendered in memory, frame by frame: the bundled
-// data set's scene, camera path and Kinect depth model, with no image files and no codec. For
-// benchmarks and checks on machines that have only the core library (voxfuse_bench synthetic[:N]).
+// Synthetic scenes (apps/synth) as an ImageSource rendered in memory, frame by frame, with the Kinect
+// depth model and exact ground truth, with no image files and no codec. For benchmarks and checks on
+// machines that have only the core library:
+//   synthetic[:N]            the bundled data set's room and camera path (default 100 frames);
+//   synthetic-corridor[:N]   a walk down a 20 m corridor and back (default 1200 frames): a map that
+//                            outgrows an active voxel array, for swapping.
 
 #include <memory>
 #include <string>
@@ -13,11 +16,12 @@ namespace voxfuse::app {
 
 class SyntheticSource final : public ImageSource {
 public:
+    enum class Kind { Room, Corridor };
     // `frames` frames (30 fps) at the given resolution; depth with the Kinect noise model of `seed`.
-    explicit SyntheticSource(int frames, int width = 640, int height = 480, unsigned seed = 1);
+    explicit SyntheticSource(Kind kind, int frames, int width = 640, int height = 480, unsigned seed = 1);
     ~SyntheticSource() override;
 
-    // "synthetic" or "synthetic:N" (N frames, default 100); anything else is not a synthetic source.
+    // "synthetic[:N]" or "synthetic-corridor[:N]"; anything else is not a synthetic source.
     static bool isSyntheticName(const std::string& path);
     static std::unique_ptr<SyntheticSource> open(const std::string& path);
 
@@ -31,6 +35,7 @@ private:
     struct Renderer;
     std::unique_ptr<Renderer> renderer_;
     RGBDCalib calib_;
+    Kind kind_;
     int frames_;
     int next_ = 0;
     std::vector<TimedPose> ground_truth_;

@@ -1,5 +1,6 @@
 #include "CameraPath.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace voxfuse::synth {
@@ -51,6 +52,33 @@ Eigen::Isometry3f CameraPath::poseAt(double t) const {
                  Eigen::AngleAxisf(static_cast<float>(rollDeg * kTwoPi / 360.0), Eigen::Vector3f::UnitZ())
                      .toRotationMatrix();
     return T;
+}
+
+}  // namespace voxfuse::synth
+
+namespace voxfuse::synth {
+
+Eigen::Isometry3f CorridorWalk::pose(int frame) const {
+    // Out over 45% of the frames, turn over 10%, back over 45%; smooth (cosine) speed within each.
+    const double u = frames_ > 1 ? double(frame) / double(frames_ - 1) : 0.0;
+    const double x0 = 0.6, x1 = double(length_m_) - 1.6;
+    auto ease = [](double f) { return 0.5 - 0.5 * std::cos(kTwoPi * 0.5 * std::clamp(f, 0.0, 1.0)); };
+    double x, heading;
+    if (u < 0.45) {
+        x = x0 + (x1 - x0) * ease(u / 0.45);
+        heading = 0.0;
+    } else if (u < 0.55) {
+        x = x1;
+        heading = kTwoPi * 0.5 * ease((u - 0.45) / 0.1);
+    } else {
+        x = x1 - (x1 - x0) * ease((u - 0.55) / 0.45);
+        heading = kTwoPi * 0.5;
+    }
+    const double t = double(frame) / CameraPath::kFps;
+    const double sway = 0.25 * std::sin(kTwoPi * 0.13 * t);  // the gaze wanders over the walls (rad)
+    const Eigen::Vector3d eye(x, 0.15 * std::sin(kTwoPi * 0.07 * t), 1.5 + 0.05 * std::sin(kTwoPi * 0.23 * t));
+    const Eigen::Vector3d gaze(std::cos(heading + sway), std::sin(heading + sway), -0.25);
+    return CameraPath::lookAt(eye.cast<float>(), (eye + gaze).cast<float>());
 }
 
 }  // namespace voxfuse::synth

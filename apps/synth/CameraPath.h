@@ -42,4 +42,17 @@ private:
     Params params_{};
 };
 
+// Walking down SyntheticScene::corridor(length) and back: `frames` frames at 30 fps, out along +x
+// at walking pace, a turn on the spot at the far end, and back, looking where it goes with a little
+// sway. The start is revisited at the end, so blocks swapped out on the way come back.
+class CorridorWalk {
+public:
+    CorridorWalk(float length_m, int frames) : length_m_(length_m), frames_(frames) {}
+    Eigen::Isometry3f pose(int frame) const;
+
+private:
+    float length_m_;
+    int frames_;
+};
+
 }  // namespace voxfuse::synth

@@ -630,6 +630,54 @@ SyntheticScene SyntheticScene::defaultRoom() {
     return scene;
 }
 
+SyntheticScene SyntheticScene::corridor(float length_m) {
+    using V = Eigen::Vector3f;
+    namespace rc = room_class;
+    SyntheticScene scene;
+    const float hy = 1.2f, height = 2.6f, hx = 0.5f * length_m;
+    scene.addClass(rc::kFloor, "floor");
+    scene.addClass(rc::kWall, "wall");
+    scene.addClass(rc::kCeiling, "ceiling");
+    scene.addClass(rc::kBox, "box");
+    scene.addClass(rc::kPoster, "poster");
+    scene.addClass(rc::kCylinder, "cylinder");
+    const V centre(hx, 0, 0);
+    scene.addRectangle(centre, V(0, 0, 1), hx, hy, makeTexture(TextureKind::Checker, V(0.78f, 0.72f, 0.62f), V(0.45f, 0.38f, 0.30f), 0.4f),
+                       rc::kFloor);
+    scene.addRectangle(centre + V(0, 0, height), V(0, 0, -1), hx, hy,
+                       makeTexture(TextureKind::Noise, V(0.92f, 0.92f, 0.90f), V(0.75f, 0.75f, 0.72f), 0.4f, 61), rc::kCeiling);
+    scene.addRectangle(centre + V(0, hy, height / 2), V(0, -1, 0), hx, height / 2,
+                       makeTexture(TextureKind::Noise, V(0.85f, 0.80f, 0.68f), V(0.60f, 0.55f, 0.45f), 0.25f, 62), rc::kWall);
+    scene.addRectangle(centre + V(0, -hy, height / 2), V(0, 1, 0), hx, height / 2,
+                       makeTexture(TextureKind::Stripes, V(0.80f, 0.84f, 0.74f), V(0.62f, 0.70f, 0.56f), 0.15f), rc::kWall);
+    scene.addRectangle(V(0, 0, height / 2), V(1, 0, 0), hy, height / 2,
+                       makeTexture(TextureKind::Noise, V(0.70f, 0.80f, 0.85f), V(0.45f, 0.55f, 0.62f), 0.25f, 63), rc::kWall);
+    scene.addRectangle(V(length_m, 0, height / 2), V(-1, 0, 0), hy, height / 2,
+                       makeTexture(TextureKind::Noise, V(0.88f, 0.75f, 0.75f), V(0.62f, 0.48f, 0.50f), 0.25f, 64), rc::kWall);
+    // Every 1.5 m a poster on one wall and an object on the floor by the other, so that every view
+    // has texture and shape to track.
+    const Texture poster = makeTexture(TextureKind::Poster, V(0.85f, 0.15f, 0.10f), V(0.10f, 0.30f, 0.80f), 0.1f);
+    int k = 0;
+    for (float x = 0.8f; x < length_m - 0.5f; x += 1.5f, ++k) {
+        const float side = (k % 2) ? 1.f : -1.f;
+        Texture tex = poster;
+        tex.seed = std::uint32_t(70 + k);
+        scene.addBox(V(x, side * (hy - 0.01f), 1.3f + 0.2f * float(k % 3) - 0.2f), rotationFromNormal(V(0, -side, 0)), V(0.45f, 0.35f, 0.01f),
+                     tex, rc::kPoster);
+        if (k % 3 == 2)
+            scene.addCylinder(V(x + 0.4f, -side * (hy - 0.3f), 0.4f), yaw(0), 0.15f, 0.4f,
+                              makeTexture(TextureKind::Wood, V(0.75f, 0.55f, 0.35f), V(0.45f, 0.28f, 0.15f), 0.03f, std::uint32_t(90 + k)),
+                              rc::kCylinder);
+        else
+            scene.addBox(V(x + 0.4f, -side * (hy - 0.35f), 0.25f), yaw(float(20 * k)), V(0.25f, 0.2f, 0.25f),
+                         makeTexture(TextureKind::Checker, V(0.90f, 0.20f + 0.1f * float(k % 4), 0.15f), V(0.95f, 0.95f, 0.90f), 0.06f),
+                         rc::kBox);
+    }
+    for (float x = 2.f; x < length_m; x += 4.f) scene.addLight({V(x, 0.f, height - 0.1f), 2.0f});
+    scene.setAmbient(0.35f);
+    return scene;
+}
+
 SyntheticScene SyntheticScene::singlePlane(const Eigen::Vector3f& point,
                                            const Eigen::Vector3f& normal) {
     SyntheticScene scene;

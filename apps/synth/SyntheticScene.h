@@ -148,6 +148,9 @@ public:
     // The project's default data set: a 5 x 4 x 2.7 m room with a table,
     // boxes, spheres, a cylinder and posters.
     static SyntheticScene defaultRoom();
+    // A corridor `length_m` long along +x from x = 0 (2.4 m wide, 2.6 m high), textured walls, posters
+    // and boxes along it: a map that outgrows an active voxel array (swapping benchmarks).
+    static SyntheticScene corridor(float length_m);
     static SyntheticScene singlePlane(const Eigen::Vector3f& point, const Eigen::Vector3f& normal);
     static SyntheticScene singleSphere(const Eigen::Vector3f& center, float radius);
     // A box (half extents 0.2, centred at (0, 0, 0.2)) on an infinite floor

@@ -15,6 +15,7 @@
 #include "ResourceUsage.h"
 #include "RunRecord.h"
 #include "SequenceRunner.h"
+#include "SyntheticSource.h"
 #include "voxfuse/core/Error.h"
 #include "voxfuse/core/Timer.h"
 #include "voxfuse/engines/MainEngine.h"
@@ -264,7 +265,8 @@ int run(CliOptions& o) {
         source = OpenNISource::openDevice(o.device_uri, o.source_options);
     } else {
         if (o.source.empty() && o.source_options.rgb_pattern.empty()) o.source = defaultSource();
-        source = openImageSource(o.source, o.source_options);
+        if (app::SyntheticSource::isSyntheticName(o.source)) source = app::SyntheticSource::open(o.source);
+        else source = openImageSource(o.source, o.source_options);
     }
     MainEngineSettings& s = o.engine;
     // Label images are decoded on the reader thread too: the stream goes inside it.
@@ -356,7 +358,8 @@ int main(int argc, char** argv) {
                  "With no SOURCE, runs on the bundled synthetic sequence."};
     CliOptions o;
     cli.add_option("source", o.source,
-                   "TUM RGB-D folder, per-frame folder (frame-XXXXXX.depth.png), OpenNI .oni recording, or Stray Scanner (iPhone LiDAR) folder");
+                   "TUM RGB-D folder, per-frame folder (frame-XXXXXX.depth.png), OpenNI .oni recording, Stray Scanner (iPhone LiDAR) "
+                   "folder, or synthetic[:N] / synthetic-corridor[:N] (rendered in memory)");
     cli.add_flag("--live", o.live, "read a live OpenNI2 camera (Kinect, PrimeSense, Structure)");
     cli.add_option("--device-uri", o.device_uri, "with --live: which camera (see --list-devices; default: the first)");
     cli.add_flag("--list-devices", o.list_devices, "list the OpenNI2 cameras and exit");
