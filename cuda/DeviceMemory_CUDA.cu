@@ -94,5 +94,21 @@ void fillPattern(void* dst, const void* pattern, std::size_t pattern_bytes, std:
 
 void synchronize() { VF_CUDA_CHECK(cudaDeviceSynchronize()); }
 
+void* createEvent() {
+    cudaEvent_t e = nullptr;
+    VF_CUDA_CHECK(cudaEventCreate(&e));
+    return e;
+}
+void destroyEvent(void* event) noexcept {
+    if (event) cudaEventDestroy(static_cast<cudaEvent_t>(event));
+}
+void recordEvent(void* event) { VF_CUDA_CHECK(cudaEventRecord(static_cast<cudaEvent_t>(event))); }
+float eventElapsedMs(void* start, void* end) {
+    VF_CUDA_CHECK(cudaEventSynchronize(static_cast<cudaEvent_t>(end)));
+    float ms = 0.f;
+    VF_CUDA_CHECK(cudaEventElapsedTime(&ms, static_cast<cudaEvent_t>(start), static_cast<cudaEvent_t>(end)));
+    return ms;
+}
+
 }  // namespace device_memory
 }  // namespace voxfuse

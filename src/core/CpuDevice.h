@@ -7,6 +7,11 @@
 //   exclusiveScan(in, out, n)     out[i] = in[0] + ... + in[i - 1]; returns the total
 //   selectIndices(n, pred, out)   the i in [0, n) with pred(i), ascending; returns how many
 //   sortUnique(keys, n)           sorts 64-bit keys ascending and drops repeats; returns how many remain
+//   countIf(n, pred)              how many i in [0, n) have pred(i)
+//   maxOf(n, value, init)         the largest of init and value(i) over [0, n) (floats)
+//   sumNormalEquations(n, terms, kernel, scale)
+//                                 the 6x6 system of n Gauss-Newton terms (terms(i, J, r) false: none),
+//                                 robustly weighted, summed in double in an order fixed by n alone
 //   read(p, scratch), write(p, v) one element between the device's memory and the host
 //
 // Loop bodies are functors from include/voxfuse/shared/ with VF_HOST_DEVICE operator()(int).
@@ -19,6 +24,8 @@
 
 #include "core/DeviceScratch.h"
 #include "voxfuse/core/DeviceMemory.h"
+#include "voxfuse/shared/NormalEquations.h"
+#include "voxfuse/shared/RobustKernel.h"
 
 namespace voxfuse {
 
@@ -75,6 +82,45 @@ struct CpuDevice {
     static int sortUnique(std::uint64_t* keys, int n, DeviceScratch&) {
         std::sort(keys, keys + n);
         return int(std::unique(keys, keys + n) - keys);
+    }
+
+    template <class Pred>
+    static int countIf(int n, const Pred& pred, DeviceScratch&) {
+        int count = 0;
+#pragma omp parallel for schedule(static) reduction(+ : count)
+        for (int i = 0; i < n; ++i) count += pred(i) ? 1 : 0;
+        return count;
+    }
+
+    template <class Value>
+    static float maxOf(int n, const Value& value, float init, DeviceScratch&) {
+        float best = init;
+#pragma omp parallel for schedule(static) reduction(max : best)
+        for (int i = 0; i < n; ++i) best = std::max(best, value(i));
+        return best;
+    }
+
+    // Per-thread partial sums over equal static shares, added in thread order: the result does not
+    // depend on which thread finished first (an omp reduction clause would not promise that).
+    template <class Terms>
+    static NormalEquations<double> sumNormalEquations(int n, const Terms& terms, RobustKernel kernel, float kernel_scale, DeviceScratch&) {
+        const int threads = omp_get_max_threads();
+        std::vector<NormalEquations<double>> partials(static_cast<std::size_t>(threads), NormalEquations<double>::zero());
+#pragma omp parallel num_threads(threads)
+        {
+            NormalEquations<double> local = NormalEquations<double>::zero();
+#pragma omp for schedule(static) nowait
+            for (int i = 0; i < n; ++i) {
+                float J[6], r;
+                if (!terms(i, J, r)) continue;
+                const float w = robustWeight(kernel, r, kernel_scale);
+                if (w > 0.f) local.addTerm(J, r, w);
+            }
+            partials[std::size_t(omp_get_thread_num())] = local;
+        }
+        NormalEquations<double> total = NormalEquations<double>::zero();
+        for (const NormalEquations<double>& p : partials) total.add(p);
+        return total;
     }
 
     template <class T>

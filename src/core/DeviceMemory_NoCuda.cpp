@@ -25,6 +25,10 @@ void releasePinned(void*) noexcept {}
 void fill(void*, int, std::size_t) { noCuda(); }
 void fillPattern(void*, const void*, std::size_t, std::size_t) { noCuda(); }
 void synchronize() {}
+void* createEvent() { noCuda(); }
+void destroyEvent(void*) noexcept {}
+void recordEvent(void*) { noCuda(); }
+float eventElapsedMs(void*, void*) { noCuda(); }
 }  // namespace device_memory
 
 }  // namespace voxfuse

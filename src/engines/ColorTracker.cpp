@@ -9,6 +9,7 @@
 #include "PhotometricFrames.h"
 #include "PoseUpdate.h"
 #include "voxfuse/core/Timer.h"
+#include "voxfuse/engines/LowLevelEngine.h"
 
 namespace voxfuse {
 namespace {
@@ -20,15 +21,15 @@ double meanCost(const NormalEquations<double>& eq) { return eq.count > 0 ? eq.we
 
 class ColorTracker final : public Tracker {
 public:
-    ColorTracker(const TrackerSettings& settings, Device /*device: CPU layers only for now*/)
-        : settings_(settings), kernels_(cpu::makeColorTrackerKernels()), frames_(*kernels_) {}
+    ColorTracker(const TrackerSettings& settings, Device device)
+        : settings_(settings), low_level_(makeLowLevelEngine(device)), kernels_(makeColorTrackerKernels(device)), frames_(*kernels_) {}
 
     void track(TrackingState& state, const View& view, const RenderState& model) override {
         const Timer total;
         stats_ = TrackerStats();
         const Timer prepare;
         const bool has_color = frames_.prepare(view, int(settings_.levels.size()));
-        const bool has_model = hasTrackableSurface(model);
+        const bool has_model = hasTrackableSurface(model, *low_level_);
         const bool colored = has_color && has_model && frames_.colorModel(model, settings_.color_point_step);
         stats_.prepare_ms = prepare.elapsedMs();
 
@@ -72,8 +73,7 @@ private:
         NormalEquations<double> finest = NormalEquations<double>::zero();
         for (int li = 0; li < int(settings_.levels.size()); ++li) finest = refineOnLevel(li, T);
 
-        const ColorPoint* pts = frames_.points().host();
-        const int colored = int(std::count_if(pts, pts + frames_.points().pixelCount(), [](const ColorPoint& c) { return c.intensity >= 0.f; }));
+        const int colored = kernels_->countColoredPoints(frames_.points());
         TrackingMeasures m;
         m.inliers = finest.count;
         m.inlier_ratio = colored > 0 ? float(finest.count) / float(colored) : 0.f;
@@ -123,6 +123,7 @@ private:
     }
 
     TrackerSettings settings_;
+    std::unique_ptr<LowLevelEngine> low_level_;  // for the model's point count
     std::unique_ptr<ColorTrackerKernels> kernels_;
     PhotometricFrames frames_;
     bool seen_model_ = false;  // a map existed: from now on an empty model means lost tracking

@@ -21,9 +21,9 @@ constexpr float kPyramidMaxDepthDiffM = 0.05f;
 class DepthTracker final : public Tracker {
 public:
     DepthTracker(const TrackerSettings& settings, Device device)
-        : settings_(settings), low_level_(makeLowLevelEngine(device)), kernels_(cpu::makeDepthTrackerKernels()) {
+        : settings_(settings), low_level_(makeLowLevelEngine(device)), kernels_(makeDepthTrackerKernels(device)) {
         if (settings.kind == TrackerKind::Rgbd) {
-            color_kernels_ = cpu::makeColorTrackerKernels();
+            color_kernels_ = makeColorTrackerKernels(device);
             photometric_ = std::make_unique<PhotometricFrames>(*color_kernels_);
         }
         pyramid_.resize(settings.levels.size());
@@ -35,7 +35,7 @@ public:
         stats_ = TrackerStats();
         const Timer prepare;
         const bool frame_ok = preparePyramid(view);
-        const bool model_ok = hasTrackableSurface(model);
+        const bool model_ok = hasTrackableSurface(model, *low_level_);
         bool color_ok = photometric_ && photometric_->prepare(view, levelCount());
         color_ok = color_ok && model_ok && photometric_->colorModel(model, settings_.color_point_step);
         stats_.prepare_ms = prepare.elapsedMs();
@@ -83,14 +83,12 @@ private:
             } else if (settings_.bilateral_filter) {
                 low_level_->bilateralFilterDepth(view.depth, level.depth, BilateralFilterParams{});
             } else {
-                level.depth.resize(view.depth.size());
-                std::memcpy(level.depth.host(), view.depth.host(), view.depth.pixelCount() * sizeof(float));
+                low_level_->copyDepth(view.depth, level.depth);
             }
             low_level_->computeVertexMap(level.depth, level.intrinsics, level.vertices);
             low_level_->computeNormalMap(level.vertices, level.normals, settings_.max_normal_edge_m * float(1 << i));
         }
-        const float* d = pyramid_[0].depth.host();
-        valid_pixels_ = int(std::count_if(d, d + pyramid_[0].depth.pixelCount(), [](float v) { return v > 0.f; }));
+        valid_pixels_ = low_level_->countValidDepth(pyramid_[0].depth);
         return valid_pixels_ > 0;
     }
 

@@ -35,20 +35,16 @@ IntegrationFrame makeIntegrationFrame(const SceneParams& params, const View& vie
     return f;
 }
 
-bool denseIntegrationBox(const PlainVoxelArray::Data& index, const SceneParams& params, const View& view,
-                         const Mat4f& T_world_camera, Vec3i& lo, Vec3i& hi, float& far_m) {
+bool denseIntegrationBox(const PlainVoxelArray::Data& index, const SceneParams& params, const Intrinsics& camera,
+                         const Mat4f& T_world_camera, float max_depth_m, Vec3i& lo, Vec3i& hi, float& far_m) {
     // Voxels in front of the nearest surface are carved too (they are free space), so the slab starts
     // at the camera; it ends mu behind the farthest usable depth.
-    far_m = 0.f;
-    const float* d = view.depth.host();
-    for (std::size_t i = 0; i < view.depth.pixelCount(); ++i)
-        if (d[i] >= params.view_frustum_min_m && d[i] <= params.view_frustum_max_m) far_m = std::max(far_m, d[i]);
-    if (far_m <= 0.f) return false;
-    far_m += params.mu_m;
+    if (!(max_depth_m > 0.f)) return false;
+    far_m = max_depth_m + params.mu_m;
     const float near_m = kIntegrationNearM;
 
     // The eight corners of the frustum slab, in world coordinates, bound every voxel that can change.
-    const Intrinsics& in = view.calib.depth;
+    const Intrinsics& in = camera;
     Vec3f box_lo{INFINITY, INFINITY, INFINITY}, box_hi{-INFINITY, -INFINITY, -INFINITY};
     for (int k = 0; k < 8; ++k) {
         const float u = (k & 1) ? float(in.width) - 0.5f : -0.5f;

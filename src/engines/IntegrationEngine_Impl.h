@@ -10,6 +10,7 @@
 #include <memory>
 #include <type_traits>
 
+#include "core/DeviceScratch.h"
 #include "engines/DeviceImages.h"
 #include "voxfuse/core/Error.h"
 #include "voxfuse/engines/IntegrationEngine.h"
@@ -49,10 +50,12 @@ public:
         requireSceneOn(kDevice, scene, "the integration engine");
         const PlainVoxelArray::Data index = scene.index().data();
         const std::uint32_t integration_number = scene.takeIntegrationNumber();
+        const IntegrationFrame frame = inputs_.frame(kDevice, scene.params(), view, T_world_camera, integration_number);
+        const float max_depth_m = TDevice::maxOf(int(view.depth.pixelCount()), UsableDepth{frame.depth, frame.min_depth_m, frame.max_depth_m},
+                                                 0.f, scratch_);
         Vec3i lo, hi;  // array coordinates (not offset)
         float far_m;
-        if (!denseIntegrationBox(index, scene.params(), view, T_world_camera, lo, hi, far_m)) return;
-        const IntegrationFrame frame = inputs_.frame(kDevice, scene.params(), view, T_world_camera, integration_number);
+        if (!denseIntegrationBox(index, scene.params(), view.calib.depth, T_world_camera, max_depth_m, lo, hi, far_m)) return;
         if constexpr (!TDevice::kOneThreadPerItem) {
             TDevice::parallelFor((hi.y - lo.y) * (hi.z - lo.z), IntegrateDenseRow<TVoxel>{scene.voxelData(), index, lo, hi, far_m, frame});
         } else {
@@ -73,6 +76,7 @@ public:
 
 private:
     IntegrationInputs<TVoxel> inputs_;
+    DeviceScratch scratch_{kDevice};
 };
 
 // The hash: every voxel of the blocks in the visible list, which the allocation engine built for this view.

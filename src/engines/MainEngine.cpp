@@ -2,6 +2,7 @@
 
 #include "voxfuse/engines/MainEngine.h"
 
+#include <chrono>
 #include <cstring>
 #include <type_traits>
 
@@ -20,6 +21,53 @@
 namespace voxfuse {
 namespace {
 
+// The frame's stage times: wall clock on the CPU; on the GPU, CUDA events recorded at the stage
+// boundaries, read once the frame's work has finished (no synchronisation between stages).
+class StageClock {
+public:
+    static constexpr int kMaxStages = 8;
+    explicit StageClock(bool gpu) : gpu_(gpu) {
+        if (gpu_)
+            for (void*& e : events_) e = device_memory::createEvent();
+    }
+    ~StageClock() {
+        for (void* e : events_) device_memory::destroyEvent(e);
+    }
+    StageClock(const StageClock&) = delete;
+    StageClock& operator=(const StageClock&) = delete;
+
+    void start(FrameResult& result) {
+        result_ = &result;
+        marks_ = 0;
+        mark();
+    }
+    // The stage that ran since the last mark ends here.
+    void stageDone(const char* name) {
+        mark();
+        result_->stages.push_back({name, 0.0});
+    }
+    // Fills in the stage times (waiting for the GPU's work on the GPU).
+    void finish() {
+        for (int i = 1; i < marks_; ++i)
+            result_->stages[std::size_t(i - 1)].ms = gpu_ ? double(device_memory::eventElapsedMs(events_[i - 1], events_[i]))
+                                                          : std::chrono::duration<double, std::milli>(times_[i] - times_[i - 1]).count();
+    }
+
+private:
+    void mark() {
+        if (marks_ >= kMaxStages + 1) throw Error("StageClock: more stages than it can time");
+        if (gpu_) device_memory::recordEvent(events_[marks_]);
+        else times_[marks_] = std::chrono::steady_clock::now();
+        ++marks_;
+    }
+
+    bool gpu_;
+    void* events_[kMaxStages + 1] = {};
+    std::chrono::steady_clock::time_point times_[kMaxStages + 1];
+    int marks_ = 0;
+    FrameResult* result_ = nullptr;
+};
+
 template <class TVoxel, class TIndex>
 class MainEngineT final : public MainEngine {
     static constexpr bool kHash = std::is_same<TIndex, VoxelBlockHash>::value;
@@ -28,16 +76,15 @@ public:
     MainEngineT(const MainEngineSettings& settings, const RGBDCalib& calib, TIndex index)
         : settings_(settings),
           scene_(settings.scene, std::move(index), settings.device),
-          // Image processing, tracking and meshing have no CUDA layers yet: they run on the CPU, on
-          // host copies of what the GPU computed (frame images go up, the raycast comes down).
-          low_level_(makeLowLevelEngine(Device::CPU)),
+          low_level_(makeLowLevelEngine(settings.device)),
           allocation_(makeAllocationEngine<TVoxel, TIndex>(settings.device)),
           integration_(makeIntegrationEngine<TVoxel, TIndex>(settings.device)),
           raycast_(makeRaycastEngine<TVoxel, TIndex>(settings.device)),
-          tracker_(makeTracker(settings.tracker, Device::CPU)),
-          meshing_(makeMeshingEngine<TVoxel, TIndex>(Device::CPU)) {
+          tracker_(makeTracker(settings.tracker, settings.device)),
+          // Meshing has no CUDA layer yet: a map on the GPU is meshed from a host copy.
+          meshing_(makeMeshingEngine<TVoxel, TIndex>(Device::CPU)),
+          clock_(settings.device == Device::CUDA) {
         view_.calib = calib;
-        if (onGpu()) view_.depth.resize(calib.depth.size(), true, true, frameImageMemory());
         if constexpr (kHash) {
             if (settings.swap.enabled) {
                 swapping_ = makeSwappingEngine<TVoxel>(settings.device);
@@ -46,11 +93,12 @@ public:
         }
     }
 
+    // On the GPU only the frame's images go up (raw depth, colour, classes); everything else stays there.
     FrameResult processFrame(const RGBDFrame& frame, const Mat4f* T_world_camera_given) override {
         FrameResult result;
         const Timer total;
+        clock_.start(result);
 
-        Timer t;
         low_level_->convertDepthToMetres(frame.depth_raw, view_.calib.disparity, view_.calib.depth.fx,
                                          settings_.scene.view_frustum_min_m, settings_.scene.view_frustum_max_m, view_.depth);
         copyColor(frame);
@@ -64,56 +112,45 @@ public:
                           frame.index);
         if (!view_.labels.empty()) checkLabelImageSize(view_.labels.size(), view_.calib, frame.labels_path, frame.index);
         if (onGpu()) uploadView();
-        result.stages.push_back({"depth", stageMs(t)});
+        clock_.stageDone("depth");
 
-        t = Timer();
         if (T_world_camera_given) {
             tracking_ = TrackingState();
             tracking_.T_world_camera = *T_world_camera_given;
         } else {
             tracker_->track(tracking_, view_, render_state_);
         }
-        result.stages.push_back({"track", stageMs(t)});
+        clock_.stageDone("track");
         result.tracking = tracking_;
         result.quality = tracking_.quality;
         result.T_world_camera = tracking_.T_world_camera;
         if (tracking_.quality == TrackingQuality::Failed) {
             // Fusing a frame at a wrong pose would smear the map: keep the map and the model raycast.
+            clock_.finish();
             result.total_ms = total.elapsedMs();
             return result;
         }
 
-        t = Timer();
         allocation_stats_ = allocation_->allocate(scene_, view_, tracking_.T_world_camera);
-        result.stages.push_back({"allocate", stageMs(t)});
+        clock_.stageDone("allocate");
 
         if (swapping_) {
             // Stored copies of the blocks this frame needs come back before it is fused.
-            t = Timer();
             if constexpr (kHash) allocation_stats_.blocks_swapped_in_this_frame = swapping_->swapIn(scene_, *cache_, settings_.swap.blocks_per_frame);
-            result.stages.push_back({"swap_in", stageMs(t)});
+            clock_.stageDone("swap_in");
         }
 
-        t = Timer();
         integration_->integrate(scene_, view_, tracking_.T_world_camera);
         result.fused = true;
-        result.stages.push_back({"integrate", stageMs(t)});
+        clock_.stageDone("integrate");
 
-        t = Timer();
         raycast_->raycast(scene_, view_.calib.depth, tracking_.T_world_camera, render_state_);
-        result.stages.push_back({"raycast", stageMs(t)});
-        if (onGpu()) {
-            // The tracker reads the model on the CPU: points and normals come down (pinned memory).
-            t = Timer();
-            render_state_.updateHost();
-            result.stages.push_back({"download", stageMs(t)});
-        }
+        clock_.stageDone("raycast");
 
         if (swapping_) {
             // Blocks that left the view go to the cache.
-            t = Timer();
             if constexpr (kHash) allocation_stats_.blocks_swapped_out_this_frame = swapping_->swapOut(scene_, *cache_, settings_.swap.blocks_per_frame);
-            result.stages.push_back({"swap_out", stageMs(t)});
+            clock_.stageDone("swap_out");
         }
 
         // Between frames, so that no stage holds voxel pointers.
@@ -132,14 +169,22 @@ public:
         }
 
         result.allocation = allocation_stats_;
+        clock_.finish();
         result.total_ms = total.elapsedMs();
         return result;
     }
 
     const MainEngineSettings& settings() const override { return settings_; }
-    const View& view() const override { return view_; }
+    // On the GPU the frame's depth and the raycast live there: host copies are made when asked for.
+    const View& view() const override {
+        if (onGpu()) view_.depth.memory().updateHost();
+        return view_;
+    }
     const TrackingState& trackingState() const override { return tracking_; }
-    const RenderState& renderState() const override { return render_state_; }
+    const RenderState& renderState() const override {
+        if (onGpu()) render_state_.updateHost();
+        return render_state_;
+    }
 
     void renderLast(RenderMode mode, Image<Vec4u8>& image) override { raycast_->render(scene_, render_state_, mode, image); }
 
@@ -175,7 +220,6 @@ public:
         has_source_origin_ = info.has_origin;
         T_source_world_ = info.T_source_world;
         raycast_->raycast(scene_, view_.calib.depth, tracking_.T_world_camera, render_state_);
-        if (onGpu()) render_state_.updateHost();
         return info;
     }
 
@@ -257,16 +301,9 @@ private:
     // Frame images that go to the GPU every frame live in pinned host memory.
     HostMemory frameImageMemory() const { return onGpu() ? HostMemory::Pinned : HostMemory::Pageable; }
 
-    // A stage's wall-clock time; on the GPU once its queued work has finished.
-    double stageMs(const Timer& t) const {
-        if (onGpu()) device_memory::synchronize();
-        return t.elapsedMs();
-    }
-
-    // The frame's images go to the GPU once, for every engine that reads them.
+    // The frame's images go to the GPU once, for every engine that reads them (the depth was made there).
     void uploadView() {
-        view_.depth.memory().updateDevice();
-        if (TVoxel::hasColor && !view_.rgb.empty()) view_.rgb.memory().updateDevice();
+        if (!view_.rgb.empty()) view_.rgb.memory().updateDevice();  // colour voxels and the colour trackers
         if (TVoxel::hasLabel && !view_.labels.empty()) view_.labels.memory().updateDevice();
     }
 
@@ -305,9 +342,9 @@ private:
     std::unique_ptr<RaycastEngine<TVoxel, TIndex>> raycast_;
     std::unique_ptr<Tracker> tracker_;
     std::unique_ptr<MeshingEngine<TVoxel, TIndex>> meshing_;
-    View view_;
+    mutable View view_;                  // mutable: view() brings host copies up to date
     TrackingState tracking_;
-    RenderState render_state_;
+    mutable RenderState render_state_;   // likewise renderState()
     RenderState free_view_;
     AllocationStats allocation_stats_;
     int frames_fused_ = 0;
@@ -315,6 +352,7 @@ private:
     Mat4f T_source_world_ = Mat4f::identity();
     std::unique_ptr<SwappingEngine<TVoxel>> swapping_;  // with SwapSettings::enabled (hash only)
     std::unique_ptr<GlobalCache> cache_;
+    StageClock clock_;
 };
 
 template <class TVoxel>

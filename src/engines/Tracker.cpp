@@ -8,21 +8,20 @@
 
 #include "voxfuse/engines/ColorTracker.h"
 #include "voxfuse/engines/DepthTracker.h"
+#include "voxfuse/engines/LowLevelEngine.h"
 
 namespace voxfuse {
 
 std::unique_ptr<Tracker> makeTracker(const TrackerSettings& settings, Device device) {
     validateTrackerSettings(settings);
-    if (device != Device::CPU) throw DeviceError("the trackers have no CUDA layer yet: use Device::CPU");
     if (settings.kind == TrackerKind::Color) return makeColorTracker(settings, device);
     return makeDepthTracker(settings, device);
 }
 
-bool hasTrackableSurface(const RenderState& model) {
+bool hasTrackableSurface(const RenderState& model, LowLevelEngine& low_level) {
     const Vec2i size = model.intrinsics.size();
     if (!model.intrinsics.valid() || model.points_world.size() != size || model.normals_world.size() != size) return false;
-    const Vec4f* p = model.points_world.host();
-    return std::any_of(p, p + model.points_world.pixelCount(), [](const Vec4f& v) { return v.w > 0.f; });
+    return low_level.countValidPoints(model.points_world) > 0;
 }
 
 TrackingQuality assessTrackingQuality(const TrackerSettings& s, const TrackingMeasures& m) {

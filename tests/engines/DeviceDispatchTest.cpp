@@ -31,10 +31,23 @@ std::string deviceErrorOf(F&& f) {
 }
 
 TEST(DeviceDispatchTest, EnginesWithoutACudaLayerSaySo) {
-    EXPECT_NE(deviceErrorOf([] { makeLowLevelEngine(Device::CUDA); }).find("low-level image processing has no CUDA layer"), std::string::npos);
-    EXPECT_NE(deviceErrorOf([] { makeTracker(TrackerSettings(), Device::CUDA); }).find("trackers have no CUDA layer"), std::string::npos);
     EXPECT_NE(deviceErrorOf([] { makeMeshingEngine<VoxelS, VoxelBlockHash>(Device::CUDA); }).find("meshing has no CUDA layer"),
               std::string::npos);
+}
+
+TEST(DeviceDispatchTest, ImageProcessingAndTrackersAreTheRequestedDevicesOrAClearError) {
+    EXPECT_EQ(makeLowLevelEngine(Device::CPU)->device(), Device::CPU);
+    for (TrackerKind kind : {TrackerKind::Icp, TrackerKind::Color, TrackerKind::Ren, TrackerKind::Rgbd}) {
+        TrackerSettings s;
+        s.kind = kind;
+        EXPECT_NE(makeTracker(s, Device::CPU), nullptr);
+        if (device_memory::builtWithCuda())
+            EXPECT_NE(makeTracker(s, Device::CUDA), nullptr);  // creating the CUDA layers touches no GPU
+        else
+            EXPECT_NE(deviceErrorOf([&] { makeTracker(s, Device::CUDA); }).find("is not in this VoxFuse build"), std::string::npos);
+    }
+    if (device_memory::builtWithCuda()) EXPECT_EQ(makeLowLevelEngine(Device::CUDA)->device(), Device::CUDA);
+    else EXPECT_NE(deviceErrorOf([] { makeLowLevelEngine(Device::CUDA); }).find("the CUDA LowLevelEngine is not in this"), std::string::npos);
 }
 
 TEST(DeviceDispatchTest, SceneEnginesAreTheRequestedDevicesOrAClearError) {

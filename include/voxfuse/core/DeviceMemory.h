@@ -34,6 +34,12 @@ void fill(void* dst_device, int byte_value, std::size_t bytes);
 void fillPattern(void* dst_device, const void* pattern, std::size_t pattern_bytes, std::size_t count);
 // Waits for all work queued on the GPU; reports a fault of an earlier kernel as DeviceError.
 void synchronize();
+// CUDA events, for timing work on the GPU's own clock: record() queues a mark behind the work queued
+// so far; elapsedMs() waits for `end` and returns the time between the two marks.
+void* createEvent();
+void destroyEvent(void* event) noexcept;
+void recordEvent(void* event);
+float eventElapsedMs(void* start, void* end);
 }  // namespace device_memory
 
 }  // namespace voxfuse

@@ -10,7 +10,8 @@
 // is frame-to-frame photometric drift, which the depth terms of the rgbd tracker keep in check.
 //
 // Host side: src/engines/ColorTracker.cpp (LM loop) and PhotometricFrames (pyramids, model colours);
-// device layer: src/cpu/ColorTracker_CPU.cpp; per-point terms: shared/ColorTracker.h.
+// device layers: src/engines/TrackerKernels_Impl.h, run by src/cpu/TrackerKernels_CPU.cpp and
+// cuda/TrackerKernels_CUDA.cu; per-point terms: shared/ColorTracker.h.
 
 #include <memory>
 
@@ -42,10 +43,19 @@ public:
     // The photometric normal equations of every coloured point against `level`.
     virtual NormalEquations<double> accumulate(const Image<ColorPoint>& points, const ColorFrameLevel& level,
                                                const ColorTermParams& params, RobustKernel kernel, float kernel_scale) = 0;
+    // Points that found an intensity.
+    virtual int countColoredPoints(const Image<ColorPoint>& points) = 0;
 };
 
 namespace cpu {
 std::unique_ptr<ColorTrackerKernels> makeColorTrackerKernels();
+}
+namespace cuda {
+std::unique_ptr<ColorTrackerKernels> makeColorTrackerKernels();
+}
+// The device layer of `device`; DeviceError in a build without CUDA.
+inline std::unique_ptr<ColorTrackerKernels> makeColorTrackerKernels(Device device) {
+    return device == Device::CPU ? cpu::makeColorTrackerKernels() : cuda::makeColorTrackerKernels();
 }
 
 // The colour-only tracker.

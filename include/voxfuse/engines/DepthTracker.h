@@ -1,13 +1,15 @@
 #pragma once
 // Depth tracking (section 4.1 of the InfiniTAM report): point-to-plane ICP of the current depth frame
 // against the model raycast, coarse to fine. The host side (src/engines/DepthTracker.cpp) builds the
-// frame pyramid and runs Gauss-Newton on SE(3); the device layer (src/cpu/DepthTracker_CPU.cpp) sums
-// the normal equations of one iteration over the pixels of a level, calling pointToPlaneTerm() from
-// shared/DepthTracker.h. The same host loop runs the "ren" refinement (a robust kernel at full
+// frame pyramid and runs Gauss-Newton on SE(3); the device layers (src/engines/TrackerKernels_Impl.h,
+// run by src/cpu/TrackerKernels_CPU.cpp and cuda/TrackerKernels_CUDA.cu) sum the normal equations of
+// one iteration over the pixels of a level, calling pointToPlaneTerm() from shared/DepthTracker.h
+// (the CPU in double per thread, the GPU in double per block: both in an order fixed by the image). The same host loop runs the "ren" refinement (a robust kernel at full
 // resolution) and "rgbd" (photometric terms from ColorTracker.h added to the system).
 
 #include <memory>
 
+#include "voxfuse/core/DeviceMemory.h"
 #include "voxfuse/core/Image.h"
 #include "voxfuse/engines/Tracker.h"
 #include "voxfuse/shared/DepthTracker.h"
@@ -35,6 +37,13 @@ public:
 
 namespace cpu {
 std::unique_ptr<DepthTrackerKernels> makeDepthTrackerKernels();
+}
+namespace cuda {
+std::unique_ptr<DepthTrackerKernels> makeDepthTrackerKernels();
+}
+// The device layer of `device`; DeviceError in a build without CUDA.
+inline std::unique_ptr<DepthTrackerKernels> makeDepthTrackerKernels(Device device) {
+    return device == Device::CPU ? cpu::makeDepthTrackerKernels() : cuda::makeDepthTrackerKernels();
 }
 
 // The icp, ren and rgbd trackers.

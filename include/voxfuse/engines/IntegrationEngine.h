@@ -36,10 +36,11 @@ IntegrationFrame makeIntegrationFrame(const SceneParams& params, const View& vie
 constexpr float kIntegrationNearM = 0.01f;
 
 // The box of dense-grid voxels (array coordinates, inclusive lo, exclusive hi) that can receive an
-// update: the view frustum from the camera to mu behind the farthest valid depth (returned as far_m),
-// clipped to the array. False when the box is empty.
-bool denseIntegrationBox(const PlainVoxelArray::Data& index, const SceneParams& params, const View& view,
-                         const Mat4f& T_world_camera, Vec3i& lo, Vec3i& hi, float& far_m);
+// update from a frame of `camera` whose farthest usable depth is `max_depth_m`: the view frustum from
+// the camera to mu behind that depth (returned as far_m), clipped to the array. False when the box is
+// empty (no usable depth, or the frustum misses the array).
+bool denseIntegrationBox(const PlainVoxelArray::Data& index, const SceneParams& params, const Intrinsics& camera,
+                         const Mat4f& T_world_camera, float max_depth_m, Vec3i& lo, Vec3i& hi, float& far_m);
 
 namespace cpu {
 template <class TVoxel, class TIndex>

@@ -1,6 +1,6 @@
 #pragma once
-// Image processing before tracking and integration. Images are processed where the engine's device
-// says (host copies for the CPU engine).
+// Image processing before tracking and integration. Stages: src/engines/LowLevelEngine_Impl.h, run
+// by src/cpu/LowLevelEngine_CPU.cpp and cuda/LowLevelEngine_CUDA.cu; per-pixel work in shared/LowLevel.h.
 
 #include <cstdint>
 #include <memory>
@@ -21,6 +21,9 @@ struct BilateralFilterParams {
 class LowLevelEngine {
 public:
     virtual ~LowLevelEngine() = default;
+    // Images are read and written on the engine's device (input copies made when they are current
+    // elsewhere; outputs sized and written there).
+    //
     // Raw samples to metres through the calibration; samples outside [min_m, max_m] become 0.
     virtual void convertDepthToMetres(const Image<std::uint16_t>& raw, const DisparityCalib& calib, float fx_depth,
                                       float min_m, float max_m, Image<float>& depth_m) = 0;
@@ -29,16 +32,23 @@ public:
     virtual void downsampleDepth(const Image<float>& in, Image<float>& out, float max_diff_m) = 0;
     virtual void computeVertexMap(const Image<float>& depth, const Intrinsics& intrinsics, Image<Vec4f>& vertices) = 0;
     virtual void computeNormalMap(const Image<Vec4f>& vertices, Image<Vec4f>& normals, float max_edge_m) = 0;
+    virtual void copyDepth(const Image<float>& in, Image<float>& out) = 0;
+    // Pixels with depth (> 0), points with w > 0.
+    virtual int countValidDepth(const Image<float>& depth) = 0;
+    virtual int countValidPoints(const Image<Vec4f>& points) = 0;
+    virtual Device device() const = 0;
 };
 
 namespace cpu {
 std::unique_ptr<LowLevelEngine> makeLowLevelEngine();
 }
+namespace cuda {
+std::unique_ptr<LowLevelEngine> makeLowLevelEngine();
+}
 
-// The engine of `device`. Low-level processing has no CUDA layer yet: Device::CUDA throws DeviceError.
+// The engine of `device`; DeviceError in a build without CUDA.
 inline std::unique_ptr<LowLevelEngine> makeLowLevelEngine(Device device) {
-    if (device != Device::CPU) throw DeviceError("low-level image processing has no CUDA layer yet: use Device::CPU");
-    return cpu::makeLowLevelEngine();
+    return device == Device::CPU ? cpu::makeLowLevelEngine() : cuda::makeLowLevelEngine();
 }
 
 }  // namespace voxfuse

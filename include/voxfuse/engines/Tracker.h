@@ -49,13 +49,15 @@ public:
     virtual const TrackerSettings& settings() const = 0;
 };
 
-// The tracker `settings.kind` asks for (validated first: ConfigError when a setting is out of range).
-// The trackers have no CUDA layer yet: Device::CUDA throws DeviceError.
+// The tracker `settings.kind` asks for (validated first: ConfigError when a setting is out of range),
+// with its per-pixel work on `device` (its images and the model are read there); DeviceError in a build
+// without CUDA.
 std::unique_ptr<Tracker> makeTracker(const TrackerSettings& settings, Device device);
 
+class LowLevelEngine;
 // True when `model` holds a surface point and point/normal images of its camera's size: something
-// to track against.
-bool hasTrackableSurface(const RenderState& model);
+// to track against (counted by `low_level`, on its device).
+bool hasTrackableSurface(const RenderState& model, LowLevelEngine& low_level);
 
 // What the quality rules look at: the tracker's final full-resolution system and the estimated motion.
 struct TrackingMeasures {

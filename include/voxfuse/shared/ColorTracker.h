@@ -102,4 +102,61 @@ VF_HOST_DEVICE inline bool photometricTerm(const ColorPoint& point, const float*
     return true;
 }
 
+// ---- Loop bodies of the device layers ----
+
+struct IntensityPixels {
+    const Vec4u8* rgb;
+    float* intensity;
+    VF_HOST_DEVICE void operator()(int i) const { intensity[i] = intensityFromRgb(rgb[i]); }
+};
+
+struct DownsampleIntensityPixels {
+    const float* in;
+    Vec2i in_size;
+    int out_width;
+    float* out;
+    VF_HOST_DEVICE void operator()(int i) const { out[i] = downsampleIntensityPixel(in, in_size, i % out_width, i / out_width); }
+};
+
+struct SobelPixels {
+    const float* intensity;
+    Vec2i size;
+    Vec2f* gradient;
+    VF_HOST_DEVICE void operator()(int i) const { gradient[i] = sobelGradientPixel(intensity, size, i % size.x, i / size.x); }
+};
+
+// Element i: model point i of the (model / step) grid, coloured from the intensity image.
+struct ColorModelPoints {
+    const Vec4f* model_points;
+    int model_width;
+    int step;
+    int out_width;
+    const float* intensity;
+    Vec2i size;
+    Mat4f T_rgb_world;
+    Intrinsics rgb;
+    ColorPoint* points;
+    VF_HOST_DEVICE void operator()(int i) const {
+        const int x = i % out_width, y = i / out_width;
+        points[i] = colorPointFromModel(model_points[x * step + y * step * model_width], intensity, size, T_rgb_world, rgb);
+    }
+};
+
+// The terms for the launchers' sumNormalEquations: element i is point i.
+struct PhotometricTerms {
+    const ColorPoint* points;
+    const float* intensity;
+    const Vec2f* gradient;
+    Vec2i size;
+    ColorTermParams params;
+    VF_HOST_DEVICE bool operator()(int i, float J[6], float& residual) const {
+        return photometricTerm(points[i], intensity, gradient, size, params, J, residual);
+    }
+};
+
+struct PointIsColored {
+    const ColorPoint* points;
+    VF_HOST_DEVICE bool operator()(int i) const { return points[i].intensity >= 0.f; }
+};
+
 }  // namespace voxfuse

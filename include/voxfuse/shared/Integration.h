@@ -128,6 +128,13 @@ VF_HOST_DEVICE inline float integrateVoxel(TVoxel& voxel, Vec3i pos, const Integ
 
 // ---- Loop bodies of the device layers ----
 
+// For the launchers' maxOf: the depth of pixel i when the integration uses it, else 0.
+struct UsableDepth {
+    const float* depth;
+    float min_depth_m, max_depth_m;
+    VF_HOST_DEVICE float operator()(int i) const { return depth[i] >= min_depth_m && depth[i] <= max_depth_m ? depth[i] : 0.f; }
+};
+
 // The voxel block hash: element i updates `VoxelsPerElement` consecutive voxels (a divisor of 512) of
 // the visible blocks, taken in visible-list order: the CPU layer runs whole blocks (the block's entry
 // is read once), the CUDA layer a voxel per thread.

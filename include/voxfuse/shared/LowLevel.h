@@ -78,4 +78,69 @@ VF_HOST_DEVICE inline Vec4f normalFromVertexPixel(const Vec4f* vertices, Vec2i s
     return {n.x, n.y, n.z, 1.f};
 }
 
+// ---- Loop bodies of the device layers: element i is pixel i of the output image ----
+
+struct ConvertDepthPixels {
+    const std::uint16_t* raw;
+    DisparityCalib calib;
+    float fx_depth, min_m, max_m;
+    float* depth_m;
+    VF_HOST_DEVICE void operator()(int i) const {
+        const float d = calib.toMetres(raw[i], fx_depth);
+        depth_m[i] = (d >= min_m && d <= max_m) ? d : 0.f;
+    }
+};
+
+struct BilateralFilterPixels {
+    const float* in;
+    Vec2i size;
+    int radius_px;
+    float sigma_space_px, sigma_depth_m;
+    float* out;
+    VF_HOST_DEVICE void operator()(int i) const {
+        out[i] = bilateralFilterDepthPixel(in, size, i % size.x, i / size.x, radius_px, sigma_space_px, sigma_depth_m);
+    }
+};
+
+struct DownsampleDepthPixels {
+    const float* in;
+    Vec2i in_size;
+    int out_width;
+    float max_diff_m;
+    float* out;
+    VF_HOST_DEVICE void operator()(int i) const { out[i] = downsampleDepthPixel(in, in_size, i % out_width, i / out_width, max_diff_m); }
+};
+
+struct VertexPixels {
+    const float* depth;
+    Intrinsics intrinsics;
+    Vec4f* vertices;
+    VF_HOST_DEVICE void operator()(int i) const { vertices[i] = vertexFromDepthPixel(depth, intrinsics, i % intrinsics.width, i / intrinsics.width); }
+};
+
+struct NormalPixels {
+    const Vec4f* vertices;
+    Vec2i size;
+    float max_edge_m;
+    Vec4f* normals;
+    VF_HOST_DEVICE void operator()(int i) const { normals[i] = normalFromVertexPixel(vertices, size, i % size.x, i / size.x, max_edge_m); }
+};
+
+template <class T>
+struct CopyPixels {
+    const T* in;
+    T* out;
+    VF_HOST_DEVICE void operator()(int i) const { out[i] = in[i]; }
+};
+
+// Selections for the launchers' countIf.
+struct DepthIsValid {
+    const float* depth;
+    VF_HOST_DEVICE bool operator()(int i) const { return depth[i] > 0.f; }
+};
+struct PointIsValid {
+    const Vec4f* points;
+    VF_HOST_DEVICE bool operator()(int i) const { return points[i].w > 0.f; }
+};
+
 }  // namespace voxfuse

@@ -1,0 +1,80 @@
+#pragma once
+// The low-level engine's stages, written once for both device layers: a template on the device type,
+// instantiated by src/cpu/LowLevelEngine_CPU.cpp and cuda/LowLevelEngine_CUDA.cu. One pixel of the
+// output per element (shared/LowLevel.h).
+
+#include <memory>
+
+#include "core/DeviceScratch.h"
+#include "engines/DeviceImages.h"
+#include "voxfuse/engines/LowLevelEngine.h"
+#include "voxfuse/shared/LowLevel.h"
+
+namespace voxfuse {
+
+// An image sized for output on `where` (its other copy, if any, becomes stale when written).
+template <class T>
+T* outputOn(Device where, Image<T>& image, Vec2i size) {
+    image.resize(size, where == Device::CPU || image.memory().onHost(), where == Device::CUDA);
+    return image.memory().data(where);
+}
+
+template <class TDevice>
+class LowLevelEngineOn final : public LowLevelEngine {
+    static constexpr Device kDevice = TDevice::kind;
+
+public:
+    void convertDepthToMetres(const Image<std::uint16_t>& raw, const DisparityCalib& calib, float fx_depth, float min_m, float max_m,
+                              Image<float>& depth_m) override {
+        const std::uint16_t* in = imageOn(kDevice, raw, raw_staging_);
+        float* out = outputOn(kDevice, depth_m, raw.size());
+        TDevice::parallelFor(int(raw.pixelCount()), ConvertDepthPixels{in, calib, fx_depth, min_m, max_m, out});
+    }
+
+    void bilateralFilterDepth(const Image<float>& in, Image<float>& out, const BilateralFilterParams& p) override {
+        const float* src = imageOn(kDevice, in, float_staging_);
+        float* dst = outputOn(kDevice, out, in.size());
+        TDevice::parallelFor(int(in.pixelCount()), BilateralFilterPixels{src, in.size(), p.radius_px, p.sigma_space_px, p.sigma_depth_m, dst});
+    }
+
+    void downsampleDepth(const Image<float>& in, Image<float>& out, float max_diff_m) override {
+        const Vec2i size{in.width() / 2, in.height() / 2};
+        const float* src = imageOn(kDevice, in, float_staging_);
+        float* dst = outputOn(kDevice, out, size);
+        TDevice::parallelFor(size.x * size.y, DownsampleDepthPixels{src, in.size(), size.x, max_diff_m, dst});
+    }
+
+    void computeVertexMap(const Image<float>& depth, const Intrinsics& intr, Image<Vec4f>& vertices) override {
+        const float* src = imageOn(kDevice, depth, float_staging_);
+        Vec4f* dst = outputOn(kDevice, vertices, depth.size());
+        TDevice::parallelFor(int(depth.pixelCount()), VertexPixels{src, intr, dst});
+    }
+
+    void computeNormalMap(const Image<Vec4f>& vertices, Image<Vec4f>& normals, float max_edge_m) override {
+        const Vec4f* src = imageOn(kDevice, vertices, point_staging_);
+        Vec4f* dst = outputOn(kDevice, normals, vertices.size());
+        TDevice::parallelFor(int(vertices.pixelCount()), NormalPixels{src, vertices.size(), max_edge_m, dst});
+    }
+
+    void copyDepth(const Image<float>& in, Image<float>& out) override {
+        const float* src = imageOn(kDevice, in, float_staging_);
+        float* dst = outputOn(kDevice, out, in.size());
+        TDevice::parallelFor(int(in.pixelCount()), CopyPixels<float>{src, dst});
+    }
+
+    int countValidDepth(const Image<float>& depth) override {
+        return TDevice::countIf(int(depth.pixelCount()), DepthIsValid{imageOn(kDevice, depth, float_staging_)}, scratch_);
+    }
+    int countValidPoints(const Image<Vec4f>& points) override {
+        return TDevice::countIf(int(points.pixelCount()), PointIsValid{imageOn(kDevice, points, point_staging_)}, scratch_);
+    }
+    Device device() const override { return kDevice; }
+
+private:
+    DeviceScratch scratch_{kDevice};
+    MemoryBlock<std::uint16_t> raw_staging_;
+    MemoryBlock<float> float_staging_;
+    MemoryBlock<Vec4f> point_staging_;
+};
+
+}  // namespace voxfuse
