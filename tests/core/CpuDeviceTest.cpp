@@ -14,6 +14,7 @@ TEST(CpuDeviceTest, AtomicsCombineExactly) { test::checkAtomicsCombineExactly<Cp
 TEST(CpuDeviceTest, ExclusiveScan) { test::checkExclusiveScan<CpuDevice>(); }
 TEST(CpuDeviceTest, SelectIndicesKeepsOrder) { test::checkSelectIndices<CpuDevice>(); }
 TEST(CpuDeviceTest, SortUnique) { test::checkSortUnique<CpuDevice>(); }
+TEST(CpuDeviceTest, CountMaxAndNormalEquations) { test::checkCountMaxAndNormalEquations<CpuDevice>(); }
 TEST(CpuDeviceTest, ReadAndWriteOneElement) { test::checkReadAndWrite<CpuDevice>(); }
 
 }  // namespace

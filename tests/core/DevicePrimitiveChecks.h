@@ -13,6 +13,8 @@
 #include "core/DeviceScratch.h"
 #include "voxfuse/core/Atomics.h"
 #include "voxfuse/core/MemoryBlock.h"
+#include "voxfuse/shared/NormalEquations.h"
+#include "voxfuse/shared/RobustKernel.h"
 
 namespace voxfuse::test {
 
@@ -150,6 +152,62 @@ void checkSortUnique() {
         expected.erase(std::unique(expected.begin(), expected.end()), expected.end());
         ASSERT_EQ(count, int(expected.size()));
         EXPECT_EQ(valuesOf(where, b, std::size_t(count)), expected);
+    }
+}
+
+struct AboveHalf {
+    const float* values;
+    VF_HOST_DEVICE bool operator()(int i) const { return values[i] > 0.5f; }
+};
+struct ValueAt {
+    const float* values;
+    VF_HOST_DEVICE float operator()(int i) const { return values[i]; }
+};
+// Term i: J = (1, x, x^2, ..., x^5) with x = values[i], r = values[i] - 0.5; none where x < 0.1.
+struct PolynomialTerms {
+    const float* values;
+    VF_HOST_DEVICE bool operator()(int i, float J[6], float& r) const {
+        const float x = values[i];
+        if (x < 0.1f) return false;
+        float p = 1.f;
+        for (int k = 0; k < 6; ++k, p *= x) J[k] = p;
+        r = x - 0.5f;
+        return true;
+    }
+};
+
+template <class TDevice>
+void checkCountMaxAndNormalEquations() {
+    constexpr Device where = TDevice::kind;
+    DeviceScratch scratch(where);
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> u(0.f, 1.f);
+    for (int n : {1, 1000, 307200}) {
+        std::vector<float> values(static_cast<std::size_t>(n));
+        for (float& v : values) v = u(rng);
+        MemoryBlock<float> b = blockOn(where, values);
+        const int above = int(std::count_if(values.begin(), values.end(), [](float v) { return v > 0.5f; }));
+        EXPECT_EQ(TDevice::countIf(n, AboveHalf{b.data(where)}, scratch), above);
+        EXPECT_EQ(TDevice::maxOf(n, ValueAt{b.data(where)}, -1.f, scratch), *std::max_element(values.begin(), values.end()));
+        EXPECT_EQ(TDevice::maxOf(n, ValueAt{b.data(where)}, 2.f, scratch), 2.f);
+
+        // Against a serial sum in double: equal to double rounding; and the same bits run after run.
+        NormalEquations<double> serial = NormalEquations<double>::zero();
+        for (int i = 0; i < n; ++i) {
+            float J[6], r;
+            if (!PolynomialTerms{values.data()}(i, J, r)) continue;
+            const float w = robustWeight(RobustKernel::Huber, r, 0.2f);
+            if (w > 0.f) serial.addTerm(J, r, w);
+        }
+        const NormalEquations<double> a = TDevice::sumNormalEquations(n, PolynomialTerms{b.data(where)}, RobustKernel::Huber, 0.2f, scratch);
+        const NormalEquations<double> again = TDevice::sumNormalEquations(n, PolynomialTerms{b.data(where)}, RobustKernel::Huber, 0.2f, scratch);
+        EXPECT_EQ(a.count, serial.count);
+        for (int k = 0; k < 21; ++k) {
+            EXPECT_NEAR(a.hessian[k], serial.hessian[k], 1e-9 * std::max(1.0, std::fabs(serial.hessian[k])));
+            EXPECT_EQ(a.hessian[k], again.hessian[k]) << "deterministic";
+        }
+        for (int k = 0; k < 6; ++k) EXPECT_NEAR(a.gradient[k], serial.gradient[k], 1e-9 * std::max(1.0, std::fabs(serial.gradient[k])));
+        EXPECT_NEAR(a.weighted_cost, serial.weighted_cost, 1e-9 * std::max(1.0, serial.weighted_cost));
     }
 }
 

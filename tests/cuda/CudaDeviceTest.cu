@@ -27,6 +27,7 @@ TEST_F(CudaDeviceTest, AtomicsCombineExactly) { test::checkAtomicsCombineExactly
 TEST_F(CudaDeviceTest, ExclusiveScan) { test::checkExclusiveScan<CudaDevice>(); }
 TEST_F(CudaDeviceTest, SelectIndicesKeepsOrder) { test::checkSelectIndices<CudaDevice>(); }
 TEST_F(CudaDeviceTest, SortUnique) { test::checkSortUnique<CudaDevice>(); }
+TEST_F(CudaDeviceTest, CountMaxAndNormalEquations) { test::checkCountMaxAndNormalEquations<CudaDevice>(); }
 TEST_F(CudaDeviceTest, ReadAndWriteOneElement) { test::checkReadAndWrite<CudaDevice>(); }
 
 struct CopyTable {

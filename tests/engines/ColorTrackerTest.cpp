@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include "DeviceTestSupport.h"
 #include "TrackingTestSupport.h"
 #include "voxfuse/engines/Tracker.h"
 #include "voxfuse/shared/ColorTracker.h"
@@ -22,11 +23,16 @@ TrackerSettings colorSettings() {
     return s;
 }
 
-TEST(ColorTrackerTest, RecoversASmallMotion) {
+class ColorTrackerTest : public ::testing::TestWithParam<Device> {
+protected:
+    void SetUp() override { VF_SKIP_IF_UNAVAILABLE(GetParam()); }
+};
+
+TEST_P(ColorTrackerTest, RecoversASmallMotion) {
     const Intrinsics intr = test::kinectIntrinsics();
     const View first = test::renderView(room(), intr, startPose());
     const Mat4f moved = test::moveInCamera(startPose(), {0.4f, 1.f, 0.1f}, 1.5f, {0.015f, -0.01f, 0.01f});
-    auto tracker = makeTracker(colorSettings(), Device::CPU);
+    auto tracker = makeTracker(colorSettings(), GetParam());
     TrackingState state;
     state.T_world_camera = startPose();
     tracker->track(state, first, test::emptyModel(intr));  // remembers the colour of the model's frame
@@ -41,12 +47,12 @@ TEST(ColorTrackerTest, RecoversASmallMotion) {
     EXPECT_GT(tracker->lastStats().levels.back().iterations, 0);
 }
 
-TEST(ColorTrackerTest, AMotionBeyondItsBasinIsReportedFailed) {
+TEST_P(ColorTrackerTest, AMotionBeyondItsBasinIsReportedFailed) {
     // Photometric alignment only converges within a few pixels: 8 cm and 8 degrees is far beyond.
     const Intrinsics intr = test::kinectIntrinsics();
     const View first = test::renderView(room(), intr, startPose());
     const Mat4f moved = test::moveInCamera(startPose(), {0.3f, 1.f, -0.2f}, 8.f, {0.06f, 0.03f, -0.045f});
-    auto tracker = makeTracker(colorSettings(), Device::CPU);
+    auto tracker = makeTracker(colorSettings(), GetParam());
     TrackingState state;
     state.T_world_camera = startPose();
     tracker->track(state, first, test::emptyModel(intr));
@@ -56,10 +62,10 @@ TEST(ColorTrackerTest, AMotionBeyondItsBasinIsReportedFailed) {
     EXPECT_EQ(test::translationErrorM(state.T_world_camera, startPose()), 0.f);
 }
 
-TEST(ColorTrackerTest, ViewWithoutColourFailsAndKeepsThePose) {
+TEST_P(ColorTrackerTest, ViewWithoutColourFailsAndKeepsThePose) {
     const Intrinsics intr = test::kinectIntrinsics(320, 240);
     const View first = test::renderView(room(), intr, startPose());
-    auto tracker = makeTracker(colorSettings(), Device::CPU);
+    auto tracker = makeTracker(colorSettings(), GetParam());
     TrackingState state;
     state.T_world_camera = startPose();
     tracker->track(state, first, test::emptyModel(intr));
@@ -69,15 +75,17 @@ TEST(ColorTrackerTest, ViewWithoutColourFailsAndKeepsThePose) {
     EXPECT_EQ(test::translationErrorM(state.T_world_camera, startPose()), 0.f);
 }
 
-TEST(ColorTrackerTest, WithoutAnEarlierColourFrameThePoseIsKeptAsPoor) {
+TEST_P(ColorTrackerTest, WithoutAnEarlierColourFrameThePoseIsKeptAsPoor) {
     const Intrinsics intr = test::kinectIntrinsics(320, 240);
     const View first = test::renderView(room(), intr, startPose());
-    auto tracker = makeTracker(colorSettings(), Device::CPU);
+    auto tracker = makeTracker(colorSettings(), GetParam());
     TrackingState state;
     state.T_world_camera = startPose();
     tracker->track(state, first, test::modelFromView(first, startPose()));
     EXPECT_EQ(state.quality, TrackingQuality::Poor);
 }
+
+INSTANTIATE_TEST_SUITE_P(Devices, ColorTrackerTest, test::kAllDevices, test::DeviceName());
 
 TEST(ColorTrackerTermsTest, JacobianMatchesFiniteDifferences) {
     // A smooth synthetic image I(x, y) = 0.5 + 0.3 sin(0.05 x) cos(0.07 y) seen by a camera offset from the depth camera.

@@ -5,15 +5,20 @@
 #include <gtest/gtest.h>
 
 #include <random>
+#include <string>
+#include <tuple>
 
+#include "DeviceTestSupport.h"
 #include "TrackingTestSupport.h"
 #include "voxfuse/engines/Tracker.h"
 
 namespace voxfuse {
 namespace {
 
-class DepthTrackerTest : public ::testing::TestWithParam<TrackerKind> {
+class DepthTrackerTest : public ::testing::TestWithParam<std::tuple<TrackerKind, Device>> {
 protected:
+    void SetUp() override { VF_SKIP_IF_UNAVAILABLE(device()); }
+    Device device() const { return std::get<1>(GetParam()); }
     static const synth::SyntheticScene& room() {
         static const synth::SyntheticScene scene = synth::SyntheticScene::defaultRoom();
         return scene;
@@ -22,7 +27,7 @@ protected:
 
     TrackerSettings settings() const {
         TrackerSettings s;
-        s.kind = GetParam();
+        s.kind = std::get<0>(GetParam());
         return s;
     }
 
@@ -44,7 +49,7 @@ protected:
 };
 
 TEST_P(DepthTrackerTest, RecoversASmallMotion) {
-    auto tracker = makeTracker(settings(), Device::CPU);
+    auto tracker = makeTracker(settings(), device());
     const Mat4f moved = test::moveInCamera(startPose(), {0.2f, 1.f, 0.3f}, 2.f, {0.02f, -0.01f, 0.015f});
     const TrackingState state = track(*tracker, moved);
     EXPECT_EQ(state.quality, TrackingQuality::Good);
@@ -56,7 +61,7 @@ TEST_P(DepthTrackerTest, RecoversASmallMotion) {
 }
 
 TEST_P(DepthTrackerTest, RecoversEightCentimetresAndEightDegrees) {
-    auto tracker = makeTracker(settings(), Device::CPU);
+    auto tracker = makeTracker(settings(), device());
     const Mat4f moved = test::moveInCamera(startPose(), {0.3f, 1.f, -0.2f}, 8.f, {0.06f, 0.03f, -0.045f});
     ASSERT_NEAR(test::translationErrorM(startPose(), moved), 0.08f, 0.002f);
     const TrackingState state = track(*tracker, moved);
@@ -71,7 +76,7 @@ TEST_P(DepthTrackerTest, RecoversEightCentimetresAndEightDegrees) {
 }
 
 TEST_P(DepthTrackerTest, NoiseFrameFailsAndKeepsThePose) {
-    auto tracker = makeTracker(settings(), Device::CPU);
+    auto tracker = makeTracker(settings(), device());
     const Intrinsics intr = test::kinectIntrinsics();
     const View first = test::renderView(room(), intr, startPose());
     TrackingState state;
@@ -88,8 +93,11 @@ TEST_P(DepthTrackerTest, NoiseFrameFailsAndKeepsThePose) {
     for (int k = 0; k < 16; ++k) EXPECT_EQ(state.T_world_camera.m[k], startPose().m[k]) << "pose restored exactly";
 }
 
-INSTANTIATE_TEST_SUITE_P(Kinds, DepthTrackerTest, ::testing::Values(TrackerKind::Icp, TrackerKind::Ren, TrackerKind::Rgbd),
-                         [](const ::testing::TestParamInfo<TrackerKind>& info) { return std::string(toString(info.param)); });
+INSTANTIATE_TEST_SUITE_P(KindsAndDevices, DepthTrackerTest,
+                         ::testing::Combine(::testing::Values(TrackerKind::Icp, TrackerKind::Ren, TrackerKind::Rgbd), test::kAllDevices),
+                         [](const ::testing::TestParamInfo<std::tuple<TrackerKind, Device>>& info) {
+                             return std::string(toString(std::get<0>(info.param))) + "_" + deviceName(std::get<1>(info.param));
+                         });
 
 TEST(DepthTrackerLevelsTest, LargeMotionNeedsTheCoarseLevels) {
     const synth::SyntheticScene room = synth::SyntheticScene::defaultRoom();
