@@ -4,7 +4,10 @@
 // functions, so a stage is a template on the device type.
 //
 //   parallelFor(n, body)          body(i) for i in [0, n), any order, in parallel
-//   exclusiveScan(in, out, n)     out[i] = in[0] + ... + in[i - 1]; returns the total
+//   parallelForTeams<Shared>(n, body)
+//                                 body(team, i, shared) for i in [0, n), one team (core/Team.h) per i
+//                                 with a `Shared` (trivially constructible) of its own
+//   exclusiveScan(in, out, n)     out[i] = in[0] + ... + in[i - 1]; returns the total (int or long long)
 //   selectIndices(n, pred, out)   the i in [0, n) with pred(i), ascending; returns how many
 //   sortUnique(keys, n)           sorts 64-bit keys ascending and drops repeats; returns how many remain
 //   countIf(n, pred)              how many i in [0, n) have pred(i)
@@ -20,9 +23,11 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "core/DeviceScratch.h"
+#include "voxfuse/core/Team.h"
 #include "voxfuse/core/DeviceMemory.h"
 #include "voxfuse/shared/NormalEquations.h"
 #include "voxfuse/shared/RobustKernel.h"
@@ -46,10 +51,24 @@ struct CpuDevice {
         for (int i = 0; i < n; ++i) body(i);
     }
 
-    static int exclusiveScan(const int* in, int* out, int n, DeviceScratch&) {
-        int sum = 0;
+    // A team is one thread; its shared memory is allocated once per thread and reused for every item.
+    template <class Shared, class Body>
+    static void parallelForTeams(int n, const Body& body) {
+        if (n <= 0) return;
+        const int chunk = std::max(1, n / (32 * omp_get_max_threads()));
+#pragma omp parallel
+        {
+            const auto shared = std::make_unique<Shared>();
+#pragma omp for schedule(dynamic, chunk)
+            for (int i = 0; i < n; ++i) body(Team{0, 1}, i, *shared);
+        }
+    }
+
+    template <class T>
+    static T exclusiveScan(const T* in, T* out, int n, DeviceScratch&) {
+        T sum = 0;
         for (int i = 0; i < n; ++i) {
-            const int v = in[i];
+            const T v = in[i];
             out[i] = sum;
             sum += v;
         }

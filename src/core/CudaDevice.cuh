@@ -18,6 +18,7 @@
 
 #include "core/CudaCheck.h"
 #include "core/DeviceScratch.h"
+#include "voxfuse/core/Team.h"
 #include "voxfuse/core/DeviceMemory.h"
 #include "voxfuse/shared/NormalEquations.h"
 #include "voxfuse/shared/RobustKernel.h"
@@ -29,6 +30,13 @@ template <class Body>
 __global__ void parallelForKernel(int n, Body body) {
     const int i = int(blockIdx.x * blockDim.x + threadIdx.x);
     if (i < n) body(i);
+}
+
+// One thread block per item; its `Shared` lives in the block's shared memory.
+template <class Shared, class Body>
+__global__ void parallelForTeamsKernel(Body body) {
+    __shared__ Shared shared;
+    body(Team{int(threadIdx.x), int(blockDim.x)}, int(blockIdx.x), shared);
 }
 
 inline std::size_t alignUp(std::size_t bytes) { return (bytes + 255) & ~std::size_t(255); }
@@ -87,16 +95,29 @@ struct CudaDevice {
         VF_CUDA_CHECK_LAUNCH();
     }
 
-    static int exclusiveScan(const int* in, int* out, int n, DeviceScratch& scratch) {
+    // Teams of kThreadsPerTeam threads: enough to hide memory latency while a block of shared memory of
+    // up to ~16 KB per team still lets a multiprocessor hold a dozen teams.
+    static constexpr int kThreadsPerTeam = 128;
+
+    template <class Shared, class Body>
+    static void parallelForTeams(int n, const Body& body) {
+        static_assert(sizeof(Shared) <= 48 * 1024, "a team's shared memory must fit the static 48 KB");
+        if (n <= 0) return;
+        cuda_detail::parallelForTeamsKernel<Shared><<<unsigned(n), kThreadsPerTeam>>>(body);
+        VF_CUDA_CHECK_LAUNCH();
+    }
+
+    template <class T>
+    static T exclusiveScan(const T* in, T* out, int n, DeviceScratch& scratch) {
         if (n <= 0) return 0;
         // The total is the last offset plus the last input, read before an in-place scan overwrites it.
-        int* last = static_cast<int*>(scratch.hostResult(2 * sizeof(int)));
-        VF_CUDA_CHECK(cudaMemcpy(last + 1, in + n - 1, sizeof(int), cudaMemcpyDeviceToHost));
+        T* last = static_cast<T*>(scratch.hostResult(2 * sizeof(T)));
+        VF_CUDA_CHECK(cudaMemcpy(last + 1, in + n - 1, sizeof(T), cudaMemcpyDeviceToHost));
         std::size_t temp_bytes = 0;
         VF_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(nullptr, temp_bytes, in, out, n));
         void* temp = scratch.get(temp_bytes);
         VF_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(temp, temp_bytes, in, out, n));
-        VF_CUDA_CHECK(cudaMemcpy(last, out + n - 1, sizeof(int), cudaMemcpyDeviceToHost));
+        VF_CUDA_CHECK(cudaMemcpy(last, out + n - 1, sizeof(T), cudaMemcpyDeviceToHost));
         return last[0] + last[1];
     }
 

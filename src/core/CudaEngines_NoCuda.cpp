@@ -11,6 +11,7 @@
 #include "voxfuse/engines/EnginePairs.h"
 #include "voxfuse/engines/IntegrationEngine.h"
 #include "voxfuse/engines/LowLevelEngine.h"
+#include "voxfuse/engines/MeshingEngine.h"
 #include "voxfuse/engines/RaycastEngine.h"
 #include "voxfuse/engines/SwappingEngine.h"
 

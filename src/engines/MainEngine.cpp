@@ -81,8 +81,7 @@ public:
           integration_(makeIntegrationEngine<TVoxel, TIndex>(settings.device)),
           raycast_(makeRaycastEngine<TVoxel, TIndex>(settings.device)),
           tracker_(makeTracker(settings.tracker, settings.device)),
-          // Meshing has no CUDA layer yet: a map on the GPU is meshed from a host copy.
-          meshing_(makeMeshingEngine<TVoxel, TIndex>(Device::CPU)),
+          meshing_(makeMeshingEngine<TVoxel, TIndex>(settings.device)),
           clock_(settings.device == Device::CUDA) {
         view_.calib = calib;
         if constexpr (kHash) {
@@ -245,19 +244,25 @@ public:
     }
     AllocationStats allocationStats() const override { return allocation_stats_; }
     const TrackerStats& trackerStats() const override { return tracker_->lastStats(); }
-    // Meshing runs on the CPU: a map on the GPU is meshed from a host copy taken for the purpose, a map
-    // with swapped blocks from a host copy with every block in it.
+    // The map is meshed where it lives; a map with swapped-out blocks is meshed on the CPU from a host
+    // copy with every block in it (the whole map may not fit the active budget on the device).
     void extractMesh(Mesh& mesh) override {
-        if (onGpu() || hasStoredBlocks()) meshing_->extractMesh(completeHostCopy(), mesh);
+        if (hasStoredBlocks()) hostMeshing().extractMesh(completeHostCopy(), mesh);
         else meshing_->extractMesh(scene_, mesh);
     }
     void extractPointCloud(PointCloud& cloud) override {
-        if (onGpu() || hasStoredBlocks()) meshing_->extractPointCloud(completeHostCopy(), cloud);
+        if (hasStoredBlocks()) hostMeshing().extractPointCloud(completeHostCopy(), cloud);
         else meshing_->extractPointCloud(scene_, cloud);
     }
 
 private:
     bool onGpu() const { return settings_.device == Device::CUDA; }
+
+    MeshingEngine<TVoxel, TIndex>& hostMeshing() {
+        if (!onGpu()) return *meshing_;
+        if (!host_meshing_) host_meshing_ = makeMeshingEngine<TVoxel, TIndex>(Device::CPU);
+        return *host_meshing_;
+    }
 
     bool hasStoredBlocks() const {
         if constexpr (kHash) return scene_.index().storedBlocks() > 0;
@@ -342,6 +347,7 @@ private:
     std::unique_ptr<RaycastEngine<TVoxel, TIndex>> raycast_;
     std::unique_ptr<Tracker> tracker_;
     std::unique_ptr<MeshingEngine<TVoxel, TIndex>> meshing_;
+    std::unique_ptr<MeshingEngine<TVoxel, TIndex>> host_meshing_;  // swapped maps on the GPU: meshed from a host copy
     mutable View view_;                  // mutable: view() brings host copies up to date
     TrackingState tracking_;
     mutable RenderState render_state_;   // likewise renderState()

@@ -30,11 +30,6 @@ std::string deviceErrorOf(F&& f) {
     return "no error";
 }
 
-TEST(DeviceDispatchTest, EnginesWithoutACudaLayerSaySo) {
-    EXPECT_NE(deviceErrorOf([] { makeMeshingEngine<VoxelS, VoxelBlockHash>(Device::CUDA); }).find("meshing has no CUDA layer"),
-              std::string::npos);
-}
-
 TEST(DeviceDispatchTest, ImageProcessingAndTrackersAreTheRequestedDevicesOrAClearError) {
     EXPECT_EQ(makeLowLevelEngine(Device::CPU)->device(), Device::CPU);
     for (TrackerKind kind : {TrackerKind::Icp, TrackerKind::Color, TrackerKind::Ren, TrackerKind::Rgbd}) {
@@ -54,15 +49,18 @@ TEST(DeviceDispatchTest, SceneEnginesAreTheRequestedDevicesOrAClearError) {
     EXPECT_NE((makeAllocationEngine<VoxelS, VoxelBlockHash>(Device::CPU)), nullptr);
     EXPECT_NE((makeIntegrationEngine<VoxelSRgb, PlainVoxelArray>(Device::CPU)), nullptr);
     EXPECT_NE((makeRaycastEngine<VoxelF, VoxelBlockHash>(Device::CPU)), nullptr);
+    EXPECT_NE((makeMeshingEngine<VoxelSLabel, PlainVoxelArray>(Device::CPU)), nullptr);
     if (device_memory::builtWithCuda()) {
         // The CUDA layers exist in this build; creating them touches no GPU.
         EXPECT_NE((makeAllocationEngine<VoxelS, VoxelBlockHash>(Device::CUDA)), nullptr);
         EXPECT_NE((makeIntegrationEngine<VoxelSRgbLabel, VoxelBlockHash>(Device::CUDA)), nullptr);
         EXPECT_NE((makeRaycastEngine<VoxelFRgb, PlainVoxelArray>(Device::CUDA)), nullptr);
+        EXPECT_NE((makeMeshingEngine<VoxelS, VoxelBlockHash>(Device::CUDA)), nullptr);
     } else {
         for (const std::string& error : {deviceErrorOf([] { makeAllocationEngine<VoxelS, VoxelBlockHash>(Device::CUDA); }),
                                          deviceErrorOf([] { makeIntegrationEngine<VoxelS, VoxelBlockHash>(Device::CUDA); }),
-                                         deviceErrorOf([] { makeRaycastEngine<VoxelS, VoxelBlockHash>(Device::CUDA); })})
+                                         deviceErrorOf([] { makeRaycastEngine<VoxelS, VoxelBlockHash>(Device::CUDA); }),
+                                         deviceErrorOf([] { makeMeshingEngine<VoxelS, PlainVoxelArray>(Device::CUDA); })})
             EXPECT_NE(error.find("is not in this VoxFuse build"), std::string::npos) << error;
     }
 }

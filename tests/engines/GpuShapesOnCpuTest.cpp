@@ -1,19 +1,23 @@
 // The CUDA layers' launch shapes run on the CPU: the engine stages (src/engines/*_Impl.h) with one
 // item per element, as on the GPU (a pixel per stage-1 element, a voxel per integration element, a
-// ray per raycast element, the dense frustum box voxel by voxel), must give exactly what the CPU
-// layer's wide elements give. Together with the device-parametrised engine tests this runs every
+// ray per raycast element, the dense frustum box voxel by voxel, meshing teams of several threads
+// meeting at barriers), must give exactly what the CPU layer's wide elements give. Together with the device-parametrised engine tests this runs every
 // loop body a CUDA kernel runs, in the normal test suite; what remains GPU-only is the launch, the
 // atomics' device branch and the CUB primitives (tests/cuda/CudaDeviceTest.cu).
 
 #include <gtest/gtest.h>
 
+#include <omp.h>
+
 #include <cstring>
+#include <memory>
 
 #include "DeviceTestSupport.h"
 #include "SyntheticViews.h"
 #include "core/CpuDevice.h"
 #include "engines/AllocationEngine_Impl.h"
 #include "engines/IntegrationEngine_Impl.h"
+#include "engines/MeshingEngine_Impl.h"
 #include "engines/RaycastEngine_Impl.h"
 #include "voxfuse/objects/Voxel.h"
 
@@ -23,6 +27,18 @@ namespace {
 // The CPU launcher and memory with the GPU's launch shapes.
 struct CpuDeviceWithGpuShapes : CpuDevice {
     static constexpr bool kOneThreadPerItem = true;
+
+    // Teams of five threads (an odd size, so that the loops' strides end unevenly), one item at a time:
+    // every thread runs the body, splits the work by its rank and waits at each team.sync().
+    static constexpr int kThreadsPerTeam = 5;
+    template <class Shared, class Body>
+    static void parallelForTeams(int n, const Body& body) {
+        const auto shared = std::make_unique<Shared>();
+        for (int i = 0; i < n; ++i) {
+#pragma omp parallel num_threads(kThreadsPerTeam)
+            body(Team{omp_get_thread_num(), omp_get_num_threads()}, i, *shared);
+        }
+    }
 };
 
 template <class TVoxel>
@@ -44,6 +60,36 @@ View labelledView(const Mat4f& pose, int k) {
 template <class TVoxel>
 void expectSameVoxels(const MemoryBlock<TVoxel>& a, const MemoryBlock<TVoxel>& b) {
     ASSERT_EQ(test::firstDifferentVoxel(a, b), -1) << "voxels differ";
+}
+
+template <class T>
+void expectSameArray(const std::vector<T>& a, const std::vector<T>& b, const char* what) {
+    ASSERT_EQ(a.size(), b.size()) << what;
+    if (!a.empty()) {
+        ASSERT_EQ(0, std::memcmp(a.data(), b.data(), a.size() * sizeof(T))) << what;
+    }
+}
+
+// The scene's mesh and cloud by teams of one thread and of several.
+template <class TVoxel, class TIndex>
+void expectSameSurfaceFromBothTeamShapes(const Scene<TVoxel, TIndex>& scene) {
+    auto one = makeMeshingEngineOn<CpuDevice, TVoxel, TIndex>();
+    auto several = makeMeshingEngineOn<CpuDeviceWithGpuShapes, TVoxel, TIndex>();
+    Mesh ma, mb;
+    one->extractMesh(scene, ma);
+    several->extractMesh(scene, mb);
+    EXPECT_GT(ma.triangles.size(), 2000u);
+    expectSameArray(ma.vertices, mb.vertices, "vertices");
+    expectSameArray(ma.normals, mb.normals, "normals");
+    expectSameArray(ma.colors, mb.colors, "colours");
+    expectSameArray(ma.labels, mb.labels, "classes");
+    expectSameArray(ma.triangles, mb.triangles, "triangles");
+    PointCloud ca, cb;
+    one->extractPointCloud(scene, ca);
+    several->extractPointCloud(scene, cb);
+    expectSameArray(ca.points, ma.vertices, "cloud points");
+    expectSameArray(ca.points, cb.points, "cloud points");
+    expectSameArray(ca.labels, cb.labels, "cloud classes");
 }
 
 void expectSameRaycast(const RenderState& a, const RenderState& b) {
@@ -95,6 +141,7 @@ TYPED_TEST(GpuShapesOnCpuTest, HashPipelineGivesTheSameTableVoxelsRaysAndRenders
     wide_raycast->raycast(wide, test::kinectIntrinsics(160, 120), free_view, ra);
     narrow_raycast->raycast(narrow, test::kinectIntrinsics(160, 120), free_view, rb);
     expectSameRaycast(ra, rb);
+    expectSameSurfaceFromBothTeamShapes(wide);
 }
 
 TYPED_TEST(GpuShapesOnCpuTest, DenseIntegrationVoxelByVoxelEqualsTheClippedRows) {
@@ -117,6 +164,7 @@ TYPED_TEST(GpuShapesOnCpuTest, DenseIntegrationVoxelByVoxelEqualsTheClippedRows)
     row_raycast->raycast(rows, test::kinectIntrinsics(160, 120), poses().back(), ra);
     voxel_raycast->raycast(voxels, test::kinectIntrinsics(160, 120), poses().back(), rb);
     expectSameRaycast(ra, rb);
+    expectSameSurfaceFromBothTeamShapes(rows);
 }
 
 }  // namespace

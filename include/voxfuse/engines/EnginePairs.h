@@ -42,4 +42,5 @@
 #define VF_FOR_EACH_CUDA_ENGINE(MACRO) \
     MACRO(AllocationEngine)           \
     MACRO(IntegrationEngine)          \
-    MACRO(RaycastEngine)
+    MACRO(RaycastEngine)              \
+    MACRO(MeshingEngine)

@@ -1,7 +1,7 @@
 #pragma once
 // Surface extraction from the scene: a triangle mesh by marching cubes, or the mesh's vertices alone
-// as a point cloud. The CPU layer (src/cpu/MeshingEngine_CPU.cpp) loops over voxel blocks and calls
-// the per-cell functions of shared/MarchingCubes.h.
+// as a point cloud. Its stages (src/engines/MeshingEngine_Impl.h) run on either device: per block,
+// count the surface, scan, emit it (shared/Meshing.h, with the cells of shared/MarchingCubes.h).
 //
 // What the output is:
 // - One vertex per voxel edge whose two ends were observed with opposite SDF signs, at the linear
@@ -17,13 +17,13 @@
 //   is below the edge's middle) if that voxel has one (w_label > 0), else the other end's, else
 //   kNoLabel.
 // - Triangles wind counter-clockwise seen from free space. Their order, and the vertices', depends on
-//   the scene only, not on the number of threads.
-// Memory: proportional to the surface, about twice the final mesh while it is assembled.
+//   the scene only, not on the number of threads or the device.
+// Memory: the mesh, plus about 130 bytes per block and 640 per block with surface. On the GPU the
+// mesh is assembled there and only the finished arrays come down.
 
 #include <memory>
 
 #include "voxfuse/core/DeviceMemory.h"
-#include "voxfuse/core/Error.h"
 #include "voxfuse/objects/Mesh.h"
 #include "voxfuse/objects/PointCloud.h"
 #include "voxfuse/objects/Scene.h"
@@ -34,8 +34,7 @@ template <class TVoxel, class TIndex>
 class MeshingEngine {
 public:
     virtual ~MeshingEngine() = default;
-    // Replaces `mesh` with the scene's surface. The scene must live on the engine's device (a map on the
-    // GPU is meshed from a host copy: Scene::copyTo(Device::CPU)).
+    // Replaces `mesh` (host memory) with the scene's surface. The scene must live on the engine's device.
     virtual void extractMesh(const Scene<TVoxel, TIndex>& scene, Mesh& mesh) = 0;
     // Replaces `cloud` with the vertices of extractMesh() (points, normals, colours, classes) without
     // building the triangles: one point per zero-crossing voxel edge.
@@ -46,11 +45,15 @@ namespace cpu {
 template <class TVoxel, class TIndex>
 std::unique_ptr<MeshingEngine<TVoxel, TIndex>> makeMeshingEngine();
 }
+namespace cuda {
+template <class TVoxel, class TIndex>
+std::unique_ptr<MeshingEngine<TVoxel, TIndex>> makeMeshingEngine();
+}
 
+// The engine of `device` for scenes on that device; DeviceError in a build without CUDA.
 template <class TVoxel, class TIndex>
 std::unique_ptr<MeshingEngine<TVoxel, TIndex>> makeMeshingEngine(Device device) {
-    if (device == Device::CUDA) throw DeviceError("meshing has no CUDA layer yet: extract the mesh with Device::CPU");
-    return cpu::makeMeshingEngine<TVoxel, TIndex>();
+    return device == Device::CPU ? cpu::makeMeshingEngine<TVoxel, TIndex>() : cuda::makeMeshingEngine<TVoxel, TIndex>();
 }
 
 }  // namespace voxfuse
