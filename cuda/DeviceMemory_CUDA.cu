@@ -2,6 +2,8 @@
 // point but cudaAvailable() then throws DeviceError.
 
 #include <cstring>
+#include <mutex>
+#include <unordered_map>
 
 #include "core/CudaCheck.h"
 #include "voxfuse/core/DeviceMemory.h"
@@ -20,6 +22,17 @@ __global__ void fillPatternKernel(unsigned char* dst, FillPattern pattern, unsig
     if (i >= count) return;
     unsigned char* element = dst + i * pattern_bytes;
     for (unsigned b = 0; b < pattern_bytes; ++b) element[b] = pattern.bytes[b];
+}
+
+// Sizes of the live allocations, for bytesInUse() and the peak (allocations are few and large).
+struct AllocationLedger {
+    std::mutex mutex;
+    std::unordered_map<void*, std::size_t> sizes;
+    std::size_t in_use = 0, peak = 0;
+};
+AllocationLedger& ledger() {
+    static AllocationLedger l;
+    return l;
 }
 
 }  // namespace
@@ -57,10 +70,40 @@ std::string cudaDescription() {
 void* allocate(std::size_t bytes) {
     void* p = nullptr;
     VF_CUDA_CHECK(cudaMalloc(&p, bytes));
+    AllocationLedger& l = ledger();
+    const std::lock_guard<std::mutex> lock(l.mutex);
+    l.sizes[p] = bytes;
+    l.in_use += bytes;
+    if (l.in_use > l.peak) l.peak = l.in_use;
     return p;
 }
 
-void release(void* ptr) noexcept { cudaFree(ptr); }
+void release(void* ptr) noexcept {
+    if (!ptr) return;
+    cudaFree(ptr);
+    AllocationLedger& l = ledger();
+    const std::lock_guard<std::mutex> lock(l.mutex);
+    const auto it = l.sizes.find(ptr);
+    if (it == l.sizes.end()) return;
+    l.in_use -= it->second;
+    l.sizes.erase(it);
+}
+
+std::size_t bytesInUse() {
+    AllocationLedger& l = ledger();
+    const std::lock_guard<std::mutex> lock(l.mutex);
+    return l.in_use;
+}
+std::size_t peakBytesInUse() {
+    AllocationLedger& l = ledger();
+    const std::lock_guard<std::mutex> lock(l.mutex);
+    return l.peak;
+}
+void resetPeakBytes() {
+    AllocationLedger& l = ledger();
+    const std::lock_guard<std::mutex> lock(l.mutex);
+    l.peak = l.in_use;
+}
 
 void* allocatePinned(std::size_t bytes) noexcept {
     if (!cudaAvailable()) return nullptr;

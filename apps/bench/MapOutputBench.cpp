@@ -6,6 +6,7 @@
 
 #include "ResourceUsage.h"
 #include "Statistics.h"
+#include "voxfuse/core/DeviceMemory.h"
 #include "voxfuse/core/Timer.h"
 #include "voxfuse/engines/PointCloudDownsampling.h"
 
@@ -19,11 +20,15 @@ MeshingBench benchMeshing(MainEngine& engine, int repeats) {
         Mesh mesh;
         // Only the first run starts from nothing: later ones could reuse pages the allocator kept.
         const StagePeakMemory peak;
+        const std::size_t gpu_before = device_memory::bytesInUse();
+        device_memory::resetPeakBytes();
         const Timer t;
         engine.extractMesh(mesh);
         ms.push_back(t.elapsedMs());
         if (r == 0) {
             b.peak_extra_mb = peak.extraMb();
+            if (engine.settings().device == Device::CUDA)
+                b.gpu_peak_extra_mb = double(device_memory::peakBytesInUse() - gpu_before) / (1024.0 * 1024.0);
             b.vertices = (long long)mesh.vertices.size();
             b.triangles = (long long)mesh.triangles.size();
             b.mesh_mb = double(mesh.bytes()) / (1024.0 * 1024.0);
@@ -61,6 +66,8 @@ void printMeshing(const MeshingBench& b) {
                 b.repeats, b.median_ms, b.min_ms, b.vertices, b.triangles, b.mesh_mb);
     if (b.peak_extra_mb >= 0.0)
         std::printf(", peak +%.1f MB (%.2f x the mesh)", b.peak_extra_mb, b.mesh_mb > 0.0 ? b.peak_extra_mb / b.mesh_mb : 0.0);
+    if (b.gpu_peak_extra_mb >= 0.0)
+        std::printf(", GPU peak +%.1f MB (%.2f x the mesh)", b.gpu_peak_extra_mb, b.mesh_mb > 0.0 ? b.gpu_peak_extra_mb / b.mesh_mb : 0.0);
     std::printf("\n");
 }
 
@@ -96,6 +103,7 @@ void writeMeshingJson(JsonWriter& j, const MeshingBench& b) {
     j.value("triangles", b.triangles);
     j.value("mesh_mb", b.mesh_mb);
     if (b.peak_extra_mb >= 0.0) j.value("peak_extra_mb", b.peak_extra_mb);
+    if (b.gpu_peak_extra_mb >= 0.0) j.value("gpu_peak_extra_mb", b.gpu_peak_extra_mb);
     j.endObject();
 }
 

@@ -16,6 +16,7 @@ struct MeshingBench {
     long long vertices = 0, triangles = 0;
     double mesh_mb = 0.0;        // the arrays of the finished mesh
     double peak_extra_mb = -1.0;  // resident memory above the pre-meshing level at the peak (< 0: unknown)
+    double gpu_peak_extra_mb = -1.0;  // GPU memory above the pre-meshing level at the peak (< 0: a CPU run)
 };
 
 struct CloudBench {

@@ -17,6 +17,9 @@ bool cudaAvailable() { return false; }
 std::string cudaDescription() { return "built without CUDA"; }
 void* allocate(std::size_t) { noCuda(); }
 void release(void*) noexcept {}
+std::size_t bytesInUse() { return 0; }
+std::size_t peakBytesInUse() { return 0; }
+void resetPeakBytes() {}
 void copyHostToDevice(void*, const void*, std::size_t) { noCuda(); }
 void copyDeviceToHost(void*, const void*, std::size_t) { noCuda(); }
 void copyDeviceToDevice(void*, const void*, std::size_t) { noCuda(); }

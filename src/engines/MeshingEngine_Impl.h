@@ -107,66 +107,58 @@ private:
         if (vertex_total > INT_MAX)
             throw Error("meshing: the surface has " + std::to_string(vertex_total) + " vertices, more than a mesh's int indices address (2^31 - 1)");
 
-        Outputs o = prepareOutputs(out, std::size_t(vertex_total), with_triangles ? std::size_t(triangle_total) : 0);
+        out.positions.resize(std::size_t(vertex_total));
+        out.normals.resize(std::size_t(vertex_total));
+        out.colors.resize(TVoxel::hasColor ? std::size_t(vertex_total) : 0);
+        out.labels.resize(TVoxel::hasLabel ? std::size_t(vertex_total) : 0);
+        if (with_triangles) out.triangles->resize(std::size_t(triangle_total));
+        // The emit pass writes into the caller's arrays on the CPU, into buffers of this mesh's size on
+        // the GPU (freed when it has come down: between calls meshing holds only its work arrays).
+        DeviceSurface on_gpu;
+        SurfaceOutput target{out.positions.data(), out.normals.data(), out.colors.data(), out.labels.data(),
+                             with_triangles ? out.triangles->data() : nullptr, nullptr};
+        if constexpr (kDevice == Device::CUDA) target = on_gpu.allocate(out);
         grow(unresolved_, 1);
         unresolved_.fill(kDevice, 0, 0, 1);
-        o.device.unresolved_corners = unresolved_.data(kDevice);
+        target.unresolved_corners = unresolved_.data(kDevice);
         TDevice::template parallelForTeams<EmitShared<TVoxel>>(
             meshed, EmitBlockSurface<TVoxel, TBlocks>{blocks, meshed_.data(kDevice), slot_of_block_.data(kDevice), rows, vertex_count_.data(kDevice),
-                                                      triangle_count_.data(kDevice), voxel_size_m, o.device});
+                                                      triangle_count_.data(kDevice), voxel_size_m, target});
         const int unresolved = TDevice::read(unresolved_.data(kDevice), scratch_);
         if (unresolved > 0)
             throw Error("meshing: " + std::to_string(unresolved) + " triangle corners refer to no vertex (the scene changed during meshing?)");
-        if constexpr (kDevice == Device::CUDA) download(out, o);
+        if constexpr (kDevice == Device::CUDA) on_gpu.download(out);
     }
 
-    // Where the emit pass writes: the caller's arrays on the CPU, buffers on the GPU (sized to this mesh).
-    struct Outputs {
-        meshing::SurfaceOutput device;
-        std::size_t vertices, triangles;
+    // The GPU's copy of the output, sized like the caller's arrays.
+    struct DeviceSurface {
+        MemoryBlock<Vec3f> positions, normals;
+        MemoryBlock<Vec3u8> colors;
+        MemoryBlock<ClassId> labels;
+        MemoryBlock<Vec3i> triangles;
+
+        meshing::SurfaceOutput allocate(const HostSurface& out) {
+            positions.allocate(out.positions.size(), false, true);
+            normals.allocate(out.normals.size(), false, true);
+            colors.allocate(out.colors.size(), false, true);
+            labels.allocate(out.labels.size(), false, true);
+            if (out.triangles) triangles.allocate(out.triangles->size(), false, true);
+            return {positions.device(), normals.device(), colors.device(), labels.device(), out.triangles ? triangles.device() : nullptr, nullptr};
+        }
+        void download(HostSurface& out) const {
+            positions.readRange(Device::CUDA, 0, out.positions.data(), out.positions.size());
+            normals.readRange(Device::CUDA, 0, out.normals.data(), out.normals.size());
+            colors.readRange(Device::CUDA, 0, out.colors.data(), out.colors.size());
+            labels.readRange(Device::CUDA, 0, out.labels.data(), out.labels.size());
+            if (out.triangles) triangles.readRange(Device::CUDA, 0, out.triangles->data(), out.triangles->size());
+        }
     };
 
-    Outputs prepareOutputs(HostSurface out, std::size_t vertices, std::size_t triangles) {
-        out.positions.resize(vertices);
-        out.normals.resize(vertices);
-        out.colors.resize(TVoxel::hasColor ? vertices : 0);
-        out.labels.resize(TVoxel::hasLabel ? vertices : 0);
-        if (out.triangles) out.triangles->resize(triangles);
-        if constexpr (kDevice == Device::CPU) {
-            return {{out.positions.data(), out.normals.data(), out.colors.data(), out.labels.data(), out.triangles ? out.triangles->data() : nullptr, nullptr},
-                    vertices, triangles};
-        } else {
-            fit(positions_out_, vertices);
-            fit(normals_out_, vertices);
-            fit(colors_out_, TVoxel::hasColor ? vertices : 0);
-            fit(labels_out_, TVoxel::hasLabel ? vertices : 0);
-            fit(triangles_out_, triangles);
-            return {{positions_out_.data(kDevice), normals_out_.data(kDevice), colors_out_.data(kDevice), labels_out_.data(kDevice),
-                     out.triangles ? triangles_out_.data(kDevice) : nullptr, nullptr},
-                    vertices, triangles};
-        }
-    }
-
-    void download(HostSurface out, const Outputs& o) {
-        positions_out_.readRange(kDevice, 0, out.positions.data(), o.vertices);
-        normals_out_.readRange(kDevice, 0, out.normals.data(), o.vertices);
-        if constexpr (TVoxel::hasColor) colors_out_.readRange(kDevice, 0, out.colors.data(), o.vertices);
-        if constexpr (TVoxel::hasLabel) labels_out_.readRange(kDevice, 0, out.labels.data(), o.vertices);
-        if (out.triangles) triangles_out_.readRange(kDevice, 0, out.triangles->data(), o.triangles);
-    }
-
-    // Work arrays grow and are kept between calls (a few bytes per block).
+    // Work arrays grow and are kept between calls (about 130 bytes per block and 640 per block with surface).
     template <class T>
     static void grow(MemoryBlock<T>& block, std::size_t count) {
         if (block.size() < count) block.allocate(count + count / 4, kDevice == Device::CPU, kDevice == Device::CUDA);
     }
-    // Output buffers on the GPU are sized to the mesh at hand, so that the GPU memory meshing holds
-    // stays proportional to the last mesh (reallocated when it is too small or over twice too large).
-    template <class T>
-    static void fit(MemoryBlock<T>& block, std::size_t count) {
-        if (block.size() < count || block.size() > 2 * count + 1024) block.allocate(count, false, true);
-    }
-
     DeviceScratch scratch_{kDevice};
     MemoryBlock<int> entry_ids_, ptrs_, list_index_of_ptr_, meshed_, slot_of_block_, neighbours_;
     MemoryBlock<std::uint64_t> codes_;
@@ -177,10 +169,6 @@ private:
     MemoryBlock<std::uint16_t> row_first_vertex_, row_first_triangle_;
     MemoryBlock<long long> vertex_count_, triangle_count_;
     MemoryBlock<int> unresolved_;
-    MemoryBlock<Vec3f> positions_out_, normals_out_;
-    MemoryBlock<Vec3u8> colors_out_;
-    MemoryBlock<ClassId> labels_out_;
-    MemoryBlock<Vec3i> triangles_out_;
 };
 
 template <class TDevice, class TVoxel, class TIndex>

@@ -21,6 +21,11 @@ bool cudaAvailable();
 std::string cudaDescription();
 void* allocate(std::size_t bytes);
 void release(void* ptr) noexcept;
+// GPU memory VoxFuse holds through allocate(), now and at most since the last resetPeakBytes() (for
+// benchmarks: what a stage needs on the GPU).
+std::size_t bytesInUse();
+std::size_t peakBytesInUse();
+void resetPeakBytes();
 // Page-locked host memory: transfers from and to it run at full bus speed and without a hidden
 // staging copy. Returns nullptr where there is no usable GPU (callers fall back to ordinary memory).
 void* allocatePinned(std::size_t bytes) noexcept;
