@@ -30,10 +30,10 @@ echo "== bundle of commit $(cat "$bundle/commit.txt" 2>/dev/null); $(nvidia-smi 
 step cuda_tests 180 "$bundle/bin/voxfuse_cuda_tests" --gtest_brief=1 --gtest_output="xml:$out/cuda_tests.xml"
 step engine_cuda_tests 180 "$bundle/bin/voxfuse_core_tests" --gtest_brief=1 --gtest_filter='*cuda*' --gtest_output="xml:$out/engine_cuda_tests.xml"
 cd "$out"
-step bench_cuda_hash 120 "$bundle/bin/voxfuse_bench" "synthetic:$frames" --device cuda --poses groundtruth --json bench_cuda_hash.json
-step bench_cuda_dense 120 "$bundle/bin/voxfuse_bench" "synthetic:$frames" --device cuda --poses groundtruth --index dense --json bench_cuda_dense.json
+step bench_cuda_hash 120 "$bundle/bin/voxfuse_bench" "synthetic:$frames" --device cuda --poses groundtruth --mesh --cloud --repeats 5 --json bench_cuda_hash.json
+step bench_cuda_dense 120 "$bundle/bin/voxfuse_bench" "synthetic:$frames" --device cuda --poses groundtruth --index dense --mesh --cloud --repeats 5 --json bench_cuda_dense.json
 step bench_cuda_tracked 120 "$bundle/bin/voxfuse_bench" "synthetic:$frames" --device cuda --json bench_cuda_tracked.json
-step bench_cpu_hash 180 "$bundle/bin/voxfuse_bench" "synthetic:$frames" --device cpu --poses groundtruth --json bench_cpu_hash.json
+step bench_cpu_hash 180 "$bundle/bin/voxfuse_bench" "synthetic:$frames" --device cpu --poses groundtruth --mesh --cloud --repeats 3 --json bench_cpu_hash.json
 
 python3 - "$out" <<'PY'
 import json, os, sys, xml.etree.ElementTree as ET
@@ -51,7 +51,7 @@ for name in ("cuda_tests", "engine_cuda_tests"):
     for c in root.iter("testcase"):
         if c.find("failure") is not None:
             print("  FAILED", c.get("classname"), c.get("name"))
-stages = ("allocate", "integrate", "raycast", "download", "track", "depth", "total")
+stages = ("depth", "track", "allocate", "integrate", "raycast", "total")
 print(f"\n{'run':<20}" + "".join(f"{s:>10}" for s in stages) + f"{'a+i+r':>10}{'ATE mm':>9}")
 for name in ("bench_cuda_hash", "bench_cuda_dense", "bench_cuda_tracked", "bench_cpu_hash"):
     path = os.path.join(out, name + ".json")
@@ -67,5 +67,10 @@ for name in ("bench_cuda_hash", "bench_cuda_dense", "bench_cuda_tracked", "bench
     if name == "bench_cuda_hash":
         print(f"{'':<20}gpu: {j.get('gpu', '?')}; {j.get('frames')} frames, median ms per stage; blocks {j.get('blocks_allocated')}, "
               f"allocation failures {j.get('allocation_failures')}")
+    m, c = j.get("meshing"), j.get("point_cloud")
+    if m:
+        gpu_peak = f", GPU peak +{m['gpu_peak_extra_mb']:.1f} MB" if "gpu_peak_extra_mb" in m else ""
+        print(f"{'':<20}mesh {m['median_ms']:.2f} ms ({m['triangles']} triangles, {m['vertices']} vertices{gpu_peak})"
+              + (f"; cloud {c['extract_median_ms']:.2f} ms ({c['points']} points)" if c else ""))
 print("logs and JSON:", out)
 PY

@@ -92,7 +92,7 @@ int main(int argc, char** argv) {
     cli.add_option("--voxel", voxel, "voxel type")->capture_default_str()->check(CLI::IsMember({"s", "f", "s_rgb", "f_rgb", "s_label", "s_rgb_label"}));
 #endif
     cli.add_option("--index", index, "voxel index")->capture_default_str()->check(CLI::IsMember({"dense", "hash"}));
-    cli.add_option("--device", device, "where the scene lives and allocation, integration and raycast run (tracking stays on the CPU)")
+    cli.add_option("--device", device, "where the whole frame loop runs: image processing, tracking, allocation, integration, raycast, and the map outputs")
         ->capture_default_str()->check(CLI::IsMember({"cpu", "cuda"}));
     cli.add_option("--voxel-size", s.scene.voxel_size_m, "voxel edge (m)")->capture_default_str();
     cli.add_option("--mu", s.scene.mu_m, "truncation band (m)")->capture_default_str();

@@ -96,7 +96,7 @@ int main(int argc, char** argv) {
     app::addVoxelAndLabelOptions(cli, o.labels, "s_rgb");
     cli.add_option("--index", o.index, "voxel index")->capture_default_str()->check(CLI::IsMember({"dense", "hash"}));
     cli.add_option("--voxel-size", o.engine.scene.voxel_size_m, "voxel edge in metres")->capture_default_str()->check(CLI::PositiveNumber);
-    cli.add_option("--device", o.device, "where the scene lives and allocation, integration and raycast run (tracking stays on the CPU)")->capture_default_str()->check(CLI::IsMember({"cpu", "cuda"}));
+    cli.add_option("--device", o.device, "where the frame loop runs and the map lives: cpu, or cuda for the GPU (image processing, tracking, fusion, raycast, meshes)")->capture_default_str()->check(CLI::IsMember({"cpu", "cuda"}));
     cli.add_option("--poses", o.poses, "track the camera, or take the source's ground truth")
         ->capture_default_str()->check(CLI::IsMember({"track", "groundtruth"}));
     cli.add_option("--out", o.viewer.out_dir, "folder for the mesh (m), the map (s) and screenshot (p)")->capture_default_str();

@@ -7,8 +7,6 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
-#include <iterator>
 #include <iostream>
 
 #include "LabelInput.h"
@@ -100,27 +98,9 @@ private:
     bool tty_;
 };
 
-// The tracker settings: defaults, then --tracker-config FILE, then the single options, all read by one
-// parser so that every value is checked the same way.
+// The tracker settings: defaults, then --tracker-config FILE, then the single options.
 TrackerSettings trackerSettings(const CliOptions& o) {
-    std::string text, name = "command line";
-    if (!o.tracker_config.empty()) {
-        std::ifstream in(o.tracker_config);
-        if (!in) throw IoError(o.tracker_config, "cannot open the tracker settings file");
-        text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-        text += "\n";
-        name = o.tracker_config + " and the command line";
-    }
-    auto list = [](const auto& values) {
-        std::string out;
-        for (const auto& v : values) out += " " + std::to_string(v);
-        return out;
-    };
-    if (!o.tracker.empty()) text += "tracker = " + o.tracker + "\n";
-    if (!o.tracker_levels.empty()) text += "levels = " + o.tracker_levels + "\n";
-    if (!o.tracker_iterations.empty()) text += "iterations =" + list(o.tracker_iterations) + "\n";
-    if (!o.tracker_max_distance.empty()) text += "max_distance_m =" + list(o.tracker_max_distance) + "\n";
-    return parseTrackerSettings(text, name);
+    return trackerSettingsWith({o.tracker_config, o.tracker, o.tracker_levels, o.tracker_iterations, o.tracker_max_distance, "command line"});
 }
 
 std::vector<ClassId> excludedClasses(const CliOptions& o) { return std::vector<ClassId>(o.exclude_classes.begin(), o.exclude_classes.end()); }
@@ -402,7 +382,7 @@ int main(int argc, char** argv) {
     cli.add_option("--hash-excess", o.engine.hash.excess_entry_count, "hash: entries in the excess list")->capture_default_str()->check(CLI::NonNegativeNumber);
     cli.add_option("--volume-size", o.dense_size, "dense volume size in voxels (x y z)")->expected(3)->capture_default_str();
     cli.add_option("--volume-offset", o.dense_offset, "dense volume's first voxel, grid units (x y z)")->expected(3)->capture_default_str();
-    cli.add_option("--device", o.device, "where the scene lives and allocation, integration and raycast run (tracking stays on the CPU)")->capture_default_str()->check(CLI::IsMember({"cpu", "cuda"}));
+    cli.add_option("--device", o.device, "where the frame loop runs and the map lives: cpu, or cuda for the GPU (image processing, tracking, fusion, raycast, meshes)")->capture_default_str()->check(CLI::IsMember({"cpu", "cuda"}));
     cli.add_flag("--mesh", o.write_mesh, "write the map's mesh (marching cubes) to DIR/mesh.ply at the end");
     cli.add_option("--mesh-file", o.mesh_path, "write the mesh to this file instead (.ply, .obj or .stl)");
     cli.add_flag("--cloud", o.write_cloud, "write the surface points with normals (and colours) to DIR/cloud.ply");

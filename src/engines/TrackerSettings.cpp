@@ -261,4 +261,28 @@ TrackerSettings parseTrackerSettingsFile(const std::string& path) {
     return parseTrackerSettings(text.str(), path);
 }
 
+TrackerSettings trackerSettingsWith(const TrackerOverrides& o) {
+    std::string text, name = o.origin;
+    if (!o.settings_file.empty()) {
+        std::ifstream in(o.settings_file);
+        if (!in) throw IoError(o.settings_file, "cannot open the tracker settings file");
+        std::ostringstream file;
+        file << in.rdbuf();
+        if (in.bad()) throw IoError(o.settings_file, "read error");
+        text = file.str() + "\n";
+        name = o.settings_file + " and " + o.origin;
+    }
+    auto list = [](const auto& values) {
+        std::ostringstream out;
+        out.precision(9);
+        for (const auto& v : values) out << " " << v;
+        return out.str();
+    };
+    if (!o.kind.empty()) text += "tracker = " + o.kind + "\n";
+    if (!o.levels.empty()) text += "levels = " + o.levels + "\n";
+    if (!o.iterations.empty()) text += "iterations =" + list(o.iterations) + "\n";
+    if (!o.max_distance_m.empty()) text += "max_distance_m =" + list(o.max_distance_m) + "\n";
+    return parseTrackerSettings(text, name);
+}
+
 }  // namespace voxfuse

@@ -39,9 +39,9 @@ struct MainEngineSettings {
     SceneParams scene;
     VoxelType voxel_type = VoxelType::S;
     IndexType index_type = IndexType::Hash;
-    // Where the scene lives and allocation, integration and raycast run. With Device::CUDA the frame's
-    // images go up once per frame and the raycast comes down for tracking, which (like image
-    // processing and meshing) runs on the CPU until those engines have CUDA layers.
+    // Where the frame loop runs and the scene lives. With Device::CUDA only the raw images go up;
+    // image processing, tracking, allocation, integration, raycast, renders, meshes and clouds run on
+    // the GPU, and host copies (view(), renderState()) are brought up to date when asked for.
     Device device = Device::CPU;
     // Dense index: the box of voxels (grid units; the first camera looks along +z from the origin).
     Vec3i dense_offset{-256, -256, 0};
@@ -64,7 +64,7 @@ IndexType parseIndexType(const std::string& name);  // "dense" or "hash"; Config
 const char* toString(IndexType type);
 
 struct StageTime {
-    const char* stage;  // "depth", "track", "allocate", "integrate", "raycast", and on the GPU "download"
+    const char* stage;  // "depth", "track", "allocate", "integrate", "raycast", and with swapping "swap_in", "swap_out"
     double ms;          // wall clock; on the GPU up to the end of the stage's queued work
 };
 

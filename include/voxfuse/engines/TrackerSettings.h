@@ -107,4 +107,17 @@ TrackerSettings parseTrackerSettingsFile(const std::string& path);
 // The same for text already in memory; `name` stands for the file in error messages.
 TrackerSettings parseTrackerSettings(const std::string& text, const std::string& name);
 
+// What a front-end (the CLI, the Python API) lets a user change, applied in this order: the defaults,
+// then the settings file, then the single values; all read by the parser above, so every value is
+// checked the same way. Empty fields change nothing.
+struct TrackerOverrides {
+    std::string settings_file;          // "key = value" lines as above
+    std::string kind;                   // icp | color | ren | rgbd
+    std::string levels;                 // e.g. "rbb"
+    std::vector<int> iterations;        // per level, coarse to fine
+    std::vector<float> max_distance_m;  // per level, coarse to fine
+    std::string origin = "the given settings";  // where the single values come from, for error messages
+};
+TrackerSettings trackerSettingsWith(const TrackerOverrides& overrides);
+
 }  // namespace voxfuse
