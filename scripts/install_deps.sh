@@ -14,6 +14,8 @@ packages=(
   liboctomap-dev       # optional: the OctoMap occupancy map (--occupancy)
   libglfw3-dev         # optional: the voxfuse_viewer demo
   xvfb xauth libgl1-mesa-dri   # the viewer's screenshot test under a virtual display
+  pybind11-dev python3-dev python3-venv python3-numpy python3-pytest  # the Python package and its tests
+  dpkg-dev             # dpkg-shlibdeps, for the Debian package's dependencies (cpack -G DEB)
 )
 
 missing=()
@@ -22,11 +24,17 @@ for p in "${packages[@]}"; do
 done
 if [ ${#missing[@]} -eq 0 ]; then
   echo "install_deps: all packages present"
-  exit 0
+else
+  sudo=""
+  if [ "$(id -u)" -ne 0 ]; then sudo="sudo"; fi
+  echo "install_deps: installing ${missing[*]}"
+  $sudo apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
 fi
 
-sudo=""
-if [ "$(id -u)" -ne 0 ]; then sudo="sudo"; fi
-echo "install_deps: installing ${missing[*]}"
-$sudo apt-get update -qq
-DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
+# The Python tests run with the python3 found first on PATH (CMake builds the package for it). Debian's
+# has numpy and pytest from the packages above; another one (pyenv, conda) gets them from PyPI.
+if ! python3 -c "import numpy, pytest" 2>/dev/null; then
+  echo "install_deps: installing numpy and pytest for $(command -v python3)"
+  python3 -m pip install --quiet --disable-pip-version-check numpy pytest
+fi

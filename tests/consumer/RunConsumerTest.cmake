@@ -6,9 +6,32 @@ function(run)
     message(FATAL_ERROR "failed (${rc}): ${ARGN}\n${out}\n${err}")
   endif()
   message(STATUS "${out}")
+  set(last_output "${out}" PARENT_SCOPE)
 endfunction()
 run(${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${WORK_DIR}/prefix)
 run(${CMAKE_COMMAND} -S ${CONSUMER_SOURCE} -B ${WORK_DIR}/build -G ${GENERATOR} -DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix
     -DCMAKE_BUILD_TYPE=Release)
 run(${CMAKE_COMMAND} --build ${WORK_DIR}/build)
 run(${WORK_DIR}/build/consumer)
+
+# The installed programs run from the prefix, and from wherever the prefix is moved (relative run
+# paths: no LD_LIBRARY_PATH, no ldconfig).
+if(EXISTS ${WORK_DIR}/prefix/bin/voxfuse)
+  file(RENAME ${WORK_DIR}/prefix ${WORK_DIR}/moved_prefix)
+  run(${CMAKE_COMMAND} -E env --unset=LD_LIBRARY_PATH ${WORK_DIR}/moved_prefix/bin/voxfuse --help)
+  run(${CMAKE_COMMAND} -E env --unset=LD_LIBRARY_PATH ${WORK_DIR}/moved_prefix/bin/voxfuse ${DATA_DIR} --frames 3 --render-every 0
+      --out ${WORK_DIR}/run)
+  if(NOT EXISTS ${WORK_DIR}/run/summary.json)
+    message(FATAL_ERROR "the installed voxfuse wrote no summary.json")
+  endif()
+endif()
+
+# The Python package installed with them imports from the moved prefix. (No ';' in the code: run()
+# passes its arguments as a CMake list.)
+if(PYTHON AND EXISTS ${WORK_DIR}/moved_prefix/lib/python3/dist-packages/voxfuse)
+  run(${CMAKE_COMMAND} -E env --unset=LD_LIBRARY_PATH PYTHONPATH=${WORK_DIR}/moved_prefix/lib/python3/dist-packages
+      ${PYTHON} -c "import voxfuse\nassert voxfuse.Settings().voxel == 's_rgb'\nprint('installed voxfuse:', voxfuse.__file__)")
+  if(NOT last_output MATCHES "installed voxfuse: ${WORK_DIR}/moved_prefix/")
+    message(FATAL_ERROR "the installed Python package was not the one imported: ${last_output}")
+  endif()
+endif()

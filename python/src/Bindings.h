@@ -1,0 +1,15 @@
+#pragma once
+// The parts of the _voxfuse extension module, each binding one area of the library.
+
+#include <pybind11/pybind11.h>
+
+namespace voxfuse::python {
+
+void bindErrors(pybind11::module_& m);
+void bindCalibration(pybind11::module_& m);
+void bindSources(pybind11::module_& m);
+void bindMapOutputs(pybind11::module_& m);
+void bindPipeline(pybind11::module_& m);
+void bindTrajectory(pybind11::module_& m);
+
+}  // namespace voxfuse::python

@@ -1,0 +1,395 @@
+// voxfuse.Settings, voxfuse.Pipeline and voxfuse.FrameResult: the reconstruction loop fed NumPy frames.
+// Input arrays are checked (dtype: TypeError; shape: ValueError) and copied once into the engine's
+// frame buffer; the GIL is released while the engine works.
+
+#include <pybind11/stl.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <optional>
+
+#include "Bindings.h"
+#include "MapOutputs.h"
+#include "NumpyArrays.h"
+#include "Pipeline.h"
+#include "voxfuse/core/DeviceMemory.h"
+#include "voxfuse/core/Error.h"
+#include "voxfuse/io/MapFile.h"
+
+namespace voxfuse::python {
+
+float metresPerRawUnit(const RGBDCalib& calib);
+py::tuple timedPosesToArrays(const std::vector<TimedPose>& poses);
+
+namespace {
+
+struct FrameOutcome {
+    FrameResult result;
+    int index = 0;
+    double timestamp_s = 0.0;
+};
+
+// Settings from keyword arguments over `base`: unknown names and values of the wrong type are TypeErrors.
+PipelineSettings withOverrides(PipelineSettings base, const py::kwargs& overrides) {
+    if (!overrides || overrides.empty()) return base;
+    py::object obj = py::cast(base);
+    for (const auto& item : overrides) {
+        const std::string name = py::str(item.first);
+        if (name.empty() || name[0] == '_' || !py::hasattr(obj, name.c_str()) || name == "to_dict")
+            throw py::type_error("unknown setting '" + name + "' (see voxfuse.Settings)");
+        try {
+            obj.attr(name.c_str()) = item.second;
+        } catch (const py::error_already_set&) {
+            throw py::type_error("setting '" + name + "' cannot be " + std::string(py::repr(item.second)) + " (see help(voxfuse.Settings))");
+        }
+    }
+    return obj.cast<PipelineSettings>();
+}
+
+void checkShape(const py::array& a, const char* what, py::ssize_t h, py::ssize_t w, const char* channels_text, bool channels_ok) {
+    if (a.ndim() < 2 || a.shape(0) != h || a.shape(1) != w || !channels_ok)
+        throw py::value_error(std::string(what) + " must be of shape (" + std::to_string(h) + ", " + std::to_string(w) + channels_text +
+                              ") for this calibration, not " + shapeText(a));
+}
+
+void copyDepth(const py::handle& value, const RGBDCalib& calib, Image<std::uint16_t>& out) {
+    if (!py::isinstance<py::array>(value)) throw py::type_error("depth must be a numpy array (uint16 raw, or float32/float64 metres)");
+    const py::array a = py::reinterpret_borrow<py::array>(value);
+    const py::ssize_t h = calib.depth.height, w = calib.depth.width;
+    checkShape(a, "depth", h, w, "", a.ndim() == 2);
+    out.resize({int(w), int(h)});
+    std::uint16_t* dst = out.host();
+    if (py::isinstance<py::array_t<std::uint16_t>>(a)) {
+        const auto raw = py::array_t<std::uint16_t, py::array::c_style>::ensure(a);
+        std::copy_n(raw.data(), std::size_t(h * w), dst);
+        return;
+    }
+    if (!py::isinstance<py::array_t<float>>(a) && !py::isinstance<py::array_t<double>>(a))
+        throw py::type_error("depth must be uint16 (raw) or float32/float64 (metres), not " + std::string(py::str(a.dtype())));
+    // Metres become raw units of the calibration's scale (0.2 mm for TUM's, 1 mm by default); what the
+    // raw range cannot hold, NaN and non-positive values are "no measurement".
+    const float scale = metresPerRawUnit(calib);
+    const auto metres = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(a);
+    const double* src = metres.data();
+    for (py::ssize_t i = 0; i < h * w; ++i) {
+        const double raw = std::round(src[i] / double(scale));
+        dst[i] = raw >= 1.0 && raw <= 65535.0 ? std::uint16_t(raw) : 0;  // NaN fails both tests
+    }
+}
+
+void copyRgb(const py::handle& value, const RGBDCalib& calib, Image<Vec4u8>& out) {
+    if (!py::isinstance<py::array_t<std::uint8_t>>(value)) requireDtype<std::uint8_t>(value, "rgb", "uint8 (H, W, 3) or (H, W, 4)");
+    const py::array a = py::reinterpret_borrow<py::array>(value);
+    const Intrinsics& cam = calib.rgb.valid() ? calib.rgb : calib.depth;
+    const py::ssize_t h = cam.height, w = cam.width;
+    checkShape(a, "rgb", h, w, ", 3 or 4", a.ndim() == 3 && (a.shape(2) == 3 || a.shape(2) == 4));
+    out.resize({int(w), int(h)});
+    Vec4u8* dst = out.host();
+    const py::ssize_t c = a.shape(2), sy = a.strides(0), sx = a.strides(1), sc = a.strides(2);
+    const auto* base = static_cast<const std::uint8_t*>(a.data());
+    // Read in place whatever the strides (no contiguous copy first): a frame's own RGB view of RGBA
+    // pixels, an RGB or RGBA image, a crop or a transposed array alike.
+    for (py::ssize_t y = 0; y < h; ++y) {
+        const std::uint8_t* row = base + y * sy;
+        Vec4u8* out_row = dst + y * w;
+        if (sc == 1 && sx == 4) {  // 4-byte pixels (RGBA, or RGB viewed through RGBA): whole rows
+            std::memcpy(static_cast<void*>(out_row), row, std::size_t(4 * w));
+            if (c == 3)
+                for (py::ssize_t x = 0; x < w; ++x) out_row[x].w = 255;
+        } else {
+            for (py::ssize_t x = 0; x < w; ++x) {
+                const std::uint8_t* px = row + x * sx;
+                out_row[x] = {px[0], px[sc], px[2 * sc], c == 4 ? px[3 * sc] : std::uint8_t(255)};
+            }
+        }
+    }
+}
+
+void copyLabels(const py::handle& value, Image<ClassId>& out) {
+    const auto a = requireDtype<ClassId>(value, "labels", "uint16 (H, W)");
+    if (a.ndim() != 2) throw py::value_error("labels must be a 2-D (H, W) array of class ids, not of shape " + shapeText(a));
+    out.resize({int(a.shape(1)), int(a.shape(0))});
+    std::copy_n(a.data(), std::size_t(a.size()), out.host());
+}
+
+RenderMode parseRenderMode(const std::string& mode) {
+    if (mode == "shaded") return RenderMode::Shaded;
+    if (mode == "color" || mode == "colour") return RenderMode::Color;
+    if (mode == "normals") return RenderMode::Normals;
+    if (mode == "depth") return RenderMode::Depth;
+    if (mode == "class") return RenderMode::Class;
+    throw ConfigError("render mode: shaded, color, normals, depth or class, not '" + mode + "'");
+}
+
+py::dict stageDict(const std::vector<StageTime>& stages, double total_ms) {
+    py::dict d;
+    for (const StageTime& s : stages) d[s.stage] = s.ms;
+    d["total"] = total_ms;
+    return d;
+}
+
+double median(std::vector<double> v) {
+    if (v.empty()) return std::nan("");
+    const std::size_t mid = v.size() / 2;
+    std::nth_element(v.begin(), v.begin() + long(mid), v.end());
+    const double upper = v[mid];
+    if (v.size() % 2) return upper;
+    return 0.5 * (upper + *std::max_element(v.begin(), v.begin() + long(mid)));
+}
+
+py::dict timings(const Pipeline& p) {
+    py::dict d;
+    for (const auto& [stage, t] : p.stageTimes()) {
+        double sum = 0.0;
+        for (double ms : t.ms) sum += ms;
+        py::dict s;
+        s["median_ms"] = median(t.ms);
+        s["mean_ms"] = t.ms.empty() ? std::nan("") : sum / double(t.ms.size());
+        s["frames"] = t.ms.size();
+        d[stage.c_str()] = s;
+    }
+    return d;
+}
+
+MeshOutput meshOf(Pipeline& p) {
+    auto mesh = std::make_shared<Mesh>();
+    {
+        py::gil_scoped_release no_gil;
+        p.engine().extractMesh(*mesh);
+    }
+    const VoxelType t = p.engine().settings().voxel_type;
+    return {mesh, voxelTypeHasColor(t), voxelTypeHasLabels(t)};
+}
+
+CloudOutput cloudOf(Pipeline& p) {
+    auto cloud = std::make_shared<PointCloud>();
+    {
+        py::gil_scoped_release no_gil;
+        p.engine().extractPointCloud(*cloud);
+    }
+    const VoxelType t = p.engine().settings().voxel_type;
+    return {cloud, voxelTypeHasColor(t), voxelTypeHasLabels(t)};
+}
+
+py::array render(Pipeline& p, const std::string& mode, const py::object& pose, const std::optional<Intrinsics>& intrinsics) {
+    const RenderMode m = parseRenderMode(mode);
+    Image<Vec4u8> image;
+    if (pose.is_none()) {
+        if (intrinsics) throw ConfigError("render: intrinsics need a pose (without one, the last frame's raycast is shown)");
+        py::gil_scoped_release no_gil;
+        p.engine().renderLast(m, image);
+    } else {
+        const Mat4f T = arrayToMatrix(pose, "pose");
+        const Intrinsics k = intrinsics ? *intrinsics : p.calib().depth;
+        if (!k.valid()) throw ConfigError("render: the intrinsics need a positive size and focal lengths");
+        py::gil_scoped_release no_gil;
+        p.engine().renderFromPose(T, k, m, image);
+    }
+    return imageToArray<std::uint8_t>(std::move(image), 3);
+}
+
+py::dict summary(Pipeline& p) {
+    const MainEngineSettings& s = p.engine().settings();
+    py::dict d;
+    d["device"] = deviceName(s.device);
+    if (s.device == Device::CUDA) d["gpu"] = device_memory::cudaDescription();
+    d["voxel"] = toString(s.voxel_type);
+    d["index"] = toString(s.index_type);
+    d["voxel_size_m"] = s.scene.voxel_size_m;
+    d["frames"] = p.framesProcessed();
+    d["frames_fused"] = p.framesFused();
+    d["frames_failed"] = p.framesFailed();
+    d["frames_poor"] = p.framesPoor();
+    const auto total = p.stageTimes().find("total");
+    const double total_median = total == p.stageTimes().end() ? std::nan("") : median(total->second.ms);
+    d["median_frame_ms"] = total_median;
+    d["frames_per_s"] = 1000.0 / total_median;
+    d["stages"] = timings(p);
+    d["scene_mb"] = double(p.engine().sceneBytes()) / (1024.0 * 1024.0);
+    const AllocationStats a = p.engine().allocationStats();
+    d["blocks_in_use"] = a.blocks_allocated;
+    d["blocks_stored"] = a.blocks_stored;
+    d["allocation_failures"] = a.allocation_failures_total;
+    return d;
+}
+
+}  // namespace
+
+void bindPipeline(py::module_& m) {
+    py::class_<PipelineSettings> settings(m, "Settings",
+                                          "Pipeline settings, with the names (underscores for dashes) and defaults of `voxfuse --help`.\n"
+                                          "Settings(voxel_size=0.01, tracker='rgbd'); any of them can also be given to Pipeline(...).");
+    settings.def(py::init([](const py::kwargs& kwargs) { return withOverrides(PipelineSettings{}, kwargs); }))
+        .def_readwrite("voxel", &PipelineSettings::voxel, "s | f | s_rgb | f_rgb | s_label | s_rgb_label (SDF int16 or float, colour, classes)")
+        .def_readwrite("index", &PipelineSettings::index, "hash (voxel block hash, grows with the scene) | dense (one box of voxels)")
+        .def_readwrite("device", &PipelineSettings::device, "cpu | cuda")
+        .def_readwrite("voxel_size", &PipelineSettings::voxel_size, "voxel edge (m)")
+        .def_readwrite("mu", &PipelineSettings::mu, "truncation band (m)")
+        .def_readwrite("max_weight", &PipelineSettings::max_weight, "cap on the per-voxel weight")
+        .def_readwrite("min_depth", &PipelineSettings::min_depth, "depth below this (m) is ignored")
+        .def_readwrite("max_depth", &PipelineSettings::max_depth, "depth beyond this (m) is ignored")
+        .def_readwrite("max_blocks", &PipelineSettings::max_blocks, "hash: most 8^3 voxel blocks (memory grows on demand up to this)")
+        .def_readwrite("hash_buckets", &PipelineSettings::hash_buckets, "hash: ordered buckets")
+        .def_readwrite("hash_excess", &PipelineSettings::hash_excess, "hash: entries of the excess list")
+        .def_readwrite("volume_size", &PipelineSettings::volume_size, "dense: the box's size in voxels [x, y, z]")
+        .def_readwrite("volume_offset", &PipelineSettings::volume_offset, "dense: the box's first voxel [x, y, z] (grid units)")
+        .def_readwrite("tracker", &PipelineSettings::tracker, "icp | color | ren | rgbd ('' = ren, ICP then a robust refinement)")
+        .def_readwrite("tracker_config", &PipelineSettings::tracker_config, "a tracker settings file ('key = value' lines)")
+        .def_readwrite("tracker_levels", &PipelineSettings::tracker_levels, "pyramid levels coarse to fine: r rotation, t translation, b both")
+        .def_readwrite("tracker_iterations", &PipelineSettings::tracker_iterations, "iterations per level, coarse to fine")
+        .def_readwrite("tracker_max_distance", &PipelineSettings::tracker_max_distance, "ICP outlier distance per level (m), coarse to fine")
+        .def_readwrite("label_update", &PipelineSettings::label_update, "probabilistic | vote (class update on disagreement)")
+        .def_readwrite("swap", &PipelineSettings::swap, "swapping: only the map near the view stays in the voxel array")
+        .def_readwrite("active_blocks", &PipelineSettings::active_blocks, "swapping: blocks the active voxel array holds at most (> 0 implies swap)")
+        .def_readwrite("swap_file", &PipelineSettings::swap_file, "swapping: keep the swapped-out map in this file (implies swap)")
+        .def_readwrite("swap_blocks_per_frame", &PipelineSettings::swap_blocks_per_frame, "swapping: blocks moved each way per frame at most")
+        .def("to_dict", [](const PipelineSettings& s) {
+            py::dict d;
+            py::object obj = py::cast(s);
+            for (const char* name : {"voxel", "index", "device", "voxel_size", "mu", "max_weight", "min_depth", "max_depth", "max_blocks",
+                                     "hash_buckets", "hash_excess", "volume_size", "volume_offset", "tracker", "tracker_config", "tracker_levels",
+                                     "tracker_iterations", "tracker_max_distance", "label_update", "swap", "active_blocks", "swap_file",
+                                     "swap_blocks_per_frame"})
+                d[name] = obj.attr(name);
+            return d;
+        }, "Every setting by name.")
+        .def("__repr__", [](const py::object& self) { return "voxfuse.Settings(**" + std::string(py::repr(self.attr("to_dict")())) + ")"; });
+
+    py::class_<FrameOutcome>(m, "FrameResult", "What Pipeline.process did with one frame.")
+        .def_property_readonly("pose", [](const FrameOutcome& o) { return matrixToArray(o.result.T_world_camera); },
+                               "Camera-to-world pose (4, 4); after a failure, the last good pose.")
+        .def_property_readonly("quality", [](const FrameOutcome& o) { return toString(o.result.quality); }, "'good', 'poor' or 'failed'.")
+        .def_property_readonly("fused", [](const FrameOutcome& o) { return o.result.fused; },
+                               "Whether the frame went into the map (a failed frame does not).")
+        .def_property_readonly("inlier_ratio", [](const FrameOutcome& o) { return o.result.tracking.inlier_ratio; })
+        .def_property_readonly("residual", [](const FrameOutcome& o) { return o.result.tracking.residual_m; },
+                               "RMS point-to-plane residual of the inliers (m; colour tracker: intensity).")
+        .def_property_readonly("condition", [](const FrameOutcome& o) { return o.result.tracking.condition; },
+                               "Smallest/largest eigenvalue of the scaled normal matrix (near 0: a motion is unconstrained).")
+        .def_property_readonly("timings", [](const FrameOutcome& o) { return stageDict(o.result.stages, o.result.total_ms); },
+                               "Milliseconds per stage of this frame, and 'total'.")
+        .def_readonly("index", &FrameOutcome::index)
+        .def_readonly("timestamp", &FrameOutcome::timestamp_s)
+        .def("__repr__", [](const FrameOutcome& o) {
+            return "<voxfuse.FrameResult " + std::to_string(o.index) + ": " + toString(o.result.quality) + (o.result.fused ? ", fused" : "") + ">";
+        });
+
+    py::class_<Pipeline>(m, "Pipeline",
+                         "The reconstruction loop: each frame is tracked against the model (or placed at a given pose), fused\n"
+                         "into the TSDF map and the model is raycast from the new pose.\n\n"
+                         "    pipeline = voxfuse.Pipeline(source.calib, voxel_size=0.01)\n"
+                         "    for frame in source:\n"
+                         "        result = pipeline.process(frame.depth, frame.rgb)\n"
+                         "    pipeline.extract_mesh().save('mesh.ply')\n\n"
+                         "Settings are voxfuse.Settings names (those of `voxfuse --help`), given as a Settings or as keywords.")
+        .def(py::init([](const RGBDCalib& calib, const std::optional<PipelineSettings>& s, const py::kwargs& kwargs) {
+                 const PipelineSettings settings = withOverrides(s ? *s : PipelineSettings{}, kwargs);
+                 py::gil_scoped_release no_gil;
+                 return std::make_unique<Pipeline>(calib, settings);
+             }),
+             py::arg("calib"), py::arg("settings") = py::none())
+        .def_static(
+            "from_map",
+            [](const std::string& path, const std::optional<RGBDCalib>& calib, const std::optional<PipelineSettings>& s, const py::kwargs& kwargs) {
+                for (const char* fixed : {"voxel", "index", "voxel_size", "mu", "max_blocks", "hash_buckets", "hash_excess", "volume_size", "volume_offset"})
+                    if (kwargs.contains(fixed))
+                        throw ConfigError(path + ": the map decides '" + fixed + "'; leave it out (or create a Pipeline and load_map)");
+                const MapFileInfo info = readMapFileInfo(path);
+                PipelineSettings settings = withOverrides(s ? *s : PipelineSettings{}, kwargs);
+                settings.adopt(info);
+                RGBDCalib c;
+                if (calib) c = *calib;
+                else {
+                    if (!info.camera.valid()) throw ConfigError(path + ": the map has no camera; give a calib");
+                    c.depth = c.rgb = info.camera;
+                }
+                py::gil_scoped_release no_gil;
+                auto p = std::make_unique<Pipeline>(c, settings);
+                p->engine().loadMap(path);
+                return p;
+            },
+            py::arg("path"), py::arg("calib") = py::none(), py::arg("settings") = py::none(),
+            "A pipeline continuing the map in a .vfm file (its voxel type, index, voxel size and mu; tracking resumes\n"
+            "from the pose it was saved at). Without calib: the camera the map was saved with, and raw depth in\n"
+            "millimetres (depth given in metres is exact either way); give the source's calib to fuse its raw frames.")
+        .def(
+            "process",
+            [](Pipeline& p, const py::handle& depth, const py::object& rgb, const py::object& labels, const py::object& pose,
+               const py::object& timestamp) {
+                RGBDFrame& f = p.frameBuffer();
+                copyDepth(depth, p.calib(), f.depth_raw);
+                if (rgb.is_none()) f.rgb = Image<Vec4u8>();
+                else copyRgb(rgb, p.calib(), f.rgb);
+                if (labels.is_none()) f.labels = Image<ClassId>();
+                else copyLabels(labels, f.labels);
+                std::optional<Mat4f> given;
+                if (!pose.is_none()) given = arrayToMatrix(pose, "pose");
+                f.index = p.framesProcessed();
+                f.timestamp_s = timestamp.is_none() ? double(f.index) / 30.0 : timestamp.cast<double>();
+                f.has_ground_truth = false;
+                f.depth_path = "frame " + std::to_string(f.index) + " given to Pipeline.process";
+                f.labels_path = f.depth_path;
+                FrameOutcome o;
+                o.index = f.index;
+                o.timestamp_s = f.timestamp_s;
+                py::gil_scoped_release no_gil;
+                o.result = p.process(f, given ? &*given : nullptr);
+                return o;
+            },
+            py::arg("depth"), py::arg("rgb") = py::none(), py::arg("labels") = py::none(), py::kw_only(), py::arg("pose") = py::none(),
+            py::arg("timestamp") = py::none(),
+            "Processes one frame. depth: uint16 (H, W) raw (metres = raw * calib.depth_scale) or float32/float64 metres;\n"
+            "rgb: uint8 (H, W, 3) or (H, W, 4) of the colour camera; labels: uint16 (H, W) class ids (65535: none).\n"
+            "pose: a camera-to-world 4x4 to fuse at (e.g. ground truth) instead of tracking. timestamp: seconds\n"
+            "(default: frame number / 30). Returns a FrameResult; a frame whose tracking failed is not fused.")
+        .def(
+            "process_frame",
+            [](Pipeline& p, const std::shared_ptr<RGBDFrame>& frame, const py::object& pose, bool ground_truth) {
+                std::optional<Mat4f> given;
+                if (!pose.is_none() && ground_truth) throw ConfigError("process_frame: give a pose or ground_truth=True, not both");
+                if (!pose.is_none()) given = arrayToMatrix(pose, "pose");
+                if (ground_truth) given = p.groundTruthPose(*frame);
+                FrameOutcome o;
+                o.index = frame->index;
+                o.timestamp_s = frame->timestamp_s;
+                py::gil_scoped_release no_gil;
+                o.result = p.process(*frame, given ? &*given : nullptr);
+                return o;
+            },
+            py::arg("frame"), py::kw_only(), py::arg("pose") = py::none(), py::arg("ground_truth") = false,
+            "Processes a Frame from a Source as it is (no copy of its images), with its labels when it has any.\n"
+            "pose: a camera-to-world 4x4 to fuse at instead of tracking; ground_truth=True: the frame's ground-truth\n"
+            "pose, relative to the first frame's as `voxfuse --poses groundtruth` does.")
+        .def("render", &render, py::arg("mode") = "shaded", py::kw_only(), py::arg("pose") = py::none(), py::arg("intrinsics") = py::none(),
+             "The model as an image, uint8 (H, W, 3) RGB (a view of RGBA pixels). mode: shaded, color, normals, depth or\n"
+             "class. Without pose: the raycast of the last frame; with a camera-to-world pose (and intrinsics, default\n"
+             "the depth camera's): a new raycast from there.")
+        .def("extract_mesh", &meshOf, "The map's surface by marching cubes, as a voxfuse.Mesh.")
+        .def("extract_point_cloud", &cloudOf, "The map's surface points, as a voxfuse.PointCloud.")
+        .def("save_map", [](Pipeline& p, const std::string& path) {
+                 py::gil_scoped_release no_gil;
+                 p.engine().saveMap(path);
+             }, py::arg("path"), "Writes the map and the current pose to a .vfm file (written to a temporary file, then renamed).")
+        .def("load_map", [](Pipeline& p, const std::string& path) {
+                 py::gil_scoped_release no_gil;
+                 p.engine().loadMap(path);
+             }, py::arg("path"), "Replaces the map with a .vfm file's (which must match the settings; see Pipeline.from_map).")
+        .def("reset", &Pipeline::reset, "Clears the map, the pose, the trajectory and the timings.")
+        .def_property_readonly("pose", [](Pipeline& p) { return matrixToArray(p.engine().trackingState().T_world_camera); },
+                               "The current camera-to-world pose (4, 4).")
+        .def_property_readonly("trajectory", [](const Pipeline& p) { return timedPosesToArrays(p.trajectory()); },
+                               "(timestamps (N,), camera-to-world poses (N, 4, 4)) of every processed frame.")
+        .def_property_readonly("settings", [](const Pipeline& p) { return p.settings(); })
+        .def_property_readonly("calib", [](const Pipeline& p) { return p.calib(); })
+        .def_property_readonly("frames_processed", &Pipeline::framesProcessed)
+        .def("timings", &timings, "Per stage: median and mean milliseconds over the frames so far, and the frame count.")
+        .def("summary", &summary, "The run so far as a dict: device, voxel and index, frames (fused, failed), timings, memory, blocks.")
+        .def("__repr__", [](Pipeline& p) {
+            const MainEngineSettings& s = p.engine().settings();
+            return std::string("<voxfuse.Pipeline ") + toString(s.voxel_type) + " " + toString(s.index_type) + " on " + deviceName(s.device) + ", " +
+                   std::to_string(p.framesProcessed()) + " frames>";
+        });
+}
+
+}  // namespace voxfuse::python

@@ -1,0 +1,108 @@
+// Trajectory error (ATE, RPE) against ground truth, and the array helpers the other bindings share.
+
+#include <pybind11/stl.h>
+
+#include <cmath>
+#include <vector>
+
+#include "Bindings.h"
+#include "NumpyArrays.h"
+#include "voxfuse/eval/TrajectoryError.h"
+#include "voxfuse/io/TrajectoryIO.h"
+
+namespace voxfuse::python {
+
+std::string shapeText(const py::array& a) {
+    std::string s = "(";
+    for (py::ssize_t i = 0; i < a.ndim(); ++i) s += (i ? ", " : "") + std::to_string(a.shape(i));
+    return s + (a.ndim() == 1 ? ",)" : ")");
+}
+
+Mat4f arrayToMatrix(const py::handle& value, const char* what) {
+    py::array_t<double, py::array::c_style | py::array::forcecast> a;
+    try {
+        a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(value);
+    } catch (const py::error_already_set&) {
+        a = {};
+    }
+    if (!a || a.ndim() != 2 || a.shape(0) != 4 || a.shape(1) != 4)
+        throw py::value_error(std::string(what) + " must be a 4x4 matrix" + (a ? ", not of shape " + shapeText(a) : std::string()));
+    Mat4f T;
+    const auto m = a.unchecked<2>();
+    for (int r = 0; r < 4; ++r)
+        for (int c = 0; c < 4; ++c) {
+            if (!std::isfinite(m(r, c))) throw py::value_error(std::string(what) + " has a value that is not finite");
+            T(r, c) = float(m(r, c));
+        }
+    if (T(3, 0) != 0.f || T(3, 1) != 0.f || T(3, 2) != 0.f || T(3, 3) != 1.f)
+        throw py::value_error(std::string(what) + " must be a rigid transform (last row 0 0 0 1)");
+    return T;
+}
+
+// (timestamps (N,), poses (N, 4, 4)) as the library's timed poses.
+std::vector<TimedPose> timedPoses(const py::handle& timestamps, const py::handle& poses, const char* what) {
+    auto t = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(timestamps);
+    auto p = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(poses);
+    if (!t || t.ndim() != 1) throw py::value_error(std::string(what) + ": timestamps must be a 1-D array");
+    if (!p || p.ndim() != 3 || p.shape(1) != 4 || p.shape(2) != 4 || p.shape(0) != t.shape(0))
+        throw py::value_error(std::string(what) + ": poses must be an (N, 4, 4) array with one pose per timestamp");
+    std::vector<TimedPose> out(std::size_t(t.shape(0)));
+    const auto ta = t.unchecked<1>();
+    const auto pa = p.unchecked<3>();
+    for (py::ssize_t i = 0; i < t.shape(0); ++i) {
+        out[i].timestamp_s = ta(i);
+        for (int r = 0; r < 4; ++r)
+            for (int c = 0; c < 4; ++c) out[i].T_world_camera(r, c) = float(pa(i, r, c));
+    }
+    return out;
+}
+
+py::tuple timedPosesToArrays(const std::vector<TimedPose>& poses) {
+    py::array_t<double> t(std::vector<py::ssize_t>{py::ssize_t(poses.size())});
+    py::array_t<double> p({py::ssize_t(poses.size()), py::ssize_t(4), py::ssize_t(4)});
+    auto ta = t.mutable_unchecked<1>();
+    auto pa = p.mutable_unchecked<3>();
+    for (std::size_t i = 0; i < poses.size(); ++i) {
+        ta(py::ssize_t(i)) = poses[i].timestamp_s;
+        for (int r = 0; r < 4; ++r)
+            for (int c = 0; c < 4; ++c) pa(py::ssize_t(i), r, c) = double(poses[i].T_world_camera(r, c));
+    }
+    return py::make_tuple(t, p);
+}
+
+void bindTrajectory(py::module_& m) {
+    m.def(
+        "evaluate_trajectory",
+        [](const py::handle& timestamps, const py::handle& poses, const py::handle& gt_timestamps, const py::handle& gt_poses,
+           double max_time_difference) {
+            TrajectoryErrorOptions o;
+            o.max_time_difference_s = max_time_difference;
+            const TrajectoryError e = evaluateTrajectory(timedPoses(timestamps, poses, "estimate"),
+                                                         timedPoses(gt_timestamps, gt_poses, "ground truth"), o);
+            py::dict d;
+            d["pairs"] = e.pairs;
+            d["ate_rmse_m"] = e.ate_rmse_m;
+            d["ate_mean_m"] = e.ate_mean_m;
+            d["ate_median_m"] = e.ate_median_m;
+            d["ate_max_m"] = e.ate_max_m;
+            d["rpe_pairs"] = e.rpe_pairs;
+            d["rpe_trans_m_per_s"] = e.rpe_trans_m_per_s;
+            d["rpe_rot_deg_per_s"] = e.rpe_rot_deg_per_s;
+            d["T_truth_estimate"] = matrixToArray(e.T_truth_estimate);
+            return d;
+        },
+        py::arg("timestamps"), py::arg("poses"), py::arg("gt_timestamps"), py::arg("gt_poses"), py::arg("max_time_difference") = 0.02,
+        "ATE and RPE of camera-to-world poses (N, 4, 4) against ground truth, after a rigid alignment (TUM's\n"
+        "evaluate_ate / evaluate_rpe); poses pair by nearest timestamp within max_time_difference seconds.");
+    m.def(
+        "read_tum_trajectory", [](const std::string& path) { return timedPosesToArrays(readTumTrajectory(path)); }, py::arg("path"),
+        "Reads a TUM trajectory file ('timestamp tx ty tz qx qy qz qw'): (timestamps (N,), poses (N, 4, 4)).");
+    m.def(
+        "write_tum_trajectory",
+        [](const std::string& path, const py::handle& timestamps, const py::handle& poses) {
+            writeTumTrajectory(path, timedPoses(timestamps, poses, "trajectory"));
+        },
+        py::arg("path"), py::arg("timestamps"), py::arg("poses"), "Writes a TUM trajectory file.");
+}
+
+}  // namespace voxfuse::python
