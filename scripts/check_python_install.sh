@@ -17,5 +17,5 @@ CMAKE_BUILD_PARALLEL_LEVEL=${CMAKE_BUILD_PARALLEL_LEVEL:-2} pip install --quiet 
 echo "check_python_install: pip install . took $(( $(date +%s) - start )) s"
 python -c "import numpy, pytest" 2>/dev/null || pip install --quiet --disable-pip-version-check numpy pytest
 cd "$work"  # away from the checkout: the installed package is the one imported
-python -c "import voxfuse, sys; print('check_python_install: voxfuse from', voxfuse.__file__)"
+python -c "import voxfuse; print('check_python_install: voxfuse from', voxfuse.__file__, '(CUDA', 'built)' if voxfuse.built_with_cuda() else 'not built)')"
 python -m pytest -q -p no:cacheprovider "$repo/python/tests"

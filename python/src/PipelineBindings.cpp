@@ -53,27 +53,30 @@ void checkShape(const py::array& a, const char* what, py::ssize_t h, py::ssize_t
                               ") for this calibration, not " + shapeText(a));
 }
 
-void copyDepth(const py::handle& value, const RGBDCalib& calib, Image<std::uint16_t>& out) {
+// `raw_scale` > 0: uint16 depth in units of that many metres (converted to the calibration's units).
+void copyDepth(const py::handle& value, const RGBDCalib& calib, float raw_scale, Image<std::uint16_t>& out) {
     if (!py::isinstance<py::array>(value)) throw py::type_error("depth must be a numpy array (uint16 raw, or float32/float64 metres)");
     const py::array a = py::reinterpret_borrow<py::array>(value);
     const py::ssize_t h = calib.depth.height, w = calib.depth.width;
     checkShape(a, "depth", h, w, "", a.ndim() == 2);
     out.resize({int(w), int(h)});
     std::uint16_t* dst = out.host();
-    if (py::isinstance<py::array_t<std::uint16_t>>(a)) {
+    const bool is_raw = py::isinstance<py::array_t<std::uint16_t>>(a);
+    if (!is_raw && raw_scale > 0.f) throw py::type_error("depth_scale applies to uint16 depth; float depth is in metres already");
+    if (is_raw && raw_scale <= 0.f) {
         const auto raw = py::array_t<std::uint16_t, py::array::c_style>::ensure(a);
         std::copy_n(raw.data(), std::size_t(h * w), dst);
         return;
     }
-    if (!py::isinstance<py::array_t<float>>(a) && !py::isinstance<py::array_t<double>>(a))
+    if (!is_raw && !py::isinstance<py::array_t<float>>(a) && !py::isinstance<py::array_t<double>>(a))
         throw py::type_error("depth must be uint16 (raw) or float32/float64 (metres), not " + std::string(py::str(a.dtype())));
     // Metres become raw units of the calibration's scale (0.2 mm for TUM's, 1 mm by default); what the
     // raw range cannot hold, NaN and non-positive values are "no measurement".
-    const float scale = metresPerRawUnit(calib);
-    const auto metres = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(a);
-    const double* src = metres.data();
+    const double to_calib_units = (is_raw ? double(raw_scale) : 1.0) / double(metresPerRawUnit(calib));
+    const auto values = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(a);
+    const double* src = values.data();
     for (py::ssize_t i = 0; i < h * w; ++i) {
-        const double raw = std::round(src[i] / double(scale));
+        const double raw = std::round(src[i] * to_calib_units);
         dst[i] = raw >= 1.0 && raw <= 65535.0 ? std::uint16_t(raw) : 0;  // NaN fails both tests
     }
 }
@@ -315,10 +318,15 @@ void bindPipeline(py::module_& m) {
             "millimetres (depth given in metres is exact either way); give the source's calib to fuse its raw frames.")
         .def(
             "process",
-            [](Pipeline& p, const py::handle& depth, const py::object& rgb, const py::object& labels, const py::object& pose,
-               const py::object& timestamp) {
+            [](Pipeline& p, const py::handle& depth, const py::object& rgb, const py::object& labels, const py::object& depth_scale,
+               const py::object& pose, const py::object& timestamp) {
+                float raw_scale = 0.f;
+                if (!depth_scale.is_none()) {
+                    raw_scale = depth_scale.cast<float>();
+                    if (!(raw_scale > 0.f) || !std::isfinite(raw_scale)) throw py::value_error("depth_scale must be a positive number of metres");
+                }
                 RGBDFrame& f = p.frameBuffer();
-                copyDepth(depth, p.calib(), f.depth_raw);
+                copyDepth(depth, p.calib(), raw_scale, f.depth_raw);
                 if (rgb.is_none()) f.rgb = Image<Vec4u8>();
                 else copyRgb(rgb, p.calib(), f.rgb);
                 if (labels.is_none()) f.labels = Image<ClassId>();
@@ -337,9 +345,10 @@ void bindPipeline(py::module_& m) {
                 o.result = p.process(f, given ? &*given : nullptr);
                 return o;
             },
-            py::arg("depth"), py::arg("rgb") = py::none(), py::arg("labels") = py::none(), py::kw_only(), py::arg("pose") = py::none(),
-            py::arg("timestamp") = py::none(),
-            "Processes one frame. depth: uint16 (H, W) raw (metres = raw * calib.depth_scale) or float32/float64 metres;\n"
+            py::arg("depth"), py::arg("rgb") = py::none(), py::arg("labels") = py::none(), py::kw_only(), py::arg("depth_scale") = py::none(),
+            py::arg("pose") = py::none(), py::arg("timestamp") = py::none(),
+            "Processes one frame. depth: uint16 (H, W) raw (metres = raw * depth_scale, by default calib.depth_scale)\n"
+            "or float32/float64 metres;\n"
             "rgb: uint8 (H, W, 3) or (H, W, 4) of the colour camera; labels: uint16 (H, W) class ids (65535: none).\n"
             "pose: a camera-to-world 4x4 to fuse at (e.g. ground truth) instead of tracking. timestamp: seconds\n"
             "(default: frame number / 30). Returns a FrameResult; a frame whose tracking failed is not fused.")

@@ -57,10 +57,10 @@ def test_mesh_and_cloud_arrays_are_consistent_and_owned(room_frames):
     assert np.isfinite(v).all() and t.max() < len(v)  # still valid: the arrays own their mesh
 
 
-def _run(calib, frames, to_depth, to_rgb):
+def _run(calib, frames, to_depth, to_rgb, depth_scale=None, depth_of=None):
     p = voxfuse.Pipeline(calib, voxel_size=0.01)
     for f in frames:
-        p.process(to_depth(f), to_rgb(f), pose=f.ground_truth_pose)
+        p.process((depth_of or to_depth)(f), to_rgb(f), depth_scale=depth_scale, pose=f.ground_truth_pose)
     return p.extract_mesh()
 
 
@@ -73,6 +73,10 @@ def test_depth_in_metres_and_rgba_give_the_same_map_as_raw_and_rgb(room_frames):
     np.testing.assert_array_equal(reference.faces, metres.faces)
     np.testing.assert_array_equal(reference.vertices, metres.vertices)
     np.testing.assert_array_equal(reference.colors, metres.colors)
+    # Raw depth in other units (millimetres here) with its scale: the same map.
+    millimetres = _run(calib, frames[:3], lambda f: None, lambda f: f.rgb, depth_scale=0.001,
+                       depth_of=lambda f: np.round(f.depth.astype(np.float64) * scale * 1000).astype(np.uint16))
+    assert abs(len(millimetres.faces) - len(reference.faces)) < 0.02 * len(reference.faces)
 
 
 def test_strided_inputs_are_read_as_their_values(room_frames):

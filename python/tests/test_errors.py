@@ -26,6 +26,8 @@ def test_wrong_dtypes_are_type_errors(pipeline, room_frames):
         pipeline.process(f.depth, f.rgb.astype(np.float32))
     with pytest.raises(TypeError, match="labels must be uint16"):
         pipeline.process(f.depth, labels=f.labels.astype(np.int64))
+    with pytest.raises(TypeError, match="depth_scale applies to uint16 depth"):
+        pipeline.process(f.depth.astype(np.float32), depth_scale=0.001)
     assert pipeline.frames_processed == 0, "a rejected frame is not processed"
 
 
