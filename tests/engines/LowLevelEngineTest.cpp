@@ -71,7 +71,56 @@ TEST(LowLevelEngineTest, VertexAndNormalMapsOfATiltedPlane) {
     const Vec4f n = normals.at(100, 50);
     ASSERT_EQ(n.w, 1.f);
     EXPECT_NEAR(dot(n.xyz(), expected), 1.f, 1e-4f);
-    EXPECT_EQ(normals.at(0, 0).w, 0.f) << "border pixels have no normal";
+    // Border pixels take one-sided differences: on a plane, the same normal.
+    ASSERT_EQ(normals.at(0, 0).w, 1.f);
+    EXPECT_NEAR(dot(normals.at(0, 0).xyz(), expected), 1.f, 1e-4f);
+}
+
+// Depth registered to another camera has empty rows and columns (here every 4th of each); the valid
+// pixels beside them keep their normals (one-sided or across the gap), as on the full plane.
+TEST(LowLevelEngineTest, HoleLinesDoNotTakeTheNormalsOfTheirNeighbours) {
+    auto engine = makeLowLevelEngine(Device::CPU);
+    const Intrinsics intr = test::kinectIntrinsics(160, 120);
+    Image<float> depth(intr.size());
+    for (int y = 0; y < intr.height; ++y)
+        for (int x = 0; x < intr.width; ++x)
+            depth.at(x, y) = (x % 4 == 3 || y % 4 == 3) ? 0.f : 1.f / (1.f - 0.5f * (float(x) - intr.cx) / intr.fx);
+    Image<Vec4f> vertices, normals;
+    engine->computeVertexMap(depth, intr, vertices);
+    engine->computeNormalMap(vertices, normals, 0.1f);
+    const Vec3f expected = normalize(Vec3f{0.5f, 0.f, -1.f});
+    int valid = 0, with_normal = 0, right = 0;
+    for (int y = 0; y < intr.height; ++y)
+        for (int x = 0; x < intr.width; ++x) {
+            const Vec4f n = normals.at(x, y);
+            if (depth.at(x, y) <= 0.f) {
+                EXPECT_EQ(n.w, 0.f) << "a pixel without depth has no normal";
+                continue;
+            }
+            ++valid;
+            with_normal += n.w > 0.f;
+            right += n.w > 0.f && dot(n.xyz(), expected) > 1.f - 1e-4f;
+        }
+    EXPECT_EQ(with_normal, valid);
+    EXPECT_EQ(right, valid);
+}
+
+// A depth edge is not bridged: pixels beside a step of more than the edge threshold get the normal of
+// their own side.
+TEST(LowLevelEngineTest, NormalsDoNotReachAcrossDepthEdges) {
+    auto engine = makeLowLevelEngine(Device::CPU);
+    const Intrinsics intr = test::kinectIntrinsics(160, 120);
+    Image<float> depth(intr.size());
+    for (int y = 0; y < intr.height; ++y)
+        for (int x = 0; x < intr.width; ++x) depth.at(x, y) = x < 80 ? 1.f : 2.f;  // two fronto-parallel planes
+    Image<Vec4f> vertices, normals;
+    engine->computeVertexMap(depth, intr, vertices);
+    engine->computeNormalMap(vertices, normals, 0.1f);
+    for (int x : {78, 79, 80, 81}) {
+        const Vec4f n = normals.at(x, 60);
+        ASSERT_EQ(n.w, 1.f) << "x " << x;
+        EXPECT_NEAR(n.z, -1.f, 1e-4f) << "x " << x << ": the normal of its own plane";
+    }
 }
 
 }  // namespace

@@ -108,7 +108,18 @@ TEST_P(RaycastSphereTest, HitsOnAFusedSphereLieWithinHalfAVoxel) {
     const RenderState rs = raycast(pose);
     const SphereHitStats s = sphereHitStats(rs, intr_, pose, 0.5f);
     EXPECT_GT(s.hits, 0.95 * s.expected_hits);
-    EXPECT_LT(s.hits, 1.05 * s.expected_hits);
+    // Unobserved voxels take the interpolation of their observed neighbours (shared/VoxelAccess.h), so
+    // the silhouette of a surface fused from few views may reach up to a voxel further (measured: 5.4%
+    // more pixels hit, against 1.8% when unobserved voxels counted as free space). No hit may be a
+    // phantom: every one, grazing ones included, lies within a voxel and a half of the sphere.
+    EXPECT_LT(s.hits, 1.07 * s.expected_hits);
+    const SphereHitStats all = sphereHitStats(rs, intr_, pose, 0.f);
+    int within_a_voxel = 0;
+    for (float e : all.errors_m) {
+        within_a_voxel += e < params_.voxel_size_m;
+        ASSERT_LT(e, 1.5f * params_.voxel_size_m) << "a hit off the sphere";
+    }
+    EXPECT_GT(within_a_voxel, 0.995 * all.errors_m.size());
     ASSERT_GT(s.errors_m.size(), 1000u);
     int within = 0;
     for (float e : s.errors_m) within += e < 0.5f * params_.voxel_size_m;

@@ -3,6 +3,7 @@
 // copy arrives in the frame that needs it, and tracks alike; no frame moves more blocks than its
 // bound; maps larger than the active array save, load and mesh. On each device.
 
+#include <unistd.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -29,9 +30,16 @@ namespace {
 
 using Key = std::tuple<int, int, int>;
 
+std::string orbitMapPath(Device device);
+
 class SwappingEngineTest : public ::testing::TestWithParam<Device> {
 protected:
     void SetUp() override { VF_SKIP_IF_UNAVAILABLE(device()); }
+    void TearDown() override {
+        std::error_code ec;
+        fs::remove(orbitMapPath(device()), ec);
+        fs::remove(orbitMapPath(device()) + ".again", ec);
+    }
     Device device() const { return GetParam(); }
 };
 
@@ -139,6 +147,12 @@ std::vector<char> mapBody(const std::string& path) {
     return std::vector<char>(bytes.begin() + 16 + std::ptrdiff_t(header), bytes.end());
 }
 
+// Per process: ctest runs the cases of this suite in parallel processes, which must not share files.
+std::string tempFile(const std::string& name) {
+    return (fs::temp_directory_path() / ("voxfuse_" + std::to_string(::getpid()) + "_" + name)).string();
+}
+std::string orbitMapPath(Device device) { return tempFile("swap_" + std::string(deviceName(device)) + ".vfm"); }
+
 RunResult runOrbit(Device device, bool tracked, const SwapSettings& swap, int active_blocks, int frames = 40) {
     MainEngineSettings s;
     s.device = device;
@@ -159,7 +173,7 @@ RunResult runOrbit(Device device, bool tracked, const SwapSettings& swap, int ac
         r.poses.push_back(f.T_world_camera);
         r.stats.push_back(f.allocation);
     }
-    const std::string path = (fs::temp_directory_path() / ("voxfuse_swap_" + std::string(deviceName(device)) + ".vfm")).string();
+    const std::string path = orbitMapPath(device);
     engine->saveMap(path);
     r.map_body = mapBody(path);
     Mesh mesh;
@@ -198,7 +212,7 @@ TEST_P(SwappingEngineTest, AnActiveArraySmallerThanTheMapFusesTheSameMapWhenNoth
     EXPECT_TRUE(plain.map_body == swapped.map_body) << "the same voxels, bit for bit";
     EXPECT_EQ(plain.mesh_triangles, swapped.mesh_triangles);
 
-    swap.swap_file = (fs::temp_directory_path() / "voxfuse_swap_test.bin").string();
+    swap.swap_file = tempFile("swap_test.bin");
     const RunResult on_disk = runOrbit(device(), false, swap, active);
     EXPECT_TRUE(plain.map_body == on_disk.map_body) << "a swap file holds the same";
 }
@@ -237,7 +251,7 @@ TEST_P(SwappingEngineTest, TrackedRunsFollowTheRunWithoutSwapping) {
 
 TEST_P(SwappingEngineTest, AMapLargerThanTheActiveArrayLoadsAndMeshes) {
     const RunResult plain = runOrbit(device(), false, SwapSettings(), 0, 24);
-    const std::string path = (fs::temp_directory_path() / ("voxfuse_swap_" + std::string(deviceName(device())) + ".vfm")).string();
+    const std::string path = orbitMapPath(device());
     const MapFileInfo info = readMapFileInfo(path);
     MainEngineSettings s = settingsForMap(info, MainEngineSettings());
     s.device = device();

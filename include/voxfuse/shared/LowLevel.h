@@ -62,18 +62,44 @@ VF_HOST_DEVICE inline Vec4f vertexFromDepthPixel(const float* depth, const Intri
     return {p.x, p.y, p.z, 1.f};
 }
 
-// Normal from central differences of the vertex map, oriented towards the camera; w = 0 when a
-// neighbour is missing or the neighbours straddle a depth edge.
+// One side of a normal's difference: the nearest valid vertex within 2 pixels along (sx, sy). Missing
+// samples (holes: dropouts, the empty rows and columns of depth registered to another camera) are
+// stepped over; a sample more than `max_step_m` per pixel away from the centre is a depth edge, and then
+// the side has no neighbour (the edge is not bridged by looking further). Returns the pixel distance
+// (1 or 2), or 0 when the side has no usable neighbour.
+VF_HOST_DEVICE inline int normalNeighbour(const Vec4f* vertices, Vec2i size, int x, int y, int sx, int sy, Vec3f centre,
+                                          float max_step_m, Vec3f& out) {
+    for (int k = 1; k <= 2; ++k) {
+        const int xx = x + k * sx, yy = y + k * sy;
+        if (xx < 0 || yy < 0 || xx >= size.x || yy >= size.y) return 0;
+        const Vec4f p = vertices[xx + yy * size.x];
+        if (p.w <= 0.f) continue;  // a hole: look one pixel further
+        if (length(p.xyz() - centre) > max_step_m * float(k)) return 0;  // a depth edge
+        out = p.xyz();
+        return k;
+    }
+    return 0;
+}
+
+// Normal of a valid vertex from differences of the vertex map, oriented towards the camera; w = 0 when
+// the vertex is invalid, or an axis has no usable neighbour on either side. Per axis: the central
+// difference when both sides have a neighbour within 2 pixels, else the one-sided difference, so that
+// isolated missing pixels and one-pixel hole lines do not take the normals of their neighbours with
+// them. `max_edge_m` bounds a two-pixel difference (half of it per pixel): larger steps are depth edges.
 VF_HOST_DEVICE inline Vec4f normalFromVertexPixel(const Vec4f* vertices, Vec2i size, int x, int y, float max_edge_m) {
     const Vec4f invalid{0.f, 0.f, 0.f, 0.f};
-    if (x < 1 || y < 1 || x >= size.x - 1 || y >= size.y - 1) return invalid;
-    const Vec4f l = vertices[x - 1 + y * size.x], r = vertices[x + 1 + y * size.x];
-    const Vec4f u = vertices[x + (y - 1) * size.x], d = vertices[x + (y + 1) * size.x];
-    if (l.w <= 0.f || r.w <= 0.f || u.w <= 0.f || d.w <= 0.f) return invalid;
-    const Vec3f dx = r.xyz() - l.xyz(), dy = d.xyz() - u.xyz();
-    if (length(dx) > max_edge_m || length(dy) > max_edge_m) return invalid;
+    const Vec4f centre = vertices[x + y * size.x];
+    if (centre.w <= 0.f) return invalid;
+    const Vec3f c = centre.xyz();
+    const float max_step_m = 0.5f * max_edge_m;
+    Vec3f l = c, r = c, u = c, d = c;
+    const int kl = normalNeighbour(vertices, size, x, y, -1, 0, c, max_step_m, l);
+    const int kr = normalNeighbour(vertices, size, x, y, 1, 0, c, max_step_m, r);
+    const int ku = normalNeighbour(vertices, size, x, y, 0, -1, c, max_step_m, u);
+    const int kd = normalNeighbour(vertices, size, x, y, 0, 1, c, max_step_m, d);
+    if ((kl == 0 && kr == 0) || (ku == 0 && kd == 0)) return invalid;
+    const Vec3f dx = r - l, dy = d - u;  // a missing side stays at the centre: a one-sided difference
     Vec3f n = normalize(cross(dy, dx));
-    const Vec3f c = vertices[x + y * size.x].xyz();
     if (dot(n, c) > 0.f) n = -n;  // face the camera (which sits at the origin)
     return {n.x, n.y, n.z, 1.f};
 }

@@ -37,10 +37,16 @@ VF_HOST_DEVICE inline bool castRay(Vec3f& hit_grid, const TVoxel* voxels, const 
     float sdf = 1.f;
     bool seen_front = false;  // a positive (free-space) observation on this ray
     bool crossed = false;
+    bool last_observed = false;
     while (t < t_max) {
         bool observed;
         const Vec3f p = origin + dir * t;
         sdf = readSdfNearest(voxels, index, p, observed);
+        // An unobserved voxel met right after an observed sample (one that fell on a depth hole) takes
+        // the interpolation of its observed neighbours, as in castRayHash. Only then: deep in unobserved
+        // space (most of a dense box) the ray keeps its cheap steps.
+        if (!observed && last_observed) sdf = readSdfInterpolated(voxels, index, p, observed);
+        last_observed = observed;
         if (!observed) {
             // Nothing known here: a truncation band at a time. The front seen before the gap still counts,
             // as inside an allocated hash block (castRayHash), so that both indexes find the same surfaces;
@@ -109,12 +115,14 @@ VF_HOST_DEVICE inline bool castRayHash(Vec3f& hit_grid, const TVoxel* voxels, co
     RayState state = RayState::SearchBlockCoarse;
     float t = t_anchor + ceilf((t_min - t_anchor) / step_scale) * step_scale;
     float sdf = 1.f;
+    bool last_observed = false;
     while (t < t_max) {
         const Vec3f p = origin + dir * t;
         const Vec3i voxel{int(floorf(p.x + 0.5f)), int(floorf(p.y + 0.5f)), int(floorf(p.z + 0.5f))};
         bool allocated;
         const TVoxel v = readVoxel(voxels, index, voxel, allocated);
         if (!allocated) {
+            last_observed = false;
             state = RayState::SearchBlockCoarse;
             const float steps = ceilf((rayBlockExit(origin, dir, blockOfVoxel(voxel)) - t) / step_scale);
             t += (steps > 1.f ? steps : 1.f) * step_scale;
@@ -122,13 +130,24 @@ VF_HOST_DEVICE inline bool castRayHash(Vec3f& hit_grid, const TVoxel* voxels, co
         }
         if (state == RayState::SearchBlockCoarse) state = RayState::SearchBlockFine;
         if (v.w_depth == 0) {
-            t += step_scale;  // unobserved voxels of an allocated block: a truncation band at a time
-            continue;
-        }
-        sdf = TVoxel::sdfToFloat(v.sdf);
-        if (sdf <= 0.1f && sdf >= -0.5f) {
-            bool observed;
-            sdf = readSdfInterpolated(voxels, index, p, observed);
+            // An unobserved voxel met right after an observed sample (a voxel that fell on a depth
+            // hole) takes the interpolation of its observed neighbours instead of skipping a band.
+            // Only then, as in castRay(), so that both indexes find the same surfaces.
+            bool observed = false;
+            const float s = last_observed ? readSdfInterpolated(voxels, index, p, observed) : 1.f;
+            last_observed = observed;
+            if (!observed) {
+                t += step_scale;  // unobserved voxels of an allocated block: a truncation band at a time
+                continue;
+            }
+            sdf = s;
+        } else {
+            last_observed = true;
+            sdf = TVoxel::sdfToFloat(v.sdf);
+            if (sdf <= 0.1f && sdf >= -0.5f) {
+                bool observed;
+                sdf = readSdfInterpolated(voxels, index, p, observed);
+            }
         }
         if (sdf <= 0.f) {
             if (state == RayState::SearchSurface) {
