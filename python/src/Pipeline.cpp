@@ -73,6 +73,12 @@ Mat4f Pipeline::groundTruthPose(const RGBDFrame& frame) {
     return T_origin_world_ * frame.T_world_camera_gt;
 }
 
+std::unique_lock<std::mutex> Pipeline::claim(const char* call) {
+    std::unique_lock<std::mutex> lock(busy_, std::try_to_lock);
+    if (!lock) throw Error(std::string("Pipeline.") + call + ": the pipeline is in use by another thread (one call at a time per pipeline)");
+    return lock;
+}
+
 void Pipeline::reset() {
     have_origin_ = false;
     engine_->reset();

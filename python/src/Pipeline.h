@@ -4,6 +4,7 @@
 
 #include <map>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -69,6 +70,10 @@ public:
     int framesPoor() const { return poor_; }
     RGBDFrame& frameBuffer() { return frame_; }
     void reset();
+    // One call at a time: the GIL is released while the engine works, so another Python thread could
+    // otherwise enter the same pipeline. Never waits (waiting while holding the GIL could deadlock):
+    // voxfuse::Error naming `call` when the pipeline is busy.
+    std::unique_lock<std::mutex> claim(const char* call);
 
 private:
     RGBDCalib calib_;
@@ -78,6 +83,7 @@ private:
     std::vector<TimedPose> trajectory_;
     std::map<std::string, StageTimes> stage_times_;
     int frames_ = 0, fused_ = 0, failed_ = 0, poor_ = 0;
+    std::mutex busy_;
     bool have_origin_ = false;
     Mat4f T_origin_world_ = Mat4f::identity();
 };

@@ -157,6 +157,7 @@ py::dict timings(const Pipeline& p) {
 
 MeshOutput meshOf(Pipeline& p) {
     auto mesh = std::make_shared<Mesh>();
+    const auto busy = p.claim("extract_mesh");
     {
         py::gil_scoped_release no_gil;
         p.engine().extractMesh(*mesh);
@@ -167,6 +168,7 @@ MeshOutput meshOf(Pipeline& p) {
 
 CloudOutput cloudOf(Pipeline& p) {
     auto cloud = std::make_shared<PointCloud>();
+    const auto busy = p.claim("extract_point_cloud");
     {
         py::gil_scoped_release no_gil;
         p.engine().extractPointCloud(*cloud);
@@ -177,6 +179,7 @@ CloudOutput cloudOf(Pipeline& p) {
 
 py::array render(Pipeline& p, const std::string& mode, const py::object& pose, const std::optional<Intrinsics>& intrinsics) {
     const RenderMode m = parseRenderMode(mode);
+    const auto busy = p.claim("render");
     Image<Vec4u8> image;
     if (pose.is_none()) {
         if (intrinsics) throw ConfigError("render: intrinsics need a pose (without one, the last frame's raycast is shown)");
@@ -325,6 +328,7 @@ void bindPipeline(py::module_& m) {
                     raw_scale = depth_scale.cast<float>();
                     if (!(raw_scale > 0.f) || !std::isfinite(raw_scale)) throw py::value_error("depth_scale must be a positive number of metres");
                 }
+                const auto busy = p.claim("process");
                 RGBDFrame& f = p.frameBuffer();
                 copyDepth(depth, p.calib(), raw_scale, f.depth_raw);
                 if (rgb.is_none()) f.rgb = Image<Vec4u8>();
@@ -358,6 +362,7 @@ void bindPipeline(py::module_& m) {
                 std::optional<Mat4f> given;
                 if (!pose.is_none() && ground_truth) throw ConfigError("process_frame: give a pose or ground_truth=True, not both");
                 if (!pose.is_none()) given = arrayToMatrix(pose, "pose");
+                const auto busy = p.claim("process_frame");
                 if (ground_truth) given = p.groundTruthPose(*frame);
                 FrameOutcome o;
                 o.index = frame->index;
@@ -377,14 +382,19 @@ void bindPipeline(py::module_& m) {
         .def("extract_mesh", &meshOf, "The map's surface by marching cubes, as a voxfuse.Mesh.")
         .def("extract_point_cloud", &cloudOf, "The map's surface points, as a voxfuse.PointCloud.")
         .def("save_map", [](Pipeline& p, const std::string& path) {
+                 const auto busy = p.claim("save_map");
                  py::gil_scoped_release no_gil;
                  p.engine().saveMap(path);
              }, py::arg("path"), "Writes the map and the current pose to a .vfm file (written to a temporary file, then renamed).")
         .def("load_map", [](Pipeline& p, const std::string& path) {
+                 const auto busy = p.claim("load_map");
                  py::gil_scoped_release no_gil;
                  p.engine().loadMap(path);
              }, py::arg("path"), "Replaces the map with a .vfm file's (which must match the settings; see Pipeline.from_map).")
-        .def("reset", &Pipeline::reset, "Clears the map, the pose, the trajectory and the timings.")
+        .def("reset", [](Pipeline& p) {
+                 const auto busy = p.claim("reset");
+                 p.reset();
+             }, "Clears the map, the pose, the trajectory and the timings.")
         .def_property_readonly("pose", [](Pipeline& p) { return matrixToArray(p.engine().trackingState().T_world_camera); },
                                "The current camera-to-world pose (4, 4).")
         .def_property_readonly("trajectory", [](const Pipeline& p) { return timedPosesToArrays(p.trajectory()); },

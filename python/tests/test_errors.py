@@ -96,3 +96,30 @@ def test_the_gil_is_released_while_a_frame_is_processed(room_frames):
     # Holding the GIL, the worker would let this loop run only between frames (a handful of ticks);
     # released, the loop ticks about once a millisecond throughout.
     assert ticks > 0.3 * sum(worker_ms), (ticks, worker_ms)
+
+
+def test_a_pipeline_busy_in_another_thread_says_so(room_frames):
+    source, frames = room_frames
+    p = voxfuse.Pipeline(source.calib, voxel_size=0.01)
+    p.process_frame(frames[0])
+    done = threading.Event()
+
+    def work():
+        for f in frames[1:4]:
+            p.process_frame(f)
+        done.set()
+
+    t = threading.Thread(target=work)
+    t.start()
+    refused = served = 0
+    while not done.is_set():
+        try:
+            p.render("shaded")
+            served += 1
+        except voxfuse.Error as e:
+            assert "in use by another thread" in str(e)
+            refused += 1
+        time.sleep(0.001)
+    t.join()
+    assert refused > 0, "calls while a frame is processed are refused, not run alongside it"
+    assert p.frames_processed == 4
