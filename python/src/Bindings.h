@@ -3,6 +3,8 @@
 
 #include <pybind11/pybind11.h>
 
+#include "voxfuse/objects/RGBDCalib.h"
+
 namespace voxfuse::python {
 
 void bindErrors(pybind11::module_& m);
@@ -11,5 +13,8 @@ void bindSources(pybind11::module_& m);
 void bindMapOutputs(pybind11::module_& m);
 void bindPipeline(pybind11::module_& m);
 void bindTrajectory(pybind11::module_& m);
+
+// Metres per raw depth unit of an affine calibration without offset; ConfigError otherwise (Calibration.cpp).
+float metresPerRawUnit(const RGBDCalib& calib);
 
 }  // namespace voxfuse::python

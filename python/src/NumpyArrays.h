@@ -13,6 +13,7 @@
 
 #include "voxfuse/core/Image.h"
 #include "voxfuse/core/Math.h"
+#include "voxfuse/io/TrajectoryIO.h"
 
 namespace voxfuse::python {
 
@@ -74,6 +75,10 @@ py::array_t<T, py::array::c_style> requireDtype(const py::handle& value, const c
     return py::array_t<T, py::array::c_style>::ensure(a);
 }
 
+// "(480, 640)": an array's shape for error messages.
 std::string shapeText(const py::array& a);
+
+// (timestamps (N,), camera-to-world poses (N, 4, 4)) from the library's timed poses.
+py::tuple timedPosesToArrays(const std::vector<TimedPose>& poses);
 
 }  // namespace voxfuse::python

@@ -19,9 +19,6 @@
 
 namespace voxfuse::python {
 
-float metresPerRawUnit(const RGBDCalib& calib);
-py::tuple timedPosesToArrays(const std::vector<TimedPose>& poses);
-
 namespace {
 
 struct FrameOutcome {
@@ -73,12 +70,18 @@ void copyDepth(const py::handle& value, const RGBDCalib& calib, float raw_scale,
     // Metres become raw units of the calibration's scale (0.2 mm for TUM's, 1 mm by default); what the
     // raw range cannot hold, NaN and non-positive values are "no measurement".
     const double to_calib_units = (is_raw ? double(raw_scale) : 1.0) / double(metresPerRawUnit(calib));
-    const auto values = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(a);
-    const double* src = values.data();
-    for (py::ssize_t i = 0; i < h * w; ++i) {
-        const double raw = std::round(src[i] * to_calib_units);
-        dst[i] = raw >= 1.0 && raw <= 65535.0 ? std::uint16_t(raw) : 0;  // NaN fails both tests
-    }
+    auto convert = [&](auto element) {  // in the array's own element type: no converted copy first
+        using T = decltype(element);
+        const auto values = py::array_t<T, py::array::c_style>::ensure(a);
+        const T* src = values.data();
+        for (py::ssize_t i = 0; i < h * w; ++i) {
+            const double raw = std::round(double(src[i]) * to_calib_units);
+            dst[i] = raw >= 1.0 && raw <= 65535.0 ? std::uint16_t(raw) : 0;  // NaN fails both tests
+        }
+    };
+    if (is_raw) convert(std::uint16_t());
+    else if (py::isinstance<py::array_t<float>>(a)) convert(float());
+    else convert(double());
 }
 
 void copyRgb(const py::handle& value, const RGBDCalib& calib, Image<Vec4u8>& out) {
@@ -155,26 +158,17 @@ py::dict timings(const Pipeline& p) {
     return d;
 }
 
-MeshOutput meshOf(Pipeline& p) {
-    auto mesh = std::make_shared<Mesh>();
-    const auto busy = p.claim("extract_mesh");
+// A mesh or cloud of the map, made without the GIL, with the channels its voxel type has.
+template <class TOutput, class TGeometry>
+TOutput extractOutput(Pipeline& p, const char* call, void (MainEngine::*extract)(TGeometry&)) {
+    auto geometry = std::make_shared<TGeometry>();
+    const auto busy = p.claim(call);
     {
         py::gil_scoped_release no_gil;
-        p.engine().extractMesh(*mesh);
+        (p.engine().*extract)(*geometry);
     }
     const VoxelType t = p.engine().settings().voxel_type;
-    return {mesh, voxelTypeHasColor(t), voxelTypeHasLabels(t)};
-}
-
-CloudOutput cloudOf(Pipeline& p) {
-    auto cloud = std::make_shared<PointCloud>();
-    const auto busy = p.claim("extract_point_cloud");
-    {
-        py::gil_scoped_release no_gil;
-        p.engine().extractPointCloud(*cloud);
-    }
-    const VoxelType t = p.engine().settings().voxel_type;
-    return {cloud, voxelTypeHasColor(t), voxelTypeHasLabels(t)};
+    return {geometry, voxelTypeHasColor(t), voxelTypeHasLabels(t)};
 }
 
 py::array render(Pipeline& p, const std::string& mode, const py::object& pose, const std::optional<Intrinsics>& intrinsics) {
@@ -379,8 +373,10 @@ void bindPipeline(py::module_& m) {
              "The model as an image, uint8 (H, W, 3) RGB (a view of RGBA pixels). mode: shaded, color, normals, depth or\n"
              "class. Without pose: the raycast of the last frame; with a camera-to-world pose (and intrinsics, default\n"
              "the depth camera's): a new raycast from there.")
-        .def("extract_mesh", &meshOf, "The map's surface by marching cubes, as a voxfuse.Mesh.")
-        .def("extract_point_cloud", &cloudOf, "The map's surface points, as a voxfuse.PointCloud.")
+        .def("extract_mesh", [](Pipeline& p) { return extractOutput<MeshOutput>(p, "extract_mesh", &MainEngine::extractMesh); },
+             "The map's surface by marching cubes, as a voxfuse.Mesh.")
+        .def("extract_point_cloud", [](Pipeline& p) { return extractOutput<CloudOutput>(p, "extract_point_cloud", &MainEngine::extractPointCloud); },
+             "The map's surface points, as a voxfuse.PointCloud.")
         .def("save_map", [](Pipeline& p, const std::string& path) {
                  const auto busy = p.claim("save_map");
                  py::gil_scoped_release no_gil;

@@ -14,8 +14,6 @@
 
 namespace voxfuse::python {
 
-py::tuple timedPosesToArrays(const std::vector<TimedPose>& poses);
-
 namespace {
 
 using FramePtr = std::shared_ptr<RGBDFrame>;

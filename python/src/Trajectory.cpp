@@ -1,4 +1,4 @@
-// Trajectory error (ATE, RPE) against ground truth, and the array helpers the other bindings share.
+// Trajectory error (ATE, RPE) against ground truth and TUM trajectory files.
 
 #include <pybind11/stl.h>
 
@@ -11,33 +11,6 @@
 #include "voxfuse/io/TrajectoryIO.h"
 
 namespace voxfuse::python {
-
-std::string shapeText(const py::array& a) {
-    std::string s = "(";
-    for (py::ssize_t i = 0; i < a.ndim(); ++i) s += (i ? ", " : "") + std::to_string(a.shape(i));
-    return s + (a.ndim() == 1 ? ",)" : ")");
-}
-
-Mat4f arrayToMatrix(const py::handle& value, const char* what) {
-    py::array_t<double, py::array::c_style | py::array::forcecast> a;
-    try {
-        a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(value);
-    } catch (const py::error_already_set&) {
-        a = {};
-    }
-    if (!a || a.ndim() != 2 || a.shape(0) != 4 || a.shape(1) != 4)
-        throw py::value_error(std::string(what) + " must be a 4x4 matrix" + (a ? ", not of shape " + shapeText(a) : std::string()));
-    Mat4f T;
-    const auto m = a.unchecked<2>();
-    for (int r = 0; r < 4; ++r)
-        for (int c = 0; c < 4; ++c) {
-            if (!std::isfinite(m(r, c))) throw py::value_error(std::string(what) + " has a value that is not finite");
-            T(r, c) = float(m(r, c));
-        }
-    if (T(3, 0) != 0.f || T(3, 1) != 0.f || T(3, 2) != 0.f || T(3, 3) != 1.f)
-        throw py::value_error(std::string(what) + " must be a rigid transform (last row 0 0 0 1)");
-    return T;
-}
 
 // (timestamps (N,), poses (N, 4, 4)) as the library's timed poses.
 std::vector<TimedPose> timedPoses(const py::handle& timestamps, const py::handle& poses, const char* what) {
@@ -55,19 +28,6 @@ std::vector<TimedPose> timedPoses(const py::handle& timestamps, const py::handle
             for (int c = 0; c < 4; ++c) out[i].T_world_camera(r, c) = float(pa(i, r, c));
     }
     return out;
-}
-
-py::tuple timedPosesToArrays(const std::vector<TimedPose>& poses) {
-    py::array_t<double> t(std::vector<py::ssize_t>{py::ssize_t(poses.size())});
-    py::array_t<double> p({py::ssize_t(poses.size()), py::ssize_t(4), py::ssize_t(4)});
-    auto ta = t.mutable_unchecked<1>();
-    auto pa = p.mutable_unchecked<3>();
-    for (std::size_t i = 0; i < poses.size(); ++i) {
-        ta(py::ssize_t(i)) = poses[i].timestamp_s;
-        for (int r = 0; r < 4; ++r)
-            for (int c = 0; c < 4; ++c) pa(py::ssize_t(i), r, c) = double(poses[i].T_world_camera(r, c));
-    }
-    return py::make_tuple(t, p);
 }
 
 void bindTrajectory(py::module_& m) {
