@@ -58,7 +58,8 @@ public:
             const int inserted = insertMissingBlocks(scene, distinct, stats);
             if (appended <= stored) break;
             if (inserted == 0) {
-                // Nothing fits any more; what the list could not hold is counted as visits, an upper bound.
+                // Nothing fits any more; what the list could not hold is counted as visits, an upper bound
+                // (a lower one when the count saturated at kMaxCountedAppends).
                 stats.allocation_failures_this_frame += appended - stored;
                 break;
             }
@@ -132,7 +133,7 @@ private:
             }
             const int appended = TDevice::read(on(missing_count_), scratch_);
             if (appended <= int(missing_.size()) || int(missing_.size()) >= bound) return appended;
-            missing_.allocate(std::size_t(std::min(bound, appended + appended / 4)), kDevice == Device::CPU, kDevice == Device::CUDA);
+            missing_.allocate(std::size_t(std::min<long long>(bound, appended + appended / 4ll)), kDevice == Device::CPU, kDevice == Device::CUDA);
         }
     }
 

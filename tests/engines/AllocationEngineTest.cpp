@@ -19,6 +19,8 @@
 #include "voxfuse/engines/AllocationEngine.h"
 #include "voxfuse/engines/IntegrationEngine.h"
 #include "voxfuse/objects/Voxel.h"
+#include "core/CpuDevice.h"
+#include "voxfuse/shared/Allocation.h"
 #include "voxfuse/shared/HashAccess.h"
 
 namespace voxfuse {
@@ -375,6 +377,27 @@ TEST_P(AllocationEngineTest, CollidingNewBlocksAreAllInsertedInTheirFrame) {
     EXPECT_EQ(stats.allocation_failures_this_frame, 0);
     EXPECT_EQ(stats.blocks_allocated_this_frame, int(walked.size()));
     EXPECT_EQ(allocatedBlocks(scene.index()), walked);
+}
+
+// A frame may ask for more blocks than an int counts (a voxel size far below the depth's resolution):
+// the count of appends saturates instead of overflowing into negative list slots, and the list is
+// never written beyond its capacity.
+TEST(AllocationStage1Test, TheCountOfMissingBlocksSaturatesAndTheListIsNeverOverrun) {
+    const SceneParams params = testParams();
+    const View view = test::renderView(world(), kIntr, poseA(), false);
+    VoxelBlockHash hash{VoxelBlockHashSettings()};
+    const int needed = int(blocksOnSegments(view, poseA(), params).size());
+    ASSERT_GT(needed, 200);
+    constexpr int kCapacity = 16, kCountStop = 100;
+    std::vector<std::uint64_t> list(kCapacity + 8, 0xfeedull);  // 8 guard slots past the capacity
+    int count = 0;
+    MarkBlocksForPixels<256> mark{makeDepthSegmentFrame(params, view, poseA()), hash.data(), hash.state().entry_visibility,
+                                  list.data(), &count, kCapacity, kIntr.width};
+    mark.max_counted_appends = kCountStop;
+    CpuDevice::parallelFor(mark.elementCount(), mark);
+    EXPECT_GE(count, kCountStop);
+    EXPECT_LE(count, kCountStop + omp_get_max_threads());
+    for (int i = kCapacity; i < int(list.size()); ++i) EXPECT_EQ(list[std::size_t(i)], 0xfeedull) << "slot " << i;
 }
 
 INSTANTIATE_TEST_SUITE_P(Devices, AllocationEngineTest, test::kAllDevices, test::DeviceName());

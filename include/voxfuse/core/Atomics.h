@@ -70,4 +70,15 @@ VF_HOST_DEVICE inline void racingStore(T* target, T value) {
 #endif
 }
 
+// A load of a value other threads may be changing (a counter polled to stop early): any value it
+// held recently. Relaxed atomic on the CPU; a volatile load on the GPU, so that it is re-read.
+template <class T>
+VF_HOST_DEVICE inline T racingLoad(const T* target) {
+#if defined(__CUDA_ARCH__)
+    return *static_cast<const volatile T*>(target);
+#else
+    return __atomic_load_n(target, __ATOMIC_RELAXED);
+#endif
+}
+
 }  // namespace voxfuse

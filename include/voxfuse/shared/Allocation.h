@@ -96,6 +96,11 @@ struct RecentBlocks {
     }
 };
 
+// Appends to the missing list are counted up to here and no further, so that the count cannot overflow
+// an int however many blocks a frame asks for (a voxel size far below the depth's resolution asks for
+// billions). Concurrent appends may pass it by one per thread in flight, far below the 2^20 margin.
+constexpr int kMaxCountedAppends = 0x7fffffff - (1 << 20);
+
 // Allocation stage 1 for a run of `span` pixels of one row (element e: row e / spans_per_row): each block
 // the pixels need is marked seen when the hash has it, or its key is appended to the missing list
 // (every block outside the storable coordinates as kOutOfRangeBlockKey). The list may get a block more
@@ -108,9 +113,10 @@ struct MarkBlocksForPixels {
     HashTableView table;
     std::uint8_t* entry_visibility;
     std::uint64_t* missing;
-    int* missing_count;               // appends attempted (may exceed the capacity)
+    int* missing_count;               // appends attempted (may exceed the capacity; saturates at kMaxCountedAppends)
     int missing_capacity;
     int span;                         // pixels per element
+    int max_counted_appends = kMaxCountedAppends;  // where the count stops (tests set less)
 
     VF_HOST_DEVICE int elementCount() const {
         return ((frame.intrinsics.width + span - 1) / span) * frame.intrinsics.height;
@@ -127,6 +133,7 @@ struct MarkBlocksForPixels {
                 racingStore(&entry_visibility[entry], kEntrySeenThisFrame);
                 return;
             }
+            if (racingLoad(missing_count) >= max_counted_appends) return;
             const int slot = atomicAddInt(missing_count, 1);
             if (slot < missing_capacity) missing[slot] = blockKey(block);
         };
