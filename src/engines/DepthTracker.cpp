@@ -8,6 +8,7 @@
 #include <cstring>
 
 #include "PhotometricFrames.h"
+#include "MotionPredictor.h"
 #include "PoseUpdate.h"
 #include "voxfuse/core/Timer.h"
 #include "voxfuse/engines/LowLevelEngine.h"
@@ -49,9 +50,11 @@ public:
         } else if (!model_ok || !frame_ok) {
             reportFailed(state);
         } else {
-            estimatePose(state, model, color_ok);
+            estimatePose(state, view, model, color_ok);
         }
         seen_model_ = seen_model_ || model_ok;
+        if (state.quality == TrackingQuality::Failed) motion_.forget();
+        else motion_.record(state.T_world_camera, view.timestamp_s);
         if (photometric_) {
             if (state.quality == TrackingQuality::Failed)
                 photometric_->forget();  // its pose is unknown: it must not colour the next model
@@ -63,6 +66,7 @@ public:
 
     void reset() override {
         seen_model_ = false;
+        motion_.forget();
         if (photometric_) photometric_->forget();
     }
     const TrackerStats& lastStats() const override { return stats_; }
@@ -92,9 +96,9 @@ private:
         return valid_pixels_ > 0;
     }
 
-    void estimatePose(TrackingState& state, const RenderState& model, bool use_color) {
+    void estimatePose(TrackingState& state, const View& view, const RenderState& model, bool use_color) {
         const Eigen::Matrix4d T_start = pose::toEigenD(state.T_world_camera);
-        Eigen::Matrix4d T = T_start;
+        Eigen::Matrix4d T = settings_.predict_motion ? motion_.predict(state.T_world_camera, view.timestamp_s) : T_start;
         NormalEquations<double> finest = NormalEquations<double>::zero();
         for (int li = 0; li < levelCount(); ++li) finest = refineOnLevel(li, model, use_color, T);
 
@@ -118,7 +122,12 @@ private:
         const TrackerLevel& ls = settings_.levels[std::size_t(li)];
         const int pi = levelCount() - 1 - li;
         const DepthFrameLevel& level = pyramid_[std::size_t(pi)];
-        const RobustKernel kernel = settings_.kind == TrackerKind::Ren && pi == 0 ? settings_.robust_kernel : RobustKernel::None;
+        // ren: the coarsest level first converges without the kernel (least squares within the level's
+        // outlier distance captures motions far beyond the kernel's scale), then on with it; the finer
+        // levels start from a converged coarse pose and use the kernel throughout. Every level thus
+        // ends on the same robust cost.
+        const RobustKernel final_kernel = settings_.kind == TrackerKind::Ren ? settings_.robust_kernel : RobustKernel::None;
+        bool robust = final_kernel == RobustKernel::None || li > 0;
         const Mat4f T_model_world = rigidInverse(model.T_world_camera);
         TrackerLevelStats stats;
         stats.width = level.depth.width();
@@ -131,7 +140,7 @@ private:
         for (int it = 0; it < ls.max_iterations; ++it) {
             const Mat4f T_f = pose::toMat4f(T);
             const DepthTermParams params{T_f, T_model_world, model.intrinsics, ls.max_distance_m, min_normal_cos_};
-            depth_eq = kernels_->accumulate(level, model, params, kernel, settings_.robust_scale_m);
+            depth_eq = kernels_->accumulate(level, model, params, robust ? final_kernel : RobustKernel::None, settings_.robust_scale_m);
             stats.iterations = it + 1;
             NormalEquations<double> system = depth_eq;
             if (with_color) {
@@ -146,7 +155,13 @@ private:
             pose::Vector6d x;
             if (system.count < 6 || !pose::solveUpdate(system, ls.motion, 0.0, x)) break;
             T = pose::applyUpdate(T, x);
-            if (x.head<3>().norm() < settings_.min_rotation_step_rad && x.tail<3>().norm() < settings_.min_translation_step_m) {
+            // Least squares only has to reach the kernel's basin: it hands over at ten times the final step.
+            const double step_scale = robust ? 1.0 : 10.0;
+            if (x.head<3>().norm() < step_scale * settings_.min_rotation_step_rad && x.tail<3>().norm() < step_scale * settings_.min_translation_step_m) {
+                if (!robust) {
+                    robust = true;
+                    continue;
+                }
                 if (with_color || !use_color) break;
                 with_color = true;
             }
@@ -174,6 +189,7 @@ private:
     int valid_pixels_ = 0;
     float min_normal_cos_ = -2.f;
     bool seen_model_ = false;  // a map existed: from now on an empty model means lost tracking
+    MotionPredictor motion_;
     TrackerStats stats_;
 };
 

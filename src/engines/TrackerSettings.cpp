@@ -184,6 +184,7 @@ TrackerSettings parseTrackerSettings(const std::string& text, const std::string&
         {"min_rotation_step_rad", setFloat(s.min_rotation_step_rad)},
         {"min_translation_step_m", setFloat(s.min_translation_step_m)},
         {"bilateral_filter", setBool(s.bilateral_filter)},
+        {"predict_motion", setBool(s.predict_motion)},
         {"max_normal_edge_m", setFloat(s.max_normal_edge_m)},
         {"robust_kernel", setKernel(s.robust_kernel)},
         {"robust_scale_m", setFloat(s.robust_scale_m)},

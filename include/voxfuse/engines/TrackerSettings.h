@@ -12,7 +12,7 @@ namespace voxfuse {
 enum class TrackerKind {
     Icp,    // depth only: point-to-plane ICP against the model raycast, coarse to fine
     Color,  // colour only: photometric alignment of model points (Levenberg-Marquardt)
-    Ren,    // ICP on the coarse levels, then a robust (Tukey) refinement at full resolution
+    Ren,    // ICP with a robust (Tukey) kernel on every level: outliers weigh alike at every resolution
     Rgbd    // depth and colour residuals in one Gauss-Newton system
 };
 const char* toString(TrackerKind kind);
@@ -31,12 +31,11 @@ struct TrackerLevel {
     float max_distance_m = 0.1f;  // ICP outlier threshold on the point-to-model distance
 };
 
-// Defaults measured on TUM fr3/teddy (193 frames, frame-to-model, 1 cm voxels; ATE RMSE): ren 6.6 mm,
-// icp 6.5, rgbd 7.2 (colour weight 1e-3; 6.5 at 1e-4), color 62. Level types (bbb, rbb, rrbb, bbbb),
-// thresholds, kernels and 5-10 mm voxels all land within 6.5-6.8 mm: what is left is mostly a ~25 ms
-// lag of the depth timestamps behind the motion capture (shifting them gives 4.9 mm). ren is the
-// default for its lower drift (RPE 7.7 vs 8.4 mm/s for icp) and its tolerance of outliers; the
-// normal test is what lets an 8 cm / 8 degree jump converge.
+// Defaults measured on TUM fr3/teddy (193 frames, frame-to-model, 5 mm voxels; ATE RMSE): ren 7.1 mm,
+// with 3.4 Gauss-Newton iterations on the finest level (8.4 mm and 9.4 iterations while its kernel
+// was on the finest level only). Much of what is left is a ~25 ms lag of the depth timestamps behind
+// the motion capture: the same trajectory scored against ground truth 25 ms earlier gives 5.5 mm.
+// The normal test is what lets an 8 cm / 8 degree jump converge.
 struct TrackerSettings {
     TrackerKind kind = TrackerKind::Ren;
     // Pyramid levels, COARSE TO FINE: with n levels, levels[i] works on images downsampled by
@@ -51,13 +50,18 @@ struct TrackerSettings {
     // A level stops iterating when an update rotates less than this AND translates less than this.
     float min_rotation_step_rad = 1e-4f;
     float min_translation_step_m = 1e-4f;
+    // Start from the pose the last two frames' motion predicts (constant velocity, scaled to the time
+    // between frames) instead of the last pose: the tracker then only corrects the change of motion.
+    bool predict_motion = true;
     // Edge-preserving smoothing of the depth before the pyramid is built (KinectFusion's bilateral filter).
     bool bilateral_filter = true;
     // Normals of the frame are computed only between neighbours closer than this (metres at full
     // resolution, doubled per coarser level): larger gaps are depth edges.
     float max_normal_edge_m = 0.05f;
 
-    // ren: the robust cost of the full-resolution refinement (its iterations are the last level's).
+    // ren: the robust cost of every level. One cost for all levels gives every level the same optimum:
+    // with a kernel on the finest level only, the coarse levels converged to poses that outliers had
+    // pulled some 0.3 degrees away, and the finest level spent 9 of its 10 iterations crawling back.
     RobustKernel robust_kernel = RobustKernel::Tukey;
     float robust_scale_m = 0.01f;  // Tukey: residuals beyond this get no weight
 
@@ -97,7 +101,7 @@ void validateTrackerSettings(const TrackerSettings& settings);
 //   iterations = 10 10 10           per level, coarse to fine (one value: every level)
 //   max_distance_m = 0.1 0.05 0.02  per level, coarse to fine (one value: every level)
 //   max_normal_angle_deg, min_rotation_step_rad, min_translation_step_m, max_normal_edge_m,
-//   bilateral_filter (true/false/on/off/1/0), robust_kernel (none/huber/tukey), robust_scale_m,
+//   predict_motion and bilateral_filter (true/false/on/off/1/0), robust_kernel (none/huber/tukey), robust_scale_m,
 //   color_point_step, color_kernel, color_kernel_scale, color_weight,
 //   good_inlier_ratio, failed_inlier_ratio, good_condition, failed_condition, poor_residual_m,
 //   failed_color_residual, min_inliers, max_motion_m, max_motion_deg
