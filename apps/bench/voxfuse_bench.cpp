@@ -34,13 +34,17 @@ struct StageSummary {
     double median_ms = 0, mean_ms = 0, p90_ms = 0;
 };
 
+double meanOf(const std::vector<double>& v) {
+    double sum = 0;
+    for (const double x : v) sum += x;
+    return v.empty() ? 0.0 : sum / double(v.size());
+}
+
 StageSummary summarise(std::vector<double> v) {
     StageSummary s;
     if (v.empty()) return s;
     s.median_ms = app::median(v);
-    double sum = 0;
-    for (double x : v) sum += x;
-    s.mean_ms = sum / double(v.size());
+    s.mean_ms = meanOf(v);
     std::sort(v.begin(), v.end());
     s.p90_ms = v[std::min(v.size() - 1, std::size_t(0.9 * double(v.size())))];
     return s;
@@ -139,7 +143,7 @@ int main(int argc, char** argv) {
         app::SequenceRunner runner(*source, *engine, record.tracked ? app::PoseSource::Tracker : app::PoseSource::GroundTruth, record);
         // Per pyramid level of the tracker, coarse to fine: "track L0 160x120", ...
         std::vector<std::string> level_names;
-        std::map<std::string, std::vector<double>> level_samples;
+        std::map<std::string, std::vector<double>> level_samples, level_iterations;
         const Timer wall;
         while ((max_frames <= 0 || int(record.frames.size()) < max_frames) && runner.step()) {
             const FrameResult& fr = runner.lastRecord().result;
@@ -151,6 +155,7 @@ int main(int argc, char** argv) {
                                          std::to_string(ts.levels[l].height);
                 if (!level_samples.count(name)) level_names.push_back(name);
                 level_samples[name].push_back(ts.levels[l].ms);
+                level_iterations[name].push_back(ts.levels[l].iterations);
             }
         }
         record.wall_s = wall.elapsedMs() / 1000.0;
@@ -186,8 +191,8 @@ int main(int argc, char** argv) {
             if (name != "track") continue;
             for (const auto& level : level_names) {  // the tracker's levels, indented under it
                 summaries[level] = summarise(level_samples[level]);
-                std::printf("  %-12s %10.2f %10.2f %10.2f\n", level.c_str(), summaries[level].median_ms, summaries[level].mean_ms,
-                            summaries[level].p90_ms);
+                std::printf("  %-12s %10.2f %10.2f %10.2f   %.1f iterations (mean)\n", level.c_str(), summaries[level].median_ms,
+                            summaries[level].mean_ms, summaries[level].p90_ms, meanOf(level_iterations[level]));
             }
         }
         if (!source->groundTruth().empty()) {
@@ -215,16 +220,11 @@ int main(int argc, char** argv) {
             most_active = std::max(most_active, a.blocks_allocated);
         }
         const auto most = [](const std::vector<double>& v) { return v.empty() ? 0.0 : *std::max_element(v.begin(), v.end()); };
-        const auto mean = [](const std::vector<double>& v) {
-            double sum = 0.0;
-            for (double x : v) sum += x;
-            return v.empty() ? 0.0 : sum / double(v.size());
-        };
         if (s.swap.enabled)
             std::printf("  swapping: %d blocks stored in %s; per frame in %.1f (max %.0f), out %.1f (max %.0f), limit %d; "
                         "at most %d of %d blocks active\n",
-                        record.allocation.blocks_stored, s.swap.swap_file.empty() ? "memory" : s.swap.swap_file.c_str(), mean(swapped_in),
-                        most(swapped_in), mean(swapped_out), most(swapped_out), s.swap.blocks_per_frame, most_active, s.hash.max_block_count);
+                        record.allocation.blocks_stored, s.swap.swap_file.empty() ? "memory" : s.swap.swap_file.c_str(), meanOf(swapped_in),
+                        most(swapped_in), meanOf(swapped_out), most(swapped_out), s.swap.blocks_per_frame, most_active, s.hash.max_block_count);
 
         app::MeshingBench meshing;
         app::CloudBench cloud_bench;
@@ -262,6 +262,9 @@ int main(int argc, char** argv) {
         j.beginObject("tracker_levels");
         for (const auto& level : level_names) j.value(level.c_str() + 2, summaries[level].median_ms);
         j.endObject();
+        j.beginObject("tracker_iterations");  // mean Gauss-Newton iterations per frame and level
+        for (const auto& level : level_names) j.value(level.c_str() + 2, meanOf(level_iterations[level]));
+        j.endObject();
         if (record.has_trajectory_error) {
             j.value("ate_rmse_m", record.trajectory_error.ate_rmse_m);
             j.value("rpe_trans_m_per_s", record.trajectory_error.rpe_trans_m_per_s);
@@ -279,9 +282,9 @@ int main(int argc, char** argv) {
             j.value("most_blocks_active", most_active);
             j.value("blocks_stored", record.allocation.blocks_stored);
             j.value("blocks_per_frame_limit", s.swap.blocks_per_frame);
-            j.value("mean_swapped_in_per_frame", mean(swapped_in));
+            j.value("mean_swapped_in_per_frame", meanOf(swapped_in));
             j.value("most_swapped_in_per_frame", most(swapped_in));
-            j.value("mean_swapped_out_per_frame", mean(swapped_out));
+            j.value("mean_swapped_out_per_frame", meanOf(swapped_out));
             j.value("most_swapped_out_per_frame", most(swapped_out));
             j.endObject();
         }
