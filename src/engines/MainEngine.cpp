@@ -117,7 +117,7 @@ public:
             tracking_ = TrackingState();
             tracking_.T_world_camera = *T_world_camera_given;
         } else {
-            tracker_->track(tracking_, view_, render_state_);
+            tracker_->track(tracking_, view_, model_);
         }
         clock_.stageDone("track");
         result.tracking = tracking_;
@@ -143,7 +143,7 @@ public:
         result.fused = true;
         clock_.stageDone("integrate");
 
-        raycast_->raycast(scene_, view_.calib.depth, tracking_.T_world_camera, render_state_);
+        raycastModel(&view_.depth);
         clock_.stageDone("raycast");
 
         if (swapping_) {
@@ -181,11 +181,12 @@ public:
     }
     const TrackingState& trackingState() const override { return tracking_; }
     const RenderState& renderState() const override {
-        if (onGpu()) render_state_.updateHost();
-        return render_state_;
+        RenderState& rs = displayRaycast();
+        if (onGpu()) rs.updateHost();
+        return rs;
     }
 
-    void renderLast(RenderMode mode, Image<Vec4u8>& image) override { raycast_->render(scene_, render_state_, mode, image); }
+    void renderLast(RenderMode mode, Image<Vec4u8>& image) override { raycast_->render(scene_, displayRaycast(), mode, image); }
 
     void renderFromPose(const Mat4f& T_world_camera, const Intrinsics& intrinsics, RenderMode mode, Image<Vec4u8>& image) override {
         raycast_->raycast(scene_, intrinsics, T_world_camera, free_view_);
@@ -218,7 +219,7 @@ public:
         tracking_.T_world_camera = info.T_world_camera;
         has_source_origin_ = info.has_origin;
         T_source_world_ = info.T_source_world;
-        raycast_->raycast(scene_, view_.calib.depth, tracking_.T_world_camera, render_state_);
+        raycastModel(nullptr);
         return info;
     }
 
@@ -235,7 +236,8 @@ public:
         resetScene();
         tracker_->reset();
         tracking_ = TrackingState();
-        render_state_ = RenderState();
+        model_ = RenderState();
+        ++model_version_;
     }
 
     std::size_t sceneBytes() const override {
@@ -257,6 +259,26 @@ public:
 
 private:
     bool onGpu() const { return settings_.device == Device::CUDA; }
+
+    // The model the next frame is tracked against: a raycast from the current pose at the tracker's
+    // resolution, normals from its points, rays starting near what the frame just fused saw
+    // (engines/RaycastEngine.h: each a fraction of the cost). `fused_depth`: that frame's depth, if any.
+    void raycastModel(const Image<float>* fused_depth) {
+        const int factor = settings_.tracking_raycast_downsample;
+        raycast_->raycast(scene_, factor > 1 ? view_.calib.depth.downsampled(factor) : view_.calib.depth, tracking_.T_world_camera, model_,
+                          RaycastNormals::FromPoints, fused_depth);
+        ++model_version_;
+    }
+
+    // The model seen from the pose of the last model raycast, at the depth camera's resolution with
+    // SDF normals, for renders and renderState(): made when first asked for after each model raycast.
+    RenderState& displayRaycast() const {
+        if (display_version_ != model_version_) {
+            raycast_->raycast(scene_, view_.calib.depth, model_.T_world_camera, display_, RaycastNormals::SdfGradient);
+            display_version_ = model_version_;
+        }
+        return display_;
+    }
 
     MeshingEngine<TVoxel, TIndex>& hostMeshing() {
         if (!onGpu()) return *meshing_;
@@ -350,7 +372,10 @@ private:
     std::unique_ptr<MeshingEngine<TVoxel, TIndex>> host_meshing_;  // swapped maps on the GPU: meshed from a host copy
     mutable View view_;                  // mutable: view() brings host copies up to date
     TrackingState tracking_;
-    mutable RenderState render_state_;   // likewise renderState()
+    RenderState model_;                  // what the tracker aligns the next frame to (raycastModel)
+    mutable RenderState display_;        // renders and renderState() (displayRaycast)
+    long long model_version_ = 0;        // model raycasts so far
+    mutable long long display_version_ = -1;  // the model raycast display_ shows
     RenderState free_view_;
     AllocationStats allocation_stats_;
     int frames_fused_ = 0;
@@ -405,6 +430,8 @@ std::unique_ptr<MainEngine> MainEngine::create(const MainEngineSettings& s, cons
     if (s.dense_size.x <= 0 || s.dense_size.y <= 0 || s.dense_size.z <= 0) throw ConfigError("dense volume size must be positive");
     if (s.swap.enabled && s.index_type != IndexType::Hash) throw ConfigError("swapping needs the hash index (--index hash)");
     if (s.swap.enabled && s.swap.blocks_per_frame < 1) throw ConfigError("swapping moves at least one block per frame");
+    if (s.tracking_raycast_downsample != 1 && s.tracking_raycast_downsample != 2 && s.tracking_raycast_downsample != 4)
+        throw ConfigError("the tracking raycast's downsampling must be 1, 2 or 4 (got " + std::to_string(s.tracking_raycast_downsample) + ")");
     if (s.device == Device::CUDA && !device_memory::cudaAvailable())
         throw DeviceError("CUDA was requested but is not usable: " + device_memory::cudaDescription());
     return visitVoxelType(s.voxel_type, [&](auto tag) { return createForVoxel<typename decltype(tag)::Voxel>(s, calib); });

@@ -2,12 +2,14 @@
 
 #include "PhotometricFrames.h"
 
+#include <algorithm>
 #include <utility>
 
 namespace voxfuse {
 
 bool PhotometricFrames::prepare(const View& view, int level_count) {
     has_current_ = false;
+    depth_width_ = view.calib.depth.width;
     if (view.rgb.empty() || view.rgb.size() != view.calib.rgb.size() || !view.calib.rgb.valid()) return false;
     levels_.resize(std::size_t(level_count));
     T_rgb_depth_ = rigidInverse(view.calib.T_depth_rgb);
@@ -26,7 +28,8 @@ bool PhotometricFrames::prepare(const View& view, int level_count) {
 
 bool PhotometricFrames::colorModel(const RenderState& model, int step) {
     if (!has_previous_) return false;
-    kernels_.colorModelPoints(model, step, previous_, previous_rgb_, previous_T_rgb_world_, points_);
+    const int model_step = depth_width_ > 0 ? std::max(1, (step * model.intrinsics.width + depth_width_ / 2) / depth_width_) : step;
+    kernels_.colorModelPoints(model, model_step, previous_, previous_rgb_, previous_T_rgb_world_, points_);
     return true;
 }
 

@@ -16,8 +16,9 @@ public:
     // Builds the pyramid of the view's colour image (level 0 = full resolution). False when the view
     // has no colour image of the calibrated size.
     bool prepare(const View& view, int level_count);
-    // Colours the model points (every `step`-th pixel) with the previous frame. False when there is
-    // no previous frame.
+    // Colours the model points (every `step`-th pixel of the depth camera's resolution, so that a
+    // coarser model raycast gives the same points) with the previous frame. False when there is no
+    // previous frame. After prepare().
     bool colorModel(const RenderState& model, int step);
     // The prepared frame becomes the previous one, its depth camera at T_world_camera.
     void rememberCurrent(const Mat4f& T_world_camera);
@@ -34,6 +35,7 @@ private:
     std::vector<ColorFrameLevel> levels_;
     Image<ColorPoint> points_;
     Mat4f T_rgb_depth_ = Mat4f::identity();
+    int depth_width_ = 0;  // of the depth camera, from prepare()
     bool has_current_ = false;
 
     Image<float> previous_;  // full-resolution intensity of the previous frame

@@ -30,8 +30,10 @@ class RaycastEngineOn final : public RaycastEngine<TVoxel, TIndex> {
     static constexpr bool kHash = std::is_same<TIndex, VoxelBlockHash>::value;
 
 public:
-    void raycast(const Scene<TVoxel, TIndex>& scene, const Intrinsics& intr, const Mat4f& T_world_camera, RenderState& rs) override {
+    void raycast(const Scene<TVoxel, TIndex>& scene, const Intrinsics& intr, const Mat4f& T_world_camera, RenderState& rs,
+                 RaycastNormals normals_from, const Image<float>* depth_hint_m) override {
         requireSceneOn(kDevice, scene, "the raycast engine");
+        const RaycastDepthHint hint = depthHint(scene.params(), intr, depth_hint_m);
         rs.resize(intr, kDevice);
         rs.T_world_camera = T_world_camera;
         const RaycastCamera camera = makeRaycastCamera(scene.params(), intr, T_world_camera);
@@ -39,12 +41,18 @@ public:
         Vec4f* normals = rs.normals_world.memory().data(kDevice);
         Vec2f* ranges = rs.depth_range.memory().data(kDevice);
         const int pixels = intr.width * intr.height;
+        const bool sdf_normals = normals_from == RaycastNormals::SdfGradient;
         if constexpr (kHash) {
             computeDepthRanges(scene, intr, T_world_camera, ranges);
-            TDevice::parallelFor(pixels, RaycastHashPixel<TVoxel>{scene.voxelData(), scene.index().data(), camera, ranges, points, normals});
+            TDevice::parallelFor(pixels, RaycastHashPixel<TVoxel>{scene.voxelData(), scene.index().data(), camera, ranges, points, normals,
+                                                                  sdf_normals, hint});
         } else {
-            TDevice::parallelFor(pixels, RaycastDensePixel<TVoxel>{scene.voxelData(), scene.index().data(), camera, points, normals, ranges});
+            TDevice::parallelFor(pixels, RaycastDensePixel<TVoxel>{scene.voxelData(), scene.index().data(), camera, points, normals, ranges,
+                                                                   sdf_normals, hint});
         }
+        if (!sdf_normals)
+            TDevice::parallelFor(pixels, NormalsFromRaycastPoints{points, intr.size(), 2.f * scene.params().mu_m, T_world_camera.translation(),
+                                                                  normals});
     }
 
     // Renders on the engine's device; the image's host copy is brought up to date for the caller.
@@ -63,6 +71,16 @@ public:
     }
 
 private:
+    RaycastDepthHint depthHint(const SceneParams& params, const Intrinsics& intr, const Image<float>* depth_m) {
+        if (depth_m == nullptr || depth_m->empty()) return RaycastDepthHint{};
+        // A raycast of a downsampled camera (Intrinsics::downsampled) drops a last odd row or column.
+        const int factor = depth_m->width() / intr.width;
+        if (factor < 1 || depth_m->height() / intr.height != factor)
+            throw Error("raycast: a depth hint of " + std::to_string(depth_m->width()) + "x" + std::to_string(depth_m->height()) +
+                        " is not an integer multiple of the " + std::to_string(intr.width) + "x" + std::to_string(intr.height) + " raycast");
+        return RaycastDepthHint{imageOn(kDevice, *depth_m, hint_staging_), depth_m->width(), factor, 2.f * params.mu_m};
+    }
+
     // Per pixel [min, max] depth of the blocks that project onto it ({0, 0} where none does): the visible
     // list when it was built for this view, else every allocated block in the frustum (other viewpoints).
     // Ranges grow by one voxel in front and by mu behind (the longest ray step) so that a crossing near
@@ -97,6 +115,7 @@ private:
     }
 
     DeviceScratch scratch_{kDevice};
+    MemoryBlock<float> hint_staging_;  // the hint's copy on kDevice, when it is not current there
     MemoryBlock<Vec2f> tile_ranges_;
     MemoryBlock<BlockTileRect> rects_;
     MemoryBlock<int> fragments_;

@@ -52,6 +52,11 @@ struct MainEngineSettings {
     int remove_empty_blocks_every = 10;
     // How the pose of each frame is estimated when none is given.
     TrackerSettings tracker;
+    // The tracker aligns each frame to a raycast of the model from the last pose, made at the depth
+    // camera's resolution divided by this (1, 2 or 4). Half resolution tracks teddy as well as full
+    // (its finest level still uses every pixel of the frame) at a quarter of the rays; renders and
+    // renderState() are always raycast at full resolution.
+    int tracking_raycast_downsample = 2;
     // Hash only: only the part of the map near the view stays in the voxel array.
     SwapSettings swap;
 };
@@ -91,9 +96,11 @@ public:
     virtual const MainEngineSettings& settings() const = 0;
     virtual const View& view() const = 0;
     virtual const TrackingState& trackingState() const = 0;
-    // The raycast from the last processed pose (points and normals in world coordinates).
+    // The model raycast from the pose of the last processed frame (the last good pose after a failure),
+    // at the depth camera's resolution: points and SDF normals in world coordinates. Made when first
+    // asked for after a frame (the tracker's own raycast may be coarser).
     virtual const RenderState& renderState() const = 0;
-    // Renders the last raycast.
+    // Renders the model from that pose (renderState()).
     virtual void renderLast(RenderMode mode, Image<Vec4u8>& image) = 0;
     // Raycasts and renders the model from any viewpoint (does not disturb the tracking raycast).
     virtual void renderFromPose(const Mat4f& T_world_camera, const Intrinsics& intrinsics, RenderMode mode,

@@ -13,13 +13,24 @@
 
 namespace voxfuse {
 
+// Where a raycast's normals come from.
+enum class RaycastNormals {
+    SdfGradient,  // central differences of the TSDF at each hit: smooth shading, valid up to silhouettes (renders)
+    FromPoints    // differences of neighbouring hits in the image, as the frame's normals: a fraction of the cost (the tracker's model)
+};
+
 template <class TVoxel, class TIndex>
 class RaycastEngine {
 public:
     virtual ~RaycastEngine() = default;
     // Fills render_state's points and normals for every pixel of `intrinsics` seen from T_world_camera.
+    // `depth_hint_m`, when given: the depth (metres) of the frame just fused from this pose, at the
+    // raycast's resolution or an integer multiple of it; rays start two truncation bands in front of
+    // the nearest depth in their footprint (RaycastDepthHint in shared/Raycast.h: a fraction of the
+    // steps; a surface the model still holds in front of what the frame saw is not found).
     virtual void raycast(const Scene<TVoxel, TIndex>& scene, const Intrinsics& intrinsics, const Mat4f& T_world_camera,
-                         RenderState& render_state) = 0;
+                         RenderState& render_state, RaycastNormals normals = RaycastNormals::SdfGradient,
+                         const Image<float>* depth_hint_m = nullptr) = 0;
     // An RGBA image of the last raycast (a raycast of this engine's device), with its host copy up to date.
     virtual void render(const Scene<TVoxel, TIndex>& scene, const RenderState& render_state, RenderMode mode,
                         Image<Vec4u8>& image) = 0;

@@ -81,12 +81,14 @@ VF_HOST_DEVICE inline int normalNeighbour(const Vec4f* vertices, Vec2i size, int
     return 0;
 }
 
-// Normal of a valid vertex from differences of the vertex map, oriented towards the camera; w = 0 when
+// Normal of a valid vertex from differences of the vertex map, oriented towards the camera at `camera`
+// (the origin for camera-frame vertices; the camera centre for world points); w = 0 when
 // the vertex is invalid, or an axis has no usable neighbour on either side. Per axis: the central
 // difference when both sides have a neighbour within 2 pixels, else the one-sided difference, so that
 // isolated missing pixels and one-pixel hole lines do not take the normals of their neighbours with
 // them. `max_edge_m` bounds a two-pixel difference (half of it per pixel): larger steps are depth edges.
-VF_HOST_DEVICE inline Vec4f normalFromVertexPixel(const Vec4f* vertices, Vec2i size, int x, int y, float max_edge_m) {
+VF_HOST_DEVICE inline Vec4f normalFromVertexPixel(const Vec4f* vertices, Vec2i size, int x, int y, float max_edge_m,
+                                                  Vec3f camera = Vec3f{0.f, 0.f, 0.f}) {
     const Vec4f invalid{0.f, 0.f, 0.f, 0.f};
     const Vec4f centre = vertices[x + y * size.x];
     if (centre.w <= 0.f) return invalid;
@@ -100,7 +102,7 @@ VF_HOST_DEVICE inline Vec4f normalFromVertexPixel(const Vec4f* vertices, Vec2i s
     if ((kl == 0 && kr == 0) || (ku == 0 && kd == 0)) return invalid;
     const Vec3f dx = r - l, dy = d - u;  // a missing side stays at the centre: a one-sided difference
     Vec3f n = normalize(cross(dy, dx));
-    if (dot(n, c) > 0.f) n = -n;  // face the camera (which sits at the origin)
+    if (dot(n, c - camera) > 0.f) n = -n;  // face the camera
     return {n.x, n.y, n.z, 1.f};
 }
 

@@ -8,6 +8,7 @@
 #include "voxfuse/objects/HashTableTypes.h"
 #include "voxfuse/objects/Intrinsics.h"
 #include "voxfuse/shared/BlockProjection.h"
+#include "voxfuse/shared/LowLevel.h"
 #include "voxfuse/shared/VoxelAccess.h"
 
 namespace voxfuse {
@@ -172,14 +173,16 @@ VF_HOST_DEVICE inline bool castRayHash(Vec3f& hit_grid, const TVoxel* voxels, co
     return true;
 }
 
-// A surface hit (grid units) as the raycast's per-pixel outputs: world point (w = 1) and the SDF
-// gradient normal (w = 1, or all zero where the gradient vanishes).
+// A surface hit (grid units) as the raycast's per-pixel outputs: world point (w = 1) and, with
+// `sdf_normal`, the SDF gradient normal (w = 1, or all zero where the gradient vanishes); without it
+// the normal is left to NormalsFromRaycastPoints.
 template <class TVoxel, class TIndexData>
 VF_HOST_DEVICE inline void raycastHitOutputs(const TVoxel* voxels, const TIndexData& index, Vec3f hit_grid, float voxel_size_m,
-                                             Vec4f& point_world, Vec4f& normal_world) {
-    const Vec3f n = sdfGradientNormal(voxels, index, hit_grid);
+                                             bool sdf_normal, Vec4f& point_world, Vec4f& normal_world) {
     const Vec3f p = hit_grid * voxel_size_m;
     point_world = Vec4f{p.x, p.y, p.z, 1.f};
+    if (!sdf_normal) return;
+    const Vec3f n = sdfGradientNormal(voxels, index, hit_grid);
     normal_world = length(n) > 0.5f ? Vec4f{n.x, n.y, n.z, 1.f} : Vec4f{0.f, 0.f, 0.f, 0.f};
 }
 
@@ -219,6 +222,33 @@ struct RaycastCamera {
     }
 };
 
+// Where the surface is expected along each ray: the depth of the frame just fused from the raycast's
+// own pose, in an image `factor` times the raycast's resolution along each axis. A ray whose footprint
+// holds depths starts `margin_m` in front of the nearest of them instead of at the start of its
+// expected range: the frame saw free space up to there, and the ray no longer crosses the empty space
+// between the front of its tile's blocks and the surface (on teddy, half of its steps, each a hash
+// lookup that finds nothing). A surface the model holds in front of what the frame saw (something
+// that has moved away, not yet carved) is stepped over. Rays without depths in their footprint search
+// their whole range.
+struct RaycastDepthHint {
+    const float* depth_m = nullptr;  // nullptr: no hint; 0 = no depth at a pixel
+    int width = 0;                   // of the hint image
+    int factor = 1;                  // hint pixels per raycast pixel along each axis
+    float margin_m = 0.f;
+
+    // The depth to start searching at for raycast pixel (x, y), or 0 for the whole range.
+    VF_HOST_DEVICE float searchStart(int x, int y) const {
+        if (depth_m == nullptr) return 0.f;
+        float nearest = 1e30f;
+        for (int dy = 0; dy < factor; ++dy)
+            for (int dx = 0; dx < factor; ++dx) {
+                const float d = depth_m[(x * factor + dx) + (y * factor + dy) * width];
+                if (d > 0.f && d < nearest) nearest = d;
+            }
+        return nearest < 1e30f ? nearest - margin_m : 0.f;
+    }
+};
+
 // The dense array, one pixel per element: the ray clipped to the array, then castRay().
 template <class TVoxel>
 struct RaycastDensePixel {
@@ -228,6 +258,8 @@ struct RaycastDensePixel {
     Vec4f* points_world;
     Vec4f* normals_world;
     Vec2f* depth_range;  // set to the whole slab: the dense raycast searches all of it
+    bool sdf_normals;    // normals from the SDF gradient here, or later from the points (NormalsFromRaycastPoints)
+    RaycastDepthHint hint;
 
     VF_HOST_DEVICE void operator()(int i) const {
         const int x = i % camera.intrinsics.width, y = i / camera.intrinsics.width;
@@ -235,13 +267,13 @@ struct RaycastDensePixel {
         depth_range[i] = Vec2f{camera.min_depth_m, camera.max_depth_m};
         float t_per_depth;
         const Vec3f dir = camera.rayThroughPixel(x, y, t_per_depth);
-        float t_min = camera.min_depth_m * t_per_depth, t_max = camera.max_depth_m * t_per_depth;
+        float t_min = fmaxf(camera.min_depth_m, hint.searchStart(x, y)) * t_per_depth, t_max = camera.max_depth_m * t_per_depth;
         // The array spans voxel centres offset .. offset + size - 1.
         const Vec3f box_lo = toFloat(index.offset), box_hi = toFloat(index.offset + index.size) - Vec3f{1.f, 1.f, 1.f};
         if (!clipRayToBox(camera.origin_grid, dir, box_lo, box_hi, t_min, t_max)) return;
         Vec3f hit;
         if (!castRay(hit, voxels, index, camera.origin_grid, dir, t_min, t_max, camera.step_scale)) return;
-        raycastHitOutputs(voxels, index, hit, camera.voxel_size_m, points_world[i], normals_world[i]);
+        raycastHitOutputs(voxels, index, hit, camera.voxel_size_m, sdf_normals, points_world[i], normals_world[i]);
     }
 };
 
@@ -255,11 +287,13 @@ struct RaycastHashPixel {
     const Vec2f* depth_range;
     Vec4f* points_world;
     Vec4f* normals_world;
+    bool sdf_normals;  // normals from the SDF gradient here, or later from the points (NormalsFromRaycastPoints)
+    RaycastDepthHint hint;
 
     VF_HOST_DEVICE void operator()(int i) const {
         const int x = i % camera.intrinsics.width, y = i / camera.intrinsics.width;
         points_world[i] = normals_world[i] = Vec4f{0.f, 0.f, 0.f, 0.f};
-        const float z_min = fmaxf(depth_range[i].x, camera.min_depth_m);
+        const float z_min = fmaxf(fmaxf(depth_range[i].x, camera.min_depth_m), hint.searchStart(x, y));
         const float z_max = fminf(depth_range[i].y, camera.max_depth_m);
         if (!(z_max > z_min)) return;  // no visible block projects here
         float t_per_depth;
@@ -269,7 +303,23 @@ struct RaycastHashPixel {
         if (!castRayHash(hit, voxels, view, camera.origin_grid, dir, camera.min_depth_m * t_per_depth, z_min * t_per_depth,
                          z_max * t_per_depth, camera.step_scale))
             return;
-        raycastHitOutputs(voxels, view, hit, camera.voxel_size_m, points_world[i], normals_world[i]);
+        raycastHitOutputs(voxels, view, hit, camera.voxel_size_m, sdf_normals, points_world[i], normals_world[i]);
+    }
+};
+
+// Normals of a raycast from its points, per pixel (after RaycastHashPixel or RaycastDensePixel without
+// SDF normals): differences of neighbouring hits, as the frame's normals are made (normalFromVertexPixel),
+// facing the camera. Neighbours further apart than a truncation band per pixel are on other surfaces:
+// the TSDF cannot tell surfaces closer than that apart anyway. Six SDF interpolations per hit are
+// the larger part of a raycast's cost; this costs a few neighbour reads.
+struct NormalsFromRaycastPoints {
+    const Vec4f* points_world;
+    Vec2i size;
+    float max_edge_m;    // a two-pixel difference larger than this is a depth edge (2 mu)
+    Vec3f camera_world;  // where normals face
+    Vec4f* normals_world;
+    VF_HOST_DEVICE void operator()(int i) const {
+        normals_world[i] = normalFromVertexPixel(points_world, size, i % size.x, i / size.x, max_edge_m, camera_world);
     }
 };
 
