@@ -91,13 +91,13 @@ public:
         if (!hash.visibleListIsFor(T_world_camera, view.calib.depth))
             throw Error("hash integration: the visible list is not for this view (run the allocation engine on it first)");
         const IntegrationFrame frame = inputs_.frame(kDevice, scene.params(), view, T_world_camera, scene.takeIntegrationNumber());
+        const int blocks = keepBlocksToUpdate(hash, scene.params(), view.calib.depth, frame);
         using Body = IntegrateHashVoxels<TVoxel, TDevice::kOneThreadPerItem ? 1 : kBlockVoxelCount>;
         // At most 2^30 elements per launch (element indices are ints).
         const int blocks_per_launch = (1 << 30) / Body::kElementsPerBlock;
-        for (int first = 0; first < hash.visibleCount(); first += blocks_per_launch) {
-            const int blocks = std::min(blocks_per_launch, hash.visibleCount() - first);
-            TDevice::parallelFor(Body::elementCount(blocks), Body{scene.voxelData(), hash.data().entries, hash.visibleEntries() + first, frame});
-        }
+        for (int first = 0; first < blocks; first += blocks_per_launch)
+            TDevice::parallelFor(Body::elementCount(std::min(blocks_per_launch, blocks - first)),
+                                 Body{scene.voxelData(), hash.data().entries, kept_entries_.data(kDevice) + first, frame});
     }
 
     // Frees every block and returns the voxel storage to its initial (empty) size.
@@ -107,7 +107,36 @@ public:
     }
 
 private:
+    // The entries of the visible blocks some voxel of which the frame may update, into kept_entries_
+    // (BlockNeedsIntegration); returns how many.
+    int keepBlocksToUpdate(const VoxelBlockHash& hash, const SceneParams& params, const Intrinsics& camera, const IntegrationFrame& frame) {
+        const int visible = hash.visibleCount();
+        if (visible == 0) return 0;
+        const int tiles_x = (camera.width + kDepthTile - 1) / kDepthTile, tiles_y = (camera.height + kDepthTile - 1) / kDepthTile;
+        grow(tile_max_, std::size_t(tiles_x) * std::size_t(tiles_y));
+        grow(keep_, std::size_t(visible));
+        grow(kept_positions_, std::size_t(visible));
+        grow(kept_entries_, std::size_t(visible));
+        TDevice::parallelFor(tiles_x * tiles_y, DepthMaxTiles{frame.depth, camera.size(), frame.min_depth_m, frame.max_depth_m, tiles_x,
+                                                              tile_max_.data(kDevice)});
+        const BlockProjection projection{frame.T_depth_world, camera, params.voxel_size_m, frame.near_m, frame.max_depth_m + params.mu_m};
+        TDevice::parallelFor(visible, BlockNeedsIntegration{hash.data().entries, hash.visibleEntries(), projection, params.mu_m,
+                                                            tile_max_.data(kDevice), tiles_x, tiles_y, keep_.data(kDevice)});
+        const int kept = TDevice::selectIndices(visible, BlockIsKept{keep_.data(kDevice)}, kept_positions_.data(kDevice), scratch_);
+        TDevice::parallelFor(kept, GatherEntries{hash.visibleEntries(), kept_positions_.data(kDevice), kept_entries_.data(kDevice)});
+        return kept;
+    }
+
+    template <class T>
+    static void grow(MemoryBlock<T>& block, std::size_t count) {
+        if (block.size() < count) block.allocate(count, kDevice == Device::CPU, kDevice == Device::CUDA);
+    }
+
     IntegrationInputs<TVoxel> inputs_;
+    DeviceScratch scratch_{kDevice};
+    MemoryBlock<float> tile_max_;
+    MemoryBlock<unsigned char> keep_;
+    MemoryBlock<int> kept_positions_, kept_entries_;
 };
 
 template <class TDevice, class TVoxel, class TIndex>

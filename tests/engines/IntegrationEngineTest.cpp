@@ -2,8 +2,13 @@
 
 #include <gtest/gtest.h>
 
+#include <cstring>
+#include <vector>
+
 #include "DeviceTestSupport.h"
 #include "SyntheticViews.h"
+#include "core/CpuDevice.h"
+#include "voxfuse/engines/AllocationEngine.h"
 #include "voxfuse/engines/IntegrationEngine.h"
 #include "voxfuse/objects/Voxel.h"
 #include "voxfuse/shared/VoxelAccess.h"
@@ -179,6 +184,62 @@ TEST(IntegrationBoxTest, RowClippingLosesNoUpdate) {
         updated += brute.voxels().host()[i].w_depth;
     }
     EXPECT_GT(updated, 10000);
+}
+
+// Hash integration skips visible blocks none of whose voxels the frame can update (BlockNeedsIntegration).
+// Across frames from around a box and a sphere, whose visible lists hold blocks behind the surfaces
+// and blocks with no depth in front: every block skipped is one that integrating all voxels leaves
+// unchanged, and the scene is bit for bit the scene of integrating every visible block.
+TEST(IntegrationBlockSkipTest, SkippedBlocksAreOnesNoVoxelOfWhichChanges) {
+    const SceneParams params = smallSceneParams();
+    const synth::SyntheticScene world = synth::SyntheticScene::boxAndSphere();
+    const Intrinsics intr = test::kinectIntrinsics(160, 120);
+    using HashScene = Scene<VoxelSRgb, VoxelBlockHash>;
+    HashScene scene(params, VoxelBlockHash(VoxelBlockHashSettings()), Device::CPU);
+    auto allocation = makeAllocationEngine<VoxelSRgb, VoxelBlockHash>(Device::CPU);
+    auto integration = makeIntegrationEngine<VoxelSRgb, VoxelBlockHash>(Device::CPU);
+    int skipped_total = 0, visible_total = 0;
+    for (const Eigen::Vector3f& eye : {Eigen::Vector3f(0.9f, -0.7f, 0.8f), Eigen::Vector3f(-0.6f, -0.9f, 0.6f), Eigen::Vector3f(0.1f, 1.0f, 0.9f),
+                                       Eigen::Vector3f(1.1f, 0.3f, 0.5f)}) {
+        const Mat4f pose = test::lookAt(eye, {0.2f, 0.f, 0.1f});
+        const View view = test::renderView(world, intr, pose);
+        allocation->allocate(scene, view, pose);
+        const VoxelBlockHash& hash = scene.index();
+        const int visible = hash.visibleCount();
+        const std::vector<int> visible_entries(hash.visibleEntries(), hash.visibleEntries() + visible);
+
+        // Reference: every voxel of every visible block, on a copy.
+        HashScene all = scene.copyTo(Device::CPU);
+        const IntegrationFrame frame =
+            makeIntegrationFrame(params, view, pose, view.depth.host(), view.rgb.host(), nullptr, all.takeIntegrationNumber());
+        CpuDevice::parallelFor(visible, IntegrateHashVoxels<VoxelSRgb, kBlockVoxelCount>{all.voxelData(), all.index().data().entries,
+                                                                                          visible_entries.data(), frame});
+        // Which blocks the engine skips.
+        const int tiles_x = (intr.width + kDepthTile - 1) / kDepthTile, tiles_y = (intr.height + kDepthTile - 1) / kDepthTile;
+        std::vector<float> tile_max(std::size_t(tiles_x * tiles_y));
+        std::vector<unsigned char> keep(static_cast<std::size_t>(visible));
+        CpuDevice::parallelFor(tiles_x * tiles_y, DepthMaxTiles{view.depth.host(), intr.size(), frame.min_depth_m, frame.max_depth_m,
+                                                                tiles_x, tile_max.data()});
+        const BlockProjection projection{frame.T_depth_world, intr, params.voxel_size_m, frame.near_m, frame.max_depth_m + params.mu_m};
+        CpuDevice::parallelFor(visible, BlockNeedsIntegration{hash.data().entries, visible_entries.data(), projection, params.mu_m,
+                                                              tile_max.data(), tiles_x, tiles_y, keep.data()});
+        const HashScene before = scene.copyTo(Device::CPU);
+        for (int k = 0; k < visible; ++k) {
+            if (keep[std::size_t(k)]) continue;
+            ++skipped_total;
+            const int ptr = hash.entry(visible_entries[std::size_t(k)]).ptr;
+            ASSERT_EQ(std::memcmp(before.voxels().host() + std::size_t(ptr) * kBlockVoxelCount, all.voxels().host() + std::size_t(ptr) * kBlockVoxelCount,
+                                  sizeof(VoxelSRgb) * kBlockVoxelCount), 0)
+                << "a skipped block has voxels the frame updates";
+        }
+        visible_total += visible;
+
+        integration->integrate(scene, view, pose);
+        ASSERT_EQ(std::memcmp(scene.voxels().host(), all.voxels().host(), sizeof(VoxelSRgb) * std::size_t(hash.blocksInUse()) * kBlockVoxelCount), 0)
+            << "skipping blocks changed the map";
+    }
+    EXPECT_GT(skipped_total, visible_total / 30) << "the frames should leave blocks to skip";
+    std::printf("[ skip     ] %d of %d visible blocks skipped over 4 frames\n", skipped_total, visible_total);
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include "voxfuse/objects/HashTableTypes.h"
 #include "voxfuse/objects/Intrinsics.h"
 #include "voxfuse/objects/PlainVoxelArray.h"
+#include "voxfuse/shared/BlockProjection.h"
 #include "voxfuse/shared/LabelFusion.h"
 
 namespace voxfuse {
@@ -156,6 +157,78 @@ struct IntegrateHashVoxels {
         for (int v = first; v < first + VoxelsPerElement; ++v)
             integrateVoxel(block[v], corner + Vec3i{v & 7, (v >> 3) & 7, v >> 6}, frame);
     }
+};
+
+// ---- Skipping blocks no voxel of which the frame updates (hash integration) ----
+// Half the voxels of teddy's visible blocks lie more than mu behind the surface the frame sees, and
+// some blocks have no depth in front of them at all: integrateVoxel() would leave all of them as they
+// are. A block is skipped when the largest usable depth among the pixels its voxels can project to,
+// plus mu, lies in front of its nearest voxel. The test is conservative (padded boxes, whole tiles of
+// pixels), so the voxels come out bit-identical to integrating every block.
+
+constexpr int kDepthTile = 8;  // pixels per side of a tile of the depth-maximum image
+
+// Per tile of kDepthTile x kDepthTile pixels: the largest depth integration uses (0: none).
+struct DepthMaxTiles {
+    const float* depth;
+    Vec2i size;  // of the depth image
+    float min_depth_m, max_depth_m;
+    int tiles_x;
+    float* tile_max;
+    VF_HOST_DEVICE void operator()(int t) const {
+        const int x0 = (t % tiles_x) * kDepthTile, y0 = (t / tiles_x) * kDepthTile;
+        const int x1 = x0 + kDepthTile < size.x ? x0 + kDepthTile : size.x, y1 = y0 + kDepthTile < size.y ? y0 + kDepthTile : size.y;
+        float m = 0.f;
+        for (int y = y0; y < y1; ++y)
+            for (int x = x0; x < x1; ++x) {
+                const float d = depth[x + y * size.x];
+                if (d >= min_depth_m && d <= max_depth_m && d > m) m = d;
+            }
+        tile_max[t] = m;
+    }
+};
+
+// Per visible block k: keep[k] = 1 when some voxel of entries[visible_entries[k]] may be updated.
+struct BlockNeedsIntegration {
+    const HashEntry* entries;
+    const int* visible_entries;
+    BlockProjection projection;  // the depth camera; far_m = the largest usable depth + mu
+    float mu_m;
+    const float* tile_max;
+    int tiles_x, tiles_y;
+    unsigned char* keep;
+    VF_HOST_DEVICE void operator()(int k) const {
+        keep[k] = 0;
+        const HashEntry& e = entries[visible_entries[k]];
+        Vec2f lo, hi;
+        float z_min, z_max;
+        // Half a voxel of padding and a pixel of rounding each side absorb the float differences between
+        // the box's corners and the voxel centres integrateVoxel() projects.
+        if (!projectBlockBox({e.pos.x, e.pos.y, e.pos.z}, 0.5f, projection, lo, hi, z_min, z_max)) return;
+        const Intrinsics& in = projection.intrinsics;
+        const int px0 = int(floorf(fmaxf(lo.x, 0.f))) - 1, px1 = int(ceilf(fminf(hi.x, float(in.width - 1)))) + 1;
+        const int py0 = int(floorf(fmaxf(lo.y, 0.f))) - 1, py1 = int(ceilf(fminf(hi.y, float(in.height - 1)))) + 1;
+        const int tx0 = (px0 > 0 ? px0 : 0) / kDepthTile, tx1 = (px1 < in.width ? px1 : in.width - 1) / kDepthTile;
+        const int ty0 = (py0 > 0 ? py0 : 0) / kDepthTile, ty1 = (py1 < in.height ? py1 : in.height - 1) / kDepthTile;
+        float deepest = 0.f;
+        for (int ty = ty0; ty <= ty1 && ty < tiles_y; ++ty)
+            for (int tx = tx0; tx <= tx1 && tx < tiles_x; ++tx) deepest = fmaxf(deepest, tile_max[tx + ty * tiles_x]);
+        keep[k] = deepest > 0.f && deepest + mu_m >= z_min ? 1 : 0;
+    }
+};
+
+// For the launchers' selectIndices: the kept blocks.
+struct BlockIsKept {
+    const unsigned char* keep;
+    VF_HOST_DEVICE bool operator()(int k) const { return keep[k] != 0; }
+};
+
+// Element j: out[j] = entries_list[positions[j]] (the entries of the kept blocks, in visible-list order).
+struct GatherEntries {
+    const int* entries_list;
+    const int* positions;
+    int* out;
+    VF_HOST_DEVICE void operator()(int j) const { out[j] = entries_list[positions[j]]; }
 };
 
 // The dense array, one voxel per element: element i is voxel i of the box [lo, lo + box) of array
