@@ -83,6 +83,7 @@ void writeTimingsJson(const std::string& path, const RunRecord& run) {
         j.value("fused", f.result.fused);
         j.value("tracking", toString(f.result.quality));
         j.value("status", toString(f.result.status));
+        j.value("keyframes", f.result.keyframes);
         if (run.tracked) {
             j.value("inlier_ratio", double(f.result.tracking.inlier_ratio));
             j.value("residual", double(f.result.tracking.residual_m));
@@ -123,6 +124,7 @@ void writeSummaryJson(const std::string& path, const RunRecord& run) {
     j.value("frames_lost", countStatus(run, TrackingStatus::Lost));
     j.value("relocalisation_attempts", countRelocalisationAttempts(run));
     j.value("relocalisations", countStatus(run, TrackingStatus::Relocalised));
+    j.value("keyframes", run.frames.empty() ? 0 : run.frames.back().result.keyframes);
     if (run.has_trajectory_error) {
         const TrajectoryError& e = run.trajectory_error;
         j.value("ate_rmse_m", e.ate_rmse_m);
