@@ -14,6 +14,7 @@
 
 #include "JsonWriter.h"
 #include "MapOutputBench.h"
+#include "RelocalisationOptions.h"
 #include "ResourceUsage.h"
 #include "RunRecord.h"
 #include "SequenceRunner.h"
@@ -102,6 +103,7 @@ int main(int argc, char** argv) {
     cli.add_option("--mu", s.scene.mu_m, "truncation band (m)")->capture_default_str();
     cli.add_option("--poses", poses, "track the camera, or use the source's ground truth")
         ->capture_default_str()->check(CLI::IsMember({"track", "groundtruth"}));
+    app::addRelocalisationOptions(cli, s.relocalisation);
     cli.add_flag("--mesh", mesh, "after the run, time marching cubes on the map (median of --repeats), its size and peak memory");
     cli.add_flag("--cloud", cloud, "after the run, time the point cloud extraction");
     cli.add_option("--cloud-voxel", cloud_voxel_m, "also time downsampling the cloud to cells of this size (m); implies --cloud")
@@ -207,6 +209,9 @@ int main(int argc, char** argv) {
             std::printf("\n  ATE RMSE %.2f mm over %d poses, RPE %.2f mm/s; %d frames failed tracking", 1000.0 * record.trajectory_error.ate_rmse_m,
                         record.trajectory_error.pairs, 1000.0 * record.trajectory_error.rpe_trans_m_per_s,
                         app::countQuality(record, TrackingQuality::Failed));
+        if (s.relocalisation.enabled)
+            std::printf("\n  relocalisation: %d frames lost, %d relocalised after %d attempts", app::countStatus(record, TrackingStatus::Lost),
+                        app::countStatus(record, TrackingStatus::Relocalised), app::countRelocalisationAttempts(record));
         std::printf("\n  engine frames/s (1000 / median total): %.1f\n  wall frames/s (incl. decoding): %.1f\n  peak RSS: %.0f MB, scene: %.0f MB\n",
                     engine_fps, app::framesPerSecond(record), record.peak_rss_mb, record.scene_mb);
 
@@ -270,6 +275,9 @@ int main(int argc, char** argv) {
             j.value("rpe_trans_m_per_s", record.trajectory_error.rpe_trans_m_per_s);
         }
         j.value("tracking_failed_frames", app::countQuality(record, TrackingQuality::Failed));
+        j.value("frames_lost", app::countStatus(record, TrackingStatus::Lost));
+        j.value("relocalisation_attempts", app::countRelocalisationAttempts(record));
+        j.value("relocalisations", app::countStatus(record, TrackingStatus::Relocalised));
         j.value("engine_fps", engine_fps);
         j.value("wall_fps", app::framesPerSecond(record));
         j.value("peak_rss_mb", record.peak_rss_mb);

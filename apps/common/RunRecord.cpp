@@ -45,6 +45,18 @@ int countQuality(const RunRecord& run, TrackingQuality quality) {
     return n;
 }
 
+int countStatus(const RunRecord& run, TrackingStatus status) {
+    int n = 0;
+    for (const auto& f : run.frames) n += f.result.status == status ? 1 : 0;
+    return n;
+}
+
+int countRelocalisationAttempts(const RunRecord& run) {
+    int n = 0;
+    for (const auto& f : run.frames) n += f.result.relocalisation_tried ? 1 : 0;
+    return n;
+}
+
 double medianTotalMs(const RunRecord& run) {
     std::vector<double> totals;
     for (const auto& f : run.frames) totals.push_back(f.result.total_ms);
@@ -70,6 +82,8 @@ void writeTimingsJson(const std::string& path, const RunRecord& run) {
         j.value("timestamp", f.timestamp_s);
         j.value("fused", f.result.fused);
         j.value("tracking", toString(f.result.quality));
+        j.value("status", toString(f.result.status));
+        j.value("keyframes", f.result.keyframes);
         if (run.tracked) {
             j.value("inlier_ratio", double(f.result.tracking.inlier_ratio));
             j.value("residual", double(f.result.tracking.residual_m));
@@ -107,6 +121,10 @@ void writeSummaryJson(const std::string& path, const RunRecord& run) {
     j.value("poses", run.tracked ? "tracked" : "groundtruth");
     j.value("tracking_poor_frames", countQuality(run, TrackingQuality::Poor));
     j.value("tracking_failed_frames", countQuality(run, TrackingQuality::Failed));
+    j.value("frames_lost", countStatus(run, TrackingStatus::Lost));
+    j.value("relocalisation_attempts", countRelocalisationAttempts(run));
+    j.value("relocalisations", countStatus(run, TrackingStatus::Relocalised));
+    j.value("keyframes", run.frames.empty() ? 0 : run.frames.back().result.keyframes);
     if (run.has_trajectory_error) {
         const TrajectoryError& e = run.trajectory_error;
         j.value("ate_rmse_m", e.ate_rmse_m);
@@ -163,6 +181,7 @@ void writeSummaryJson(const std::string& path, const RunRecord& run) {
         std::string levels;
         for (const auto& l : run.settings.tracker.levels) levels += char(l.motion);
         j.value("tracker_levels", levels);
+        j.value("relocalisation", run.settings.relocalisation.enabled);
     }
     j.endObject();
     j.endObject();
@@ -185,6 +204,12 @@ std::string summaryText(const RunRecord& run, const std::string& out_dir) {
                       int(run.frames.size()) - countQuality(run, TrackingQuality::Poor) - countQuality(run, TrackingQuality::Failed),
                       countQuality(run, TrackingQuality::Poor), countQuality(run, TrackingQuality::Failed));
         s << line;
+        if (run.settings.relocalisation.enabled || countStatus(run, TrackingStatus::Lost) > 0) {
+            std::snprintf(line, sizeof line, "  lost         %d frames without a pose (not fused), %d relocalised after %d attempts%s\n",
+                          countStatus(run, TrackingStatus::Lost), countStatus(run, TrackingStatus::Relocalised),
+                          countRelocalisationAttempts(run), run.settings.relocalisation.enabled ? "" : " (relocalisation off)");
+            s << line;
+        }
     } else {
         s << "  poses        ground truth\n";
     }

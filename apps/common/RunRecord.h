@@ -39,6 +39,9 @@ struct RunRecord {
 
 // Frames whose tracking was poor / failed (failed frames are not fused).
 int countQuality(const RunRecord& run, TrackingQuality quality);
+// Frames that were tracking / lost / relocalised, and those on which relocalisation was tried.
+int countStatus(const RunRecord& run, TrackingStatus status);
+int countRelocalisationAttempts(const RunRecord& run);
 
 double medianTotalMs(const RunRecord& run);
 double framesPerSecond(const RunRecord& run);

@@ -55,7 +55,8 @@ bool SequenceRunner::step() {
         fr.timestamp_s = frame_.timestamp_s;
         fr.result = engine_.processFrame(frame_, given);
         record_.frames.push_back(fr);
-        record_.trajectory.push_back({frame_.timestamp_s, fr.result.T_world_camera});
+        // A lost frame has no pose (it holds the last good one): the trajectory leaves it out.
+        if (fr.result.status != TrackingStatus::Lost) record_.trajectory.push_back({frame_.timestamp_s, fr.result.T_world_camera});
         return true;
     }
 }

@@ -294,9 +294,15 @@ std::string ViewerApp::statusLine() const {
     const int done = int(record_.frames.size());
     const double engine_ms = done > 0 ? record_.frames.back().result.total_ms : 0.0;
     const double fps = smoothed_frame_s_ > 0.0 ? 1.0 / smoothed_frame_s_ : 0.0;
-    const char* tracking = done > 0 ? toString(record_.frames.back().result.quality) : "-";
-    std::snprintf(text, sizeof text, "frame %d%s%s | %.1f ms/frame | %.1f fps | tracking %s | %s%s | %s%s%s", done,
-                  total > 0 ? "/" : "", total > 0 ? std::to_string(total).c_str() : "", engine_ms, fps, tracking, modeName(mode_),
+    const FrameResult* last = done > 0 ? &record_.frames.back().result : nullptr;
+    // "tracking good", "LOST (relocalising)", "relocalised"; and the keyframes relocalisation can use.
+    std::string tracking = !last ? "tracking -"
+                           : last->status == TrackingStatus::Lost ? std::string("LOST") + (last->relocalisation_tried ? " (relocalising)" : "")
+                           : last->status == TrackingStatus::Relocalised ? "relocalised"
+                                                                          : std::string("tracking ") + toString(last->quality);
+    if (last && engine_->settings().relocalisation.enabled) tracking += ", " + std::to_string(last->keyframes) + " keyframes";
+    std::snprintf(text, sizeof text, "frame %d%s%s | %.1f ms/frame | %.1f fps | %s | %s%s | %s%s%s", done,
+                  total > 0 ? "/" : "", total > 0 ? std::to_string(total).c_str() : "", engine_ms, fps, tracking.c_str(), modeName(mode_),
                   free_view_.active() ? ", free view" : "", running_ ? "running" : "paused", status_.empty() ? "" : " | ",
                   status_.c_str());
     return text;

@@ -7,6 +7,7 @@
 #include <iostream>
 
 #include "LabelInput.h"
+#include "RelocalisationOptions.h"
 #include "ViewerApp.h"
 #include "voxfuse/core/Error.h"
 
@@ -99,6 +100,7 @@ int main(int argc, char** argv) {
     cli.add_option("--device", o.device, "where the frame loop runs and the map lives: cpu, or cuda for the GPU (image processing, tracking, fusion, raycast, meshes)")->capture_default_str()->check(CLI::IsMember({"cpu", "cuda"}));
     cli.add_option("--poses", o.poses, "track the camera, or take the source's ground truth")
         ->capture_default_str()->check(CLI::IsMember({"track", "groundtruth"}));
+    app::addRelocalisationOptions(cli, o.engine.relocalisation);
     cli.add_option("--out", o.viewer.out_dir, "folder for the mesh (m), the map (s) and screenshot (p)")->capture_default_str();
     cli.add_option("--load-map", o.load_map, "continue the map in this file (.vfm; see voxfuse --save-map and key s)")->check(CLI::ExistingFile);
     cli.add_option("--frames", o.viewer.max_frames, "stop processing after N frames (0 = all)")->check(CLI::NonNegativeNumber);

@@ -10,6 +10,7 @@
 #include <iostream>
 
 #include "LabelInput.h"
+#include "RelocalisationOptions.h"
 #include "ResourceUsage.h"
 #include "RunRecord.h"
 #include "SequenceRunner.h"
@@ -401,6 +402,7 @@ int main(int argc, char** argv) {
     cli.add_option("--tracker-levels", o.tracker_levels, "pyramid levels coarse to fine: r rotation, t translation, b both (e.g. rbb)");
     cli.add_option("--tracker-iterations", o.tracker_iterations, "iterations per level, coarse to fine");
     cli.add_option("--tracker-max-distance", o.tracker_max_distance, "ICP outlier distance per level (m), coarse to fine");
+    app::addRelocalisationOptions(cli, o.engine.relocalisation);
     CLI11_PARSE(cli, argc, argv);
     for (const char* option : {"--index", "--voxel-size", "--mu", "--max-blocks", "--hash-buckets", "--hash-excess", "--volume-size", "--volume-offset"})
         if (cli.count(option) > 0) o.given.push_back(option);

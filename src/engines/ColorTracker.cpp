@@ -56,8 +56,9 @@ public:
 
     void reset() override {
         seen_model_ = false;
-        frames_.forget();
+        forgetLastPose();
     }
+    void forgetLastPose() override { frames_.forget(); }
     const TrackerStats& lastStats() const override { return stats_; }
     const TrackerSettings& settings() const override { return settings_; }
 

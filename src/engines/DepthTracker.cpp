@@ -54,7 +54,7 @@ public:
         }
         seen_model_ = seen_model_ || model_ok;
         if (state.quality == TrackingQuality::Failed) motion_.forget();
-        else motion_.record(state.T_world_camera, view.timestamp_s);
+        else motion_.record(state.T_world_camera, {view.timestamp_s, view.frame_index});
         if (photometric_) {
             if (state.quality == TrackingQuality::Failed)
                 photometric_->forget();  // its pose is unknown: it must not colour the next model
@@ -66,6 +66,9 @@ public:
 
     void reset() override {
         seen_model_ = false;
+        forgetLastPose();
+    }
+    void forgetLastPose() override {
         motion_.forget();
         if (photometric_) photometric_->forget();
     }
@@ -98,7 +101,7 @@ private:
 
     void estimatePose(TrackingState& state, const View& view, const RenderState& model, bool use_color) {
         const Eigen::Matrix4d T_start = pose::toEigenD(state.T_world_camera);
-        Eigen::Matrix4d T = settings_.predict_motion ? motion_.predict(state.T_world_camera, view.timestamp_s) : T_start;
+        Eigen::Matrix4d T = settings_.predict_motion ? motion_.predict(state.T_world_camera, {view.timestamp_s, view.frame_index}) : T_start;
         NormalEquations<double> finest = NormalEquations<double>::zero();
         for (int li = 0; li < levelCount(); ++li) finest = refineOnLevel(li, model, use_color, T);
 

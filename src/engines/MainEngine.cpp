@@ -3,9 +3,11 @@
 #include "voxfuse/engines/MainEngine.h"
 
 #include <chrono>
+#include <climits>
 #include <cstring>
 #include <type_traits>
 
+#include "PoseUpdate.h"
 #include "voxfuse/core/Error.h"
 #include "voxfuse/core/Timer.h"
 #include "voxfuse/engines/AllocationEngine.h"
@@ -13,6 +15,7 @@
 #include "voxfuse/engines/LowLevelEngine.h"
 #include "voxfuse/engines/MeshingEngine.h"
 #include "voxfuse/engines/RaycastEngine.h"
+#include "voxfuse/engines/Relocaliser.h"
 #include "voxfuse/engines/SwappingEngine.h"
 #include "voxfuse/objects/GlobalCache.h"
 #include "voxfuse/objects/Scene.h"
@@ -25,7 +28,7 @@ namespace {
 // boundaries, read once the frame's work has finished (no synchronisation between stages).
 class StageClock {
 public:
-    static constexpr int kMaxStages = 8;
+    static constexpr int kMaxStages = 10;
     explicit StageClock(bool gpu) : gpu_(gpu) {
         if (gpu_)
             for (void*& e : events_) e = device_memory::createEvent();
@@ -90,6 +93,7 @@ public:
                 cache_ = std::make_unique<GlobalCache>(sizeof(TVoxel) * kBlockVoxelCount, settings.swap.swap_file);
             }
         }
+        if (settings.relocalisation.enabled) relocaliser_ = std::make_unique<Relocaliser>(settings.relocalisation, calib.depth.size());
     }
 
     // On the GPU only the frame's images go up (raw depth, colour, classes); everything else stays there.
@@ -116,10 +120,11 @@ public:
         if (T_world_camera_given) {
             tracking_ = TrackingState();
             tracking_.T_world_camera = *T_world_camera_given;
+            lost_ = false;
+            clock_.stageDone("track");
         } else {
-            tracker_->track(tracking_, view_, model_);
+            trackOrRelocalise(result);
         }
-        clock_.stageDone("track");
         result.tracking = tracking_;
         result.quality = tracking_.quality;
         result.T_world_camera = tracking_.T_world_camera;
@@ -145,6 +150,8 @@ public:
 
         raycastModel(&view_.depth);
         clock_.stageDone("raycast");
+
+        if (relocaliser_ && !T_world_camera_given) keepKeyframes(result);
 
         if (swapping_) {
             // Blocks that left the view go to the cache.
@@ -215,6 +222,7 @@ public:
         else allocation_stats_ = AllocationStats();
         frames_fused_ = 0;
         tracker_->reset();
+        forgetKeyframes();
         tracking_ = TrackingState();
         tracking_.T_world_camera = info.T_world_camera;
         has_source_origin_ = info.has_origin;
@@ -235,6 +243,7 @@ public:
     void reset() override {
         resetScene();
         tracker_->reset();
+        forgetKeyframes();
         tracking_ = TrackingState();
         model_ = RenderState();
         ++model_version_;
@@ -278,6 +287,97 @@ private:
             display_version_ = model_version_;
         }
         return display_;
+    }
+
+    // The pose of a frame that has none given: tracked from the last pose, or, on the frame tracking
+    // fails and on every frame while lost, looked up among the keyframes (relocalise()).
+    void trackOrRelocalise(FrameResult& result) {
+        bool found = false;
+        if (lost_ && relocaliser_) {
+            // Only relocalisation runs: the frame has no verdict of the tracker's own.
+            tracking_.quality = TrackingQuality::Failed;
+            tracking_.inlier_ratio = tracking_.residual_m = tracking_.condition = 0.f;
+        } else {
+            const Mat4f T_world_last = tracking_.T_world_camera;
+            tracker_->track(tracking_, view_, model_);
+            clock_.stageDone("track");
+            found = tracking_.quality != TrackingQuality::Failed;
+            if (found && relocaliser_ && relocaliser_->looksLost(tracking_)) {
+                // Converged, but onto far too little of the model: most likely a wrong pose after a jump.
+                tracking_.T_world_camera = T_world_last;
+                tracking_.quality = TrackingQuality::Failed;
+                tracker_->forgetLastPose();
+                found = false;
+            }
+        }
+        // A frame with less depth than the tracker needs (a covered lens) is not worth the candidates.
+        if (!found && relocaliser_ && low_level_->countValidDepth(view_.depth) >= settings_.tracker.min_inliers) {
+            result.relocalisation_tried = true;
+            found = relocalise();
+            if (!found) tracker_->forgetLastPose();  // every try's pose was rejected
+            clock_.stageDone("relocalise");
+            if (found) result.status = TrackingStatus::Relocalised;
+        }
+        lost_ = !found;
+        if (lost_) result.status = TrackingStatus::Lost;
+        result.keyframes = relocaliser_ ? relocaliser_->database().size() : 0;
+    }
+
+    // Candidate poses for the frame: while lost, the last good pose first (after a short gap the camera
+    // is still near it), then those of the keyframes that look most like the frame. The first that
+    // passes acceptRelocalisation() becomes the frame's pose. Returns whether one did; if none did,
+    // tracking_ keeps the last good pose.
+    bool relocalise() {
+        if (onGpu()) view_.depth.memory().updateHost();
+        // The last good pose is tracked against the raycast from it, which the last good frame left.
+        if (lost_ && refineCandidate(tracking_.T_world_camera, &model_)) return true;
+        for (const KeyframeMatch& m : relocaliser_->lookUp(view_))
+            if (refineCandidate(relocaliser_->database().keyframe(m.keyframe).T_world_camera, nullptr)) return true;
+        return false;
+    }
+
+    // Refines a candidate by the tracker against the model raycast from it (`model`, or raycast here
+    // when null), then once more against the raycast from the refined pose, and checks the result
+    // (Relocaliser.h). Takes it as the frame's tracking state when it passes.
+    bool refineCandidate(Mat4f T_world_start, const RenderState* model) {
+        TrackingState first;
+        first.T_world_camera = T_world_start;
+        if (!model) raycast_->raycast(scene_, view_.calib.depth, T_world_start, candidate_model_);
+        tracker_->track(first, view_, model ? *model : candidate_model_);
+        // Too little of the frame explained already: not worth the second refinement.
+        if (first.quality != TrackingQuality::Good || first.inlier_ratio < settings_.relocalisation.min_inlier_ratio) return false;
+        raycast_->raycast(scene_, view_.calib.depth, first.T_world_camera, candidate_model_);
+        RelocalisationCheck check;
+        check.refined = first;
+        tracker_->track(check.refined, view_, candidate_model_);
+        pose::motionBetween(pose::toEigenD(first.T_world_camera), pose::toEigenD(check.refined.T_world_camera), check.step_m, check.step_deg);
+        if (onGpu()) candidate_model_.updateHost();
+        raycastDepth(candidate_model_, candidate_depth_);
+        check.depth = compareDepth(view_.depth, candidate_depth_, settings_.relocalisation.agreement_tolerance_m);
+        if (!acceptRelocalisation(settings_.relocalisation, check)) return false;
+        tracking_ = check.refined;
+        return true;
+    }
+
+    // Bookkeeping of a fused, tracked frame: a good one joins the frames loss detection compares with,
+    // and becomes a keyframe when it is unlike every keyframe.
+    void keepKeyframes(FrameResult& result) {
+        const bool relocalised = result.status == TrackingStatus::Relocalised;
+        if (relocalised) relocaliser_->forgetRecentFrames();
+        frames_since_relocalisation_ = relocalised ? 0 : frames_since_relocalisation_ + 1;
+        if (tracking_.quality != TrackingQuality::Good) return;
+        relocaliser_->rememberGoodFrame(tracking_);
+        if (frames_since_relocalisation_ <= settings_.relocalisation.keyframe_pause_frames) return;
+        if (onGpu()) view_.depth.memory().updateHost();
+        relocaliser_->addKeyframe(view_, tracking_.T_world_camera);
+        result.keyframes = relocaliser_->database().size();
+        clock_.stageDone("keyframes");
+    }
+
+    void forgetKeyframes() {
+        if (relocaliser_) relocaliser_->clear();
+        lost_ = false;
+        frames_since_relocalisation_ = INT_MAX / 2;
     }
 
     MeshingEngine<TVoxel, TIndex>& hostMeshing() {
@@ -381,6 +481,11 @@ private:
     int frames_fused_ = 0;
     bool has_source_origin_ = false;
     Mat4f T_source_world_ = Mat4f::identity();
+    std::unique_ptr<Relocaliser> relocaliser_;  // with RelocalisationSettings::enabled
+    bool lost_ = false;                         // the last frame had no pose; tracking_ holds the last good one
+    int frames_since_relocalisation_ = INT_MAX / 2;
+    RenderState candidate_model_;               // the model raycast from a relocalisation candidate
+    Image<float> candidate_depth_;
     std::unique_ptr<SwappingEngine<TVoxel>> swapping_;  // with SwapSettings::enabled (hash only)
     std::unique_ptr<GlobalCache> cache_;
     StageClock clock_;
@@ -478,5 +583,9 @@ IndexType parseIndexType(const std::string& name) {
 }
 
 const char* toString(IndexType type) { return type == IndexType::Dense ? "dense" : "hash"; }
+
+const char* toString(TrackingStatus status) {
+    return status == TrackingStatus::Tracking ? "tracking" : status == TrackingStatus::Lost ? "lost" : "relocalised";
+}
 
 }  // namespace voxfuse

@@ -11,17 +11,22 @@ namespace voxfuse {
 
 class MotionPredictor {
 public:
-    // The pose to start from for a frame taken at `time_s`, the caller's pose being `T_given`: the
-    // last motion, scaled to the time since the last frame, applied to `T_given`. No prediction
-    // (T_given itself) unless T_given is the last recorded pose (nothing moved the camera in between:
-    // a reset, a loaded map, a relocalisation), the last two frames were recorded, and the time since
-    // the last frame is at most kMaxGapRatio frame intervals (after a longer gap the motion is unknown).
-    Eigen::Matrix4d predict(const Mat4f& T_given, double time_s) const {
+    // When a frame was taken: its timestamp (> 0) or, without one, its index in frames (>= 0).
+    struct FrameTime {
+        double timestamp_s = 0.0;
+        int index = -1;
+    };
+
+    // The pose to start from for a frame taken at `now`, the caller's pose being `T_given`: the last
+    // motion, scaled to the time since the last frame, applied to `T_given`. No prediction (T_given
+    // itself) unless T_given is the last recorded pose (nothing moved the camera in between: a reset, a
+    // loaded map, a relocalisation), the last two recorded frames are different frames, and `now` is
+    // later than the last one by at most kMaxGapRatio of their interval (after a longer gap the motion
+    // is unknown; the same frame tracked again, as relocalisation does, has no motion to predict).
+    Eigen::Matrix4d predict(const Mat4f& T_given, FrameTime now) const {
         const Eigen::Matrix4d given = pose::toEigenD(T_given);
         if (count_ < 2 || !std::equal(T_given.m, T_given.m + 16, last_f_.m)) return given;
-        double ratio = 1.0;  // without timestamps, frames are taken to be evenly spaced
-        const double interval = last_time_s_ - previous_time_s_;
-        if (time_s > 0.0 && last_time_s_ > 0.0 && previous_time_s_ > 0.0 && interval > 0.0) ratio = (time_s - last_time_s_) / interval;
+        const double ratio = elapsedRatio(now);
         if (!(ratio > 0.0 && ratio <= kMaxGapRatio)) return given;
         const Eigen::Matrix4d motion = previous_.inverse() * last_;  // in the last camera's frame
         const Eigen::AngleAxisd rotation(Eigen::Matrix3d(motion.topLeftCorner<3, 3>()));
@@ -31,25 +36,44 @@ public:
         return given * scaled;
     }
 
-    // A frame tracked well at `time_s` (<= 0: no timestamp), with the pose handed back to the caller.
-    void record(const Mat4f& T_world_camera, double time_s) {
-        previous_ = last_;
-        previous_time_s_ = last_time_s_;
+    // A frame tracked well at `now`, with the pose handed back to the caller. The same frame recorded
+    // again (tracked once more from another start) replaces its pose.
+    void record(const Mat4f& T_world_camera, FrameTime now) {
+        if (count_ == 0 || !sameFrame(now, last_time_)) {
+            previous_ = last_;
+            previous_time_ = last_time_;
+            count_ = count_ < 2 ? count_ + 1 : 2;
+        }
         last_ = pose::toEigenD(T_world_camera);
         last_f_ = T_world_camera;
-        last_time_s_ = time_s;
-        count_ = count_ < 2 ? count_ + 1 : 2;
+        last_time_ = now;
     }
 
-    // The motion is unknown from here on (a failed frame, a reset).
+    // The motion is unknown from here on (a failed frame, a rejected pose, a reset).
     void forget() { count_ = 0; }
 
     static constexpr double kMaxGapRatio = 3.0;
 
 private:
+    static bool sameFrame(FrameTime a, FrameTime b) { return a.timestamp_s == b.timestamp_s && a.index == b.index; }
+
+    // (now - last) / (last - previous), in timestamps when all three have one, else in frame indices;
+    // 0 when neither is known.
+    double elapsedRatio(FrameTime now) const {
+        if (now.timestamp_s > 0.0 && last_time_.timestamp_s > 0.0 && previous_time_.timestamp_s > 0.0) {
+            const double interval = last_time_.timestamp_s - previous_time_.timestamp_s;
+            return interval > 0.0 ? (now.timestamp_s - last_time_.timestamp_s) / interval : 0.0;
+        }
+        if (now.index >= 0 && last_time_.index >= 0 && previous_time_.index >= 0) {
+            const int interval = last_time_.index - previous_time_.index;
+            return interval > 0 ? double(now.index - last_time_.index) / double(interval) : 0.0;
+        }
+        return 0.0;
+    }
+
     Eigen::Matrix4d previous_ = Eigen::Matrix4d::Identity(), last_ = Eigen::Matrix4d::Identity();
     Mat4f last_f_ = Mat4f::identity();
-    double previous_time_s_ = 0.0, last_time_s_ = 0.0;
+    FrameTime previous_time_, last_time_;
     int count_ = 0;
 };
 

@@ -9,6 +9,7 @@
 
 #include "voxfuse/core/DeviceMemory.h"
 #include "voxfuse/engines/RaycastEngine.h"
+#include "voxfuse/engines/Relocaliser.h"
 #include "voxfuse/engines/Tracker.h"
 #include "voxfuse/io/MapFile.h"
 #include "voxfuse/io/RGBDFrame.h"
@@ -59,6 +60,8 @@ struct MainEngineSettings {
     int tracking_raycast_downsample = 2;
     // Hash only: only the part of the map near the view stays in the voxel array.
     SwapSettings swap;
+    // Keyframes while tracking is good, and finding the camera again from them once it is lost.
+    RelocalisationSettings relocalisation;
 };
 
 VoxelType parseVoxelType(const std::string& name);  // "s", "f", "s_rgb", "f_rgb", "s_label", "s_rgb_label"; ConfigError otherwise
@@ -69,15 +72,29 @@ IndexType parseIndexType(const std::string& name);  // "dense" or "hash"; Config
 const char* toString(IndexType type);
 
 struct StageTime {
-    const char* stage;  // "depth", "track", "allocate", "integrate", "raycast", and with swapping "swap_in", "swap_out"
+    const char* stage;  // "depth", "track", "allocate", "integrate", "raycast", with swapping "swap_in", "swap_out", and
+                        // with relocalisation "relocalise" (a lost frame) and "keyframes" (a well-tracked one)
     double ms;          // wall clock; on the GPU up to the end of the stage's queued work
 };
+
+// Where the camera stands after a frame.
+enum class TrackingStatus {
+    Tracking,     // the pose was tracked from the previous one (or given)
+    Lost,         // no pose: tracking failed and nothing was found again; the frame was not fused
+    Relocalised,  // the first pose after a loss, found by relocalisation
+};
+const char* toString(TrackingStatus status);  // "tracking", "lost", "relocalised"
 
 struct FrameResult {
     bool fused = false;  // the frame was integrated into the map (not when tracking failed)
     TrackingQuality quality = TrackingQuality::Good;
-    Mat4f T_world_camera = Mat4f::identity();  // after a failure: the last good pose
-    TrackingState tracking;  // the tracker's full verdict (inlier ratio, residual, condition)
+    TrackingStatus status = TrackingStatus::Tracking;
+    bool relocalisation_tried = false;  // the frame was looked up among the keyframes and candidates refined
+    int keyframes = 0;                  // in the relocaliser's database after this frame
+    Mat4f T_world_camera = Mat4f::identity();  // when lost: the last good pose
+    // The tracker's full verdict (inlier ratio, residual, condition), also when the engine found it
+    // implausible; on a relocalised frame the accepted candidate's; zero on a frame only relocalisation saw.
+    TrackingState tracking;
     double total_ms = 0.0;  // the engine's processing of this frame (no file decoding)
     std::vector<StageTime> stages;
     AllocationStats allocation;  // the index after this frame (all zero for the dense index)
@@ -90,7 +107,9 @@ public:
 
     // Processes one frame. With `T_world_camera_given` (e.g. ground truth) that pose is used; without
     // it the tracker estimates the pose against the model (the first frame defines the world). A frame
-    // whose tracking failed is not fused: the map and the last good pose stay as they were.
+    // whose tracking failed is not fused: the map and the last good pose stay as they were. Tracking
+    // is then lost, and with MainEngineSettings::relocalisation each frame is looked up among the
+    // keyframes until a candidate pose passes its strict test; nothing is fused until then.
     virtual FrameResult processFrame(const RGBDFrame& frame, const Mat4f* T_world_camera_given) = 0;
 
     virtual const MainEngineSettings& settings() const = 0;

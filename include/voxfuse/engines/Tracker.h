@@ -45,6 +45,9 @@ public:
     virtual void track(TrackingState& tracking_state, const View& view, const RenderState& model) = 0;
     // Forgets the previous frame and the map (after a map reset).
     virtual void reset() = 0;
+    // The pose the last track() returned is not to be built on (the caller rejected it, or it was one
+    // of several tries on one frame): no motion is predicted from it and no model coloured with it.
+    virtual void forgetLastPose() = 0;
     virtual const TrackerStats& lastStats() const = 0;
     virtual const TrackerSettings& settings() const = 0;
 };

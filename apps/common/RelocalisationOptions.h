@@ -1,0 +1,20 @@
+#pragma once
+// The relocalisation options every front-end offers (voxfuse, voxfuse_viewer, voxfuse_bench).
+
+#include <CLI/CLI.hpp>
+
+#include "voxfuse/engines/Relocaliser.h"
+
+namespace voxfuse::app {
+
+// --relocalise on|off and --relocalise-candidates N, written into `settings` (kept alive by the caller).
+inline void addRelocalisationOptions(CLI::App& cli, RelocalisationSettings& settings) {
+    cli.add_option_function<std::string>(
+           "--relocalise", [&settings](const std::string& mode) { settings.enabled = mode == "on"; },
+           "once tracking is lost, find the camera again from keyframes (nothing is fused until then)")
+        ->default_str(settings.enabled ? "on" : "off")->check(CLI::IsMember({"on", "off"}));
+    cli.add_option("--relocalise-candidates", settings.candidates, "relocalisation: keyframes tried per lost frame, most alike first")
+        ->capture_default_str()->check(CLI::PositiveNumber);
+}
+
+}  // namespace voxfuse::app

@@ -1,0 +1,92 @@
+#pragma once
+// Finding the camera again after tracking was lost. While tracking is good, frames whose fern codes
+// (engines/FernEncoder.h) differ from every stored keyframe become keyframes (engines/KeyframeDatabase.h).
+// Once lost, a frame's code is looked up and the poses of the nearest keyframes are candidates:
+// MainEngine refines each by the tracker against the model raycast from it and takes one only when
+// acceptRelocalisation() holds, a stricter test than the tracker's own, so that a wrong pose is
+// never fused. Host code; on the GPU the frame's depth is brought to the host to be encoded.
+
+#include <memory>
+#include <vector>
+
+#include "voxfuse/engines/FernEncoder.h"
+#include "voxfuse/engines/KeyframeDatabase.h"
+#include "voxfuse/objects/TrackingState.h"
+#include "voxfuse/objects/View.h"
+
+namespace voxfuse {
+
+struct RelocalisationSettings {
+    bool enabled = true;
+    // Loss detection beyond the tracker's own failure: a frame tracked with an inlier ratio below this
+    // fraction of the median of the last recent_frames good frames is taken as lost (a jump the tracker
+    // "converged" from into a wrong pose: teddy's inlier ratio falls from ~0.78 to ~0.25 there).
+    float lost_inlier_ratio_drop = 0.5f;
+    int recent_frames = 10;
+    FernSettings ferns;
+    int max_keyframes = 1000;
+    float keyframe_min_dissimilarity = 0.2f;  // a frame this dissimilar from every keyframe becomes one
+    int keyframe_pause_frames = 10;           // frames after a relocalisation that are not made keyframes (their pose is the least sure)
+    int candidates = 3;                       // keyframes tried per lost frame, nearest codes first (the last good pose is tried too)
+
+    // Acceptance (all must hold), measured after a second refinement from the refined pose against the
+    // model raycast from there.
+    float min_inlier_ratio = 0.5f;            // the tracker's inliers / valid frame pixels
+    float max_residual_m = 0.006f;            // the tracker's RMS point-to-plane residual
+    float min_overlap = 0.5f;                 // valid frame pixels where the model has depth, of all valid frame pixels
+    float min_agreement = 0.75f;              // of those, the ones whose depths differ by less than agreement_tolerance_m
+    float agreement_tolerance_m = 0.02f;
+    float max_refinement_step_m = 0.01f;      // the second refinement moves the pose less than this: it had converged
+    float max_refinement_step_deg = 1.f;
+};
+
+// How a frame's depth agrees with the model's depth seen from the same pose (both in metres, 0 = none).
+struct DepthAgreement {
+    float overlap = 0.f;    // valid frame pixels where the model has depth / valid frame pixels
+    float agreement = 0.f;  // of the pixels both have, those within the tolerance
+};
+DepthAgreement compareDepth(const Image<float>& frame_depth_m, const Image<float>& model_depth_m, float tolerance_m);
+
+// What acceptance looks at for one candidate.
+struct RelocalisationCheck {
+    TrackingState refined;  // the second refinement's verdict and pose
+    float step_m = 0.f;     // how far the second refinement moved the pose
+    float step_deg = 0.f;
+    DepthAgreement depth;   // at the first refinement's pose, against the raycast from there
+};
+bool acceptRelocalisation(const RelocalisationSettings& settings, const RelocalisationCheck& check);
+
+class Relocaliser {
+public:
+    // For frames of `frame_size` (the depth camera's).
+    Relocaliser(const RelocalisationSettings& settings, Vec2i frame_size);
+    ~Relocaliser();
+
+    // Whether a frame the tracker did not fail is still implausible (see lost_inlier_ratio_drop)...
+    bool looksLost(const TrackingState& tracked) const;
+    // ... against the recent good frames given here; forgotten after a relocalisation, as the camera
+    // may be somewhere else entirely.
+    void rememberGoodFrame(const TrackingState& tracked);
+    void forgetRecentFrames() { recent_inlier_ratios_.clear(); }
+    // Keyframe bookkeeping of a well-tracked frame (its depth in host memory): stored when novel.
+    // Returns whether it became a keyframe.
+    bool addKeyframe(const View& view, const Mat4f& T_world_camera);
+    // The keyframes whose codes are nearest to the frame's, nearest first (at most settings.candidates).
+    std::vector<KeyframeMatch> lookUp(const View& view);
+
+    const KeyframeDatabase& database() const { return database_; }
+    const RelocalisationSettings& settings() const { return settings_; }
+    // Forgets every keyframe and the recent frames (a new map).
+    void clear();
+
+private:
+    FernCode encode(const View& view);
+
+    RelocalisationSettings settings_;
+    Vec2i frame_size_;
+    std::unique_ptr<FernEncoder> encoder_;  // made for the first frame encoded: with intensity when it has colour
+    KeyframeDatabase database_;
+    std::vector<float> recent_inlier_ratios_;  // of the last good frames, oldest first
+};
+
+}  // namespace voxfuse

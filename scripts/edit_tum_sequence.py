@@ -1,0 +1,101 @@
+#!/usr/bin/env python3
+"""Makes a TUM RGB-D folder that plays another one's frames edited: some left out, some in another
+order, some with their depth replaced by zeros (a covered lens). No image is copied: the new lists
+name the original files, and blank depth is one all-zero PNG. For trying loss and relocalisation
+on recorded data, e.g. (frame numbers count the depth images on disk, from 0):
+
+  # 40 frames cut out of the recording
+  scripts/edit_tum_sequence.py ../shared/data/tum_fr3_teddy_200 /tmp/teddy_cut --frames 0-79,120-192 --calib calib/tum_fr3.txt
+  # out on the even frames, back on the odd ones, 40 frames cut from the way back
+  scripts/edit_tum_sequence.py ../shared/data/tum_fr3_teddy_200 /tmp/teddy_back --frames 0-120/2,119-101/2,19-1/2 --calib calib/tum_fr3.txt
+  # a covered lens for 20 frames
+  scripts/edit_tum_sequence.py ../shared/data/tum_fr3_teddy_200 /tmp/teddy_covered --blank 80-99 --calib calib/tum_fr3.txt
+  voxfuse_bench /tmp/teddy_cut
+"""
+
+import argparse
+import os
+import shutil
+import struct
+import sys
+import zlib
+
+
+def read_list(folder, name):
+    """(timestamp, absolute path) of the listed images that are on disk, in list order."""
+    entries = []
+    with open(os.path.join(folder, name)) as f:
+        for line in f:
+            fields = line.split()
+            if len(fields) < 2 or fields[0].startswith("#"):
+                continue
+            path = os.path.abspath(os.path.join(folder, fields[1]))
+            if os.path.exists(path):
+                entries.append((fields[0], path))
+    return entries
+
+
+def parse_ranges(text, count):
+    """'0-79,120-192' or '0-120/2,119-1/2' (inclusive ends, either direction) -> frame numbers."""
+    frames = []
+    for part in text.split(","):
+        span, _, step = part.partition("/")
+        first, _, last = span.partition("-")
+        first, last, step = int(first), int(last or first), int(step or 1)
+        if step < 1 or not (0 <= first < count and 0 <= last < count):
+            sys.exit(f"edit_tum_sequence: bad range '{part}' (frames 0..{count - 1}, step >= 1)")
+        frames += list(range(first, last + 1, step) if last >= first else range(first, last - 1, -step))
+    return frames
+
+
+def write_zero_png(path, width, height):
+    """A 16-bit greyscale PNG of zeros: depth 0 is 'no measurement'."""
+    def chunk(kind, data):
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
+    rows = b"".join(b"\x00" + bytes(2 * width) for _ in range(height))
+    with open(path, "wb") as f:
+        f.write(b"\x89PNG\r\n\x1a\n")
+        f.write(chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 16, 0, 0, 0, 0)))
+        f.write(chunk(b"IDAT", zlib.compress(rows)))
+        f.write(chunk(b"IEND", b""))
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("source", help="TUM RGB-D folder (rgb.txt, depth.txt, optional groundtruth.txt)")
+    parser.add_argument("out", help="folder to write (created; its lists are replaced)")
+    parser.add_argument("--frames", help="frames to play, in order (default: all)")
+    parser.add_argument("--blank", help="frames whose depth is replaced by zeros")
+    parser.add_argument("--calib", help="calibration file to put in OUT/calib.txt (default: the source's own, if any)")
+    parser.add_argument("--size", default="640x480", help="depth image size for the blank PNG (default 640x480)")
+    args = parser.parse_args()
+
+    depth = read_list(args.source, "depth.txt")
+    frames = parse_ranges(args.frames, len(depth)) if args.frames else list(range(len(depth)))
+    blank = set(parse_ranges(args.blank, len(depth))) if args.blank else set()
+    os.makedirs(args.out, exist_ok=True)
+    blank_png = os.path.abspath(os.path.join(args.out, "blank_depth.png"))
+    if blank:
+        width, height = (int(v) for v in args.size.lower().split("x"))
+        write_zero_png(blank_png, width, height)
+    with open(os.path.join(args.out, "depth.txt"), "w") as f:
+        f.write("# depth maps, edited by edit_tum_sequence.py\n")
+        for i in frames:
+            stamp, path = depth[i]
+            f.write(f"{stamp} {blank_png if i in blank else path}\n")
+    with open(os.path.join(args.out, "rgb.txt"), "w") as f:
+        f.write("# colour images of the source\n")
+        for stamp, path in read_list(args.source, "rgb.txt"):
+            f.write(f"{stamp} {path}\n")
+    gt = os.path.abspath(os.path.join(args.source, "groundtruth.txt"))
+    link = os.path.join(args.out, "groundtruth.txt")
+    if os.path.exists(gt) and not os.path.lexists(link):
+        os.symlink(gt, link)
+    calib = args.calib or os.path.join(args.source, "calib.txt")
+    if os.path.exists(calib):
+        shutil.copyfile(calib, os.path.join(args.out, "calib.txt"))
+    print(f"edit_tum_sequence: {len(frames)} frames ({len(blank & set(frames))} blank) -> {args.out}")
+
+
+if __name__ == "__main__":
+    main()

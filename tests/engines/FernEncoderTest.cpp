@@ -1,0 +1,108 @@
+// Fern codes of exact synthetic views: the same view gives the same code, nearby views share most
+// codes, unrelated ones few, and the small images the tests read are what they claim.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "SyntheticViews.h"
+#include "voxfuse/core/Error.h"
+#include "voxfuse/engines/FernEncoder.h"
+
+namespace voxfuse {
+namespace {
+
+const Intrinsics kCamera = test::kinectIntrinsics(160, 120);
+const Eigen::Vector3f kTarget{0.1f, 0.05f, 0.6f};  // the room's objects
+
+// The room seen from `degrees` along a circle of radius 1.6 m around its objects, at head height.
+View roomView(float degrees, float radius_m = 1.6f) {
+    static const synth::SyntheticScene room = synth::SyntheticScene::defaultRoom();
+    const float a = degrees * float(EIGEN_PI) / 180.f;
+    const Eigen::Vector3f eye = kTarget + Eigen::Vector3f(radius_m * std::cos(a), radius_m * std::sin(a), 0.85f);
+    return test::renderView(room, kCamera, test::lookAt(eye, kTarget));
+}
+
+FernCode encode(const View& view, FernSettings settings = {}) {
+    return FernEncoder(settings, view.depth.size(), true).encode(view.depth, view.rgb);
+}
+
+TEST(FernEncoderTest, TheSameSettingsGiveTheSameCode) {
+    const View view = roomView(180.f);
+    const FernCode code = encode(view);
+    ASSERT_EQ(code.size(), 500u);
+    EXPECT_EQ(encode(view), code);
+    for (const std::uint8_t word : code) EXPECT_LT(word, 16) << "four tests per fern: four bits";
+    FernSettings other;
+    other.seed = 2;
+    EXPECT_GT(fernDissimilarity(encode(view, other), code), 0.3f) << "another seed draws other tests";
+}
+
+TEST(FernEncoderTest, NearbyViewsShareMostCodesAndDistantViewsFew) {
+    const FernCode here = encode(roomView(180.f));
+    const float near = fernDissimilarity(here, encode(roomView(181.f)));
+    const float apart = fernDissimilarity(here, encode(roomView(200.f)));
+    const float opposite = fernDissimilarity(here, encode(roomView(0.f)));
+    std::printf("[ ferns    ] dissimilarity 1 degree on %.3f, 20 degrees %.3f, the other side %.3f\n", near, apart, opposite);
+    EXPECT_LT(near, 0.15f);
+    EXPECT_GT(apart, 0.3f);
+    EXPECT_GT(opposite, 0.5f);
+    EXPECT_LT(near, apart);
+}
+
+TEST(FernEncoderTest, IntensityIsNormalisedSoExposureMovesFewBits) {
+    View view = roomView(180.f);
+    const FernCode bright = encode(view);
+    for (std::size_t i = 0; i < view.rgb.pixelCount(); ++i) {
+        Vec4u8& p = view.rgb.host()[i];
+        p = Vec4u8{(unsigned char)(0.6f * p.x), (unsigned char)(0.6f * p.y), (unsigned char)(0.6f * p.z), 255};
+    }
+    EXPECT_LT(fernDissimilarity(bright, encode(view)), 0.05f);
+    // Without colour the tests read depth only, and intensity makes a difference to the code.
+    const FernCode depth_only = FernEncoder(FernSettings{}, view.depth.size(), false).encode(view.depth, view.rgb);
+    EXPECT_GT(fernDissimilarity(bright, depth_only), 0.2f);
+}
+
+TEST(FernEncoderTest, SmallImagesAverageValidDepthAndNormaliseIntensity) {
+    Image<float> depth(Vec2i{160, 120});
+    Image<Vec4u8> rgb(Vec2i{160, 120});
+    for (int y = 0; y < 120; ++y)
+        for (int x = 0; x < 160; ++x) {
+            depth.at(x, y) = x < 80 ? 0.f : (x % 2 ? 1.f : 3.f);  // left half: no measurement
+            const unsigned char v = (unsigned char)(y < 60 ? 50 : 150);
+            rgb.at(x, y) = Vec4u8{v, v, v, 255};
+        }
+    const FernEncoder encoder(FernSettings{}, depth.size(), true);
+    ASSERT_EQ(encoder.codeImageSize(), (Vec2i{80, 60}));
+    std::vector<float> d, intensity;
+    encoder.shrink(depth, rgb, d, intensity);
+    ASSERT_EQ(d.size(), 80u * 60u);
+    EXPECT_EQ(d[10 + 30 * 80], 0.f) << "no valid pixel near: no depth";
+    EXPECT_FLOAT_EQ(d[60 + 30 * 80], 2.f) << "the average of 1 m and 3 m";
+    EXPECT_FLOAT_EQ(d[40 + 30 * 80], 2.f) << "next to the hole, valid cells alone count";
+    double mean = 0, square = 0;
+    for (const float v : intensity) mean += v;
+    mean /= double(intensity.size());
+    for (const float v : intensity) square += (v - mean) * (v - mean);
+    EXPECT_NEAR(mean, 0.0, 1e-4);
+    EXPECT_NEAR(std::sqrt(square / double(intensity.size())), 1.0, 1e-3);
+    EXPECT_LT(intensity[0], 0.f);
+    EXPECT_GT(intensity[80 * 59], 0.f);
+}
+
+TEST(FernEncoderTest, RejectsSettingsItCannotUse) {
+    FernSettings s;
+    s.tests_per_fern = 9;
+    EXPECT_THROW(FernEncoder(s, {640, 480}, true), ConfigError);
+    s = FernSettings();
+    s.fern_count = 0;
+    EXPECT_THROW(FernEncoder(s, {640, 480}, true), ConfigError);
+    EXPECT_THROW(FernEncoder(FernSettings{}, {0, 30}, true), ConfigError);
+    EXPECT_EQ(FernEncoder(FernSettings{}, {40, 30}, true).codeImageSize(), (Vec2i{40, 30})) << "a frame smaller than the code image";
+    const FernEncoder encoder(FernSettings{}, {160, 120}, true);
+    EXPECT_THROW(encoder.encode(Image<float>(Vec2i{320, 240}), Image<Vec4u8>()), ConfigError);
+    EXPECT_EQ(fernDissimilarity(FernCode(500, 0), FernCode(400, 0)), 1.f);
+}
+
+}  // namespace
+}  // namespace voxfuse

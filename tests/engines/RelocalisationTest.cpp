@@ -1,0 +1,140 @@
+// Loss and relocalisation in the whole pipeline, on exact synthetic views of the room along the
+// synthetic camera path: a jump back to a place seen before is found again at its exact pose, a
+// jump to a place never seen stays lost and fuses nothing.
+
+#include <gtest/gtest.h>
+
+#include "DeviceTestSupport.h"
+#include "SyntheticViews.h"
+#include "TrackingTestSupport.h"
+#include "CameraPath.h"
+#include "voxfuse/core/EigenInterop.h"
+#include "voxfuse/engines/MainEngine.h"
+
+namespace voxfuse {
+namespace {
+
+const Intrinsics kCamera = test::kinectIntrinsics(320, 240);
+
+class RelocalisationTest : public ::testing::TestWithParam<Device> {
+protected:
+    void SetUp() override {
+        VF_SKIP_IF_UNAVAILABLE(GetParam());
+        MainEngineSettings s;
+        s.device = GetParam();
+        s.voxel_type = VoxelType::S;
+        s.scene = test::centimetreSceneParams(4.f);
+        RGBDCalib calib;
+        calib.depth = calib.rgb = kCamera;
+        calib.disparity = DisparityCalib::affine(0.001f);
+        engine_ = MainEngine::create(s, calib);
+    }
+
+    // The room seen from the synthetic camera path at `path_frame` (30 per second, ~1 cm apart).
+    static Mat4f pathPose(int path_frame) { return toMat4f(synth::CameraPath().pose(path_frame).matrix()); }
+
+    FrameResult process(int path_frame) {
+        static const synth::SyntheticScene room = synth::SyntheticScene::defaultRoom();
+        const Mat4f T_world_camera = pathPose(path_frame);
+        if (!have_origin_) {
+            T_origin_world_ = rigidInverse(T_world_camera);  // the engine's world is the first camera
+            have_origin_ = true;
+        }
+        truth_.push_back(T_origin_world_ * T_world_camera);
+        results_.push_back(engine_->processFrame(test::toRgbdFrame(test::renderView(room, kCamera, T_world_camera), int(results_.size())), nullptr));
+        return results_.back();
+    }
+
+    // The first 2 s of the path, every third frame: 21 frames, 0.6 m along the room's long side.
+    void walkTheFirstStretch() {
+        for (int f = 0; f <= 60; f += 3) {
+            const FrameResult r = process(f);
+            ASSERT_EQ(r.status, TrackingStatus::Tracking) << "path frame " << f;
+            ASSERT_TRUE(r.fused);
+        }
+        ASSERT_GT(results_.back().keyframes, 1);
+        EXPECT_LT(results_.back().keyframes, 21);
+    }
+
+    // Frames with a pose are within `max_m` and `max_deg` of the truth; frames without one were not fused.
+    void expectNothingFusedWrongly(float max_m, float max_deg) {
+        for (std::size_t i = 0; i < results_.size(); ++i) {
+            const FrameResult& r = results_[i];
+            if (r.status == TrackingStatus::Lost) {
+                EXPECT_FALSE(r.fused) << "frame " << i;
+                continue;
+            }
+            EXPECT_LT(test::translationErrorM(r.T_world_camera, truth_[i]), max_m) << "frame " << i << " (" << toString(r.status) << ")";
+            EXPECT_LT(test::rotationErrorDeg(r.T_world_camera, truth_[i]), max_deg) << "frame " << i;
+        }
+    }
+
+    std::unique_ptr<MainEngine> engine_;
+    std::vector<FrameResult> results_;
+    std::vector<Mat4f> truth_;
+    bool have_origin_ = false;
+    Mat4f T_origin_world_ = Mat4f::identity();
+};
+
+// The index (from `from`) of the first relocalised frame, or -1.
+int firstRelocalised(const std::vector<FrameResult>& results, std::size_t from) {
+    for (std::size_t i = from; i < results.size(); ++i)
+        if (results[i].status == TrackingStatus::Relocalised) return int(i);
+    return -1;
+}
+
+TEST_P(RelocalisationTest, LostAtAPlaceNeverSeenAndFoundAgainAtASeenOne) {
+    walkTheFirstStretch();
+    const int blocks_before = engine_->allocationStats().blocks_allocated;
+
+    // The far side of the room, looking at the wall that was behind the camera: nothing to find.
+    const std::size_t unseen = results_.size();
+    for (int f = 480; f <= 492; f += 3) process(f);
+    for (std::size_t i = unseen; i < results_.size(); ++i) {
+        EXPECT_EQ(results_[i].status, TrackingStatus::Lost) << "frame " << i;
+        EXPECT_FALSE(results_[i].fused);
+        EXPECT_TRUE(results_[i].relocalisation_tried);
+    }
+    EXPECT_EQ(engine_->allocationStats().blocks_allocated, blocks_before) << "a lost frame allocates nothing";
+
+    // Back to 0.4 m behind where tracking was lost, between two frames seen on the way (a view never
+    // rendered before): found again from the keyframes, at the exact pose, and tracked on from there.
+    const std::size_t back = results_.size();
+    for (int f = 22; f <= 34; f += 3) process(f);
+    const int found = firstRelocalised(results_, back);
+    ASSERT_GE(found, 0) << "never relocalised";
+    EXPECT_LE(found - int(back), 2) << "frames back at a seen place before the camera was found";
+    const FrameResult& r = results_[std::size_t(found)];
+    std::printf("[ reloc    ] found %d frames after coming back: error %.2f mm %.3f deg, inliers %.3f\n", found - int(back),
+                1000 * test::translationErrorM(r.T_world_camera, truth_[std::size_t(found)]),
+                test::rotationErrorDeg(r.T_world_camera, truth_[std::size_t(found)]), r.tracking.inlier_ratio);
+    EXPECT_TRUE(r.fused);
+    for (std::size_t i = std::size_t(found) + 1; i < results_.size(); ++i)
+        EXPECT_EQ(results_[i].status, TrackingStatus::Tracking) << "frame " << i << ": tracking goes on from the found pose";
+    expectNothingFusedWrongly(0.005f, 0.5f);
+}
+
+INSTANTIATE_TEST_SUITE_P(Devices, RelocalisationTest, test::kAllDevices, test::DeviceName());
+
+TEST(RelocalisationSettingsTest, OffKeepsNoKeyframesAndNeverRelocalises) {
+    MainEngineSettings s;
+    s.voxel_type = VoxelType::S;
+    s.scene = test::centimetreSceneParams(4.f);
+    s.relocalisation.enabled = false;
+    RGBDCalib calib;
+    calib.depth = calib.rgb = kCamera;
+    calib.disparity = DisparityCalib::affine(0.001f);
+    auto engine = MainEngine::create(s, calib);
+    const synth::SyntheticScene room = synth::SyntheticScene::defaultRoom();
+    for (int f : {0, 3, 6, 480}) {
+        const FrameResult r = engine->processFrame(
+            test::toRgbdFrame(test::renderView(room, kCamera, toMat4f(synth::CameraPath().pose(f).matrix())), f), nullptr);
+        EXPECT_EQ(r.keyframes, 0);
+        EXPECT_FALSE(r.relocalisation_tried);
+        EXPECT_NE(r.status, TrackingStatus::Relocalised);
+        for (const StageTime& st : r.stages) EXPECT_STRNE(st.stage, "keyframes");
+    }
+}
+
+}  // namespace
+}  // namespace voxfuse

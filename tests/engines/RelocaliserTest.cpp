@@ -1,0 +1,104 @@
+// The relocaliser's rules on their own: how a frame's depth agrees with the model's, when a candidate
+// is accepted, and when a frame the tracker did not fail is taken as lost.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <limits>
+
+#include "voxfuse/core/Error.h"
+#include "voxfuse/engines/Relocaliser.h"
+
+namespace voxfuse {
+namespace {
+
+TEST(RelocaliserTest, DepthAgreementCountsOverlapAndPixelsWithinTheTolerance) {
+    Image<float> frame(Vec2i{10, 1}), model(Vec2i{10, 1});
+    const float f[10] = {1.f, 1.f, 1.f, 1.f, 1.f, 1.f, 1.f, 1.f, 0.f, 0.f};  // 8 valid
+    const float m[10] = {1.f, 1.01f, 1.019f, 1.03f, 0.9f, 1.f, 0.f, 0.f, 1.f, 0.f};  // 6 of them overlap
+    for (int i = 0; i < 10; ++i) {
+        frame.host()[i] = f[i];
+        model.host()[i] = m[i];
+    }
+    const DepthAgreement a = compareDepth(frame, model, 0.02f);
+    EXPECT_FLOAT_EQ(a.overlap, 6.f / 8.f);
+    EXPECT_FLOAT_EQ(a.agreement, 4.f / 6.f) << "1, 1.01, 1.019 and 1 agree; 1.03 and 0.9 do not";
+    Image<float> no_depth(Vec2i{10, 1});
+    std::fill(no_depth.host(), no_depth.host() + no_depth.pixelCount(), 0.f);
+    EXPECT_EQ(compareDepth(no_depth, model, 0.02f).overlap, 0.f) << "no valid depth: nothing overlaps";
+    EXPECT_THROW(compareDepth(frame, Image<float>(Vec2i{5, 2}), 0.02f), ConfigError);
+}
+
+RelocalisationCheck passingCheck() {
+    RelocalisationCheck c;
+    c.refined.quality = TrackingQuality::Good;
+    c.refined.inlier_ratio = 0.7f;
+    c.refined.residual_m = 0.003f;
+    c.depth = {0.95f, 0.9f};
+    c.step_m = 0.001f;
+    c.step_deg = 0.1f;
+    return c;
+}
+
+TEST(RelocaliserTest, ACandidateIsTakenOnlyWhenEveryMeasurePasses) {
+    const RelocalisationSettings s;
+    EXPECT_TRUE(acceptRelocalisation(s, passingCheck()));
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    const std::vector<std::pair<const char*, void (*)(RelocalisationCheck&)>> spoilers = {
+        {"poor", [](RelocalisationCheck& c) { c.refined.quality = TrackingQuality::Poor; }},
+        {"few inliers", [](RelocalisationCheck& c) { c.refined.inlier_ratio = 0.45f; }},
+        {"large residual", [](RelocalisationCheck& c) { c.refined.residual_m = 0.008f; }},
+        {"little overlap", [](RelocalisationCheck& c) { c.depth.overlap = 0.4f; }},
+        {"disagreement", [](RelocalisationCheck& c) { c.depth.agreement = 0.64f; }},
+        {"not converged", [](RelocalisationCheck& c) { c.step_m = 0.02f; }},
+        {"still turning", [](RelocalisationCheck& c) { c.step_deg = 2.f; }},
+        {"NaN residual", [](RelocalisationCheck& c) { c.refined.residual_m = std::numeric_limits<float>::quiet_NaN(); }},
+    };
+    for (const auto& [what, spoil] : spoilers) {
+        RelocalisationCheck c = passingCheck();
+        spoil(c);
+        EXPECT_FALSE(acceptRelocalisation(s, c)) << what;
+    }
+    RelocalisationCheck c = passingCheck();
+    c.depth.agreement = nan;
+    EXPECT_FALSE(acceptRelocalisation(s, c));
+}
+
+TrackingState withInliers(float ratio) {
+    TrackingState t;
+    t.inlier_ratio = ratio;
+    return t;
+}
+
+TEST(RelocaliserTest, AnInlierRatioCollapseAfterGoodFramesLooksLost) {
+    Relocaliser r(RelocalisationSettings{}, {640, 480});
+    EXPECT_FALSE(r.looksLost(withInliers(0.1f))) << "no good frames yet: nothing to compare with";
+    for (float ratio : {0.80f, 0.78f, 0.76f, 0.79f, 0.30f}) r.rememberGoodFrame(withInliers(ratio));
+    EXPECT_TRUE(r.looksLost(withInliers(0.35f))) << "under half the median (0.78)";
+    EXPECT_FALSE(r.looksLost(withInliers(0.40f)));
+    EXPECT_TRUE(r.looksLost(withInliers(std::numeric_limits<float>::quiet_NaN())));
+    r.forgetRecentFrames();
+    EXPECT_FALSE(r.looksLost(withInliers(0.1f)));
+    // Only the last recent_frames count: a scene that slowly shows less of the map is not a loss.
+    for (int i = 0; i < 10; ++i) r.rememberGoodFrame(withInliers(0.8f));
+    for (int i = 0; i < 10; ++i) r.rememberGoodFrame(withInliers(0.4f));
+    EXPECT_FALSE(r.looksLost(withInliers(0.3f)));
+}
+
+TEST(RelocaliserTest, RejectsSettingsItCannotUse) {
+    RelocalisationSettings s;
+    s.candidates = 0;
+    EXPECT_THROW(Relocaliser(s, {640, 480}), ConfigError);
+    s = RelocalisationSettings();
+    s.keyframe_min_dissimilarity = 1.5f;
+    EXPECT_THROW(Relocaliser(s, {640, 480}), ConfigError);
+    s = RelocalisationSettings();
+    s.max_keyframes = 0;
+    EXPECT_THROW(Relocaliser(s, {640, 480}), ConfigError);
+    s = RelocalisationSettings();
+    s.ferns.tests_per_fern = 0;
+    EXPECT_THROW(Relocaliser(s, {640, 480}), ConfigError) << "checked when made, not at the first frame";
+}
+
+}  // namespace
+}  // namespace voxfuse
