@@ -364,6 +364,75 @@ TEST(FrameFolderSource, MissingIntrinsicsAndMalformedPoseAreErrors) {
     }
 }
 
+TEST(FrameFolderSource, PosesAreRotationsOrMarkedLost) {
+    struct Case {
+        const char* what;
+        std::string pose;
+        const char* reason_part;  // "" when the pose is accepted
+    };
+    const std::vector<Case> cases = {
+        {"a scaled rotation", "2 0 0 0\n0 2 0 0\n0 0 2 0\n0 0 0 1\n", "is not a rotation"},
+        {"a reflection", "-1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n", "reflection"},
+        {"one non-finite value", "1 0 0 nan\n0 1 0 0\n0 0 1 0\n0 0 0 1\n", "non-finite values"},
+        {"finite as a double, infinite as a float", "1 0 0 1e39\n0 1 0 0\n0 0 1 0\n0 0 0 1\n", "non-finite values"},
+    };
+    for (const Case& c : cases) {
+        SCOPED_TRACE(c.what);
+        ScratchDir dir;
+        writeDepthPNG(dir.file("frame-000001.depth.png"), makeDepth(kSmall, 1));
+        writeBytes(dir.file("intrinsics.K.txt"), "5 0 1.5\n0 5 1\n0 0 1\n");
+        writeBytes(dir.file("frame-000001.pose.txt"), c.pose);
+        try {
+            FrameFolderSource source(dir.path());
+            ADD_FAILURE() << "accepted";
+        } catch (const IoError& e) {
+            EXPECT_TRUE(containsText(e.file(), "frame-000001.pose.txt")) << e.what();
+            EXPECT_TRUE(containsText(e.reason(), c.reason_part)) << e.what();
+        }
+    }
+    // Lost tracking marked with -inf is counted, and said.
+    ScratchDir dir;
+    writeDepthPNG(dir.file("frame-000001.depth.png"), makeDepth(kSmall, 1));
+    writeBytes(dir.file("intrinsics.K.txt"), "5 0 1.5\n0 5 1\n0 0 1\n");
+    writeBytes(dir.file("frame-000001.pose.txt"), "-inf -inf -inf -inf\n-inf -inf -inf -inf\n-inf -inf -inf -inf\n-inf -inf -inf -inf\n");
+    FrameFolderSource source(dir.path());
+    EXPECT_TRUE(source.groundTruth().empty());
+    EXPECT_TRUE(containsText(source.description(), "1 whose pose files mark lost tracking")) << source.description();
+}
+
+TEST(FrameFolderSource, IntrinsicsAreCheckedAgainstTheImages) {
+    ScratchDir dir;
+    writeDepthPNG(dir.file("frame-000001.depth.png"), makeDepth(kSmall, 1));
+    writeBytes(dir.file("intrinsics.K.txt"), "5 0 40\n0 5 1\n0 0 1\n");  // cx beyond the 4-pixel width
+    try {
+        FrameFolderSource source(dir.path());
+        FAIL() << "accepted";
+    } catch (const IoError& e) {
+        EXPECT_TRUE(containsText(e.file(), "intrinsics.K.txt")) << e.what();
+        EXPECT_TRUE(containsText(e.reason(), "principal point (40, 1) lies outside the 4x3 depth images")) << e.what();
+    }
+    writeBytes(dir.file("intrinsics.K.txt"), "1e39 0 1.5\n0 5 1\n0 0 1\n");
+    try {
+        FrameFolderSource source(dir.path());
+        FAIL() << "accepted";
+    } catch (const IoError& e) {
+        EXPECT_TRUE(containsText(e.reason(), "non-finite value in K")) << e.what();
+    }
+}
+
+TEST(TumSource, AGroundTruthWithTwoPosesForOneTimeIsRefused) {
+    HandMadeTumFolder folder;
+    writeBytes(folder.dir.file("groundtruth.txt"), "1.000 0 0 0 0 0 0 1\n1.000 1 0 0 0 0 0 1\n");
+    try {
+        TumSource source(folder.dir.path());
+        FAIL() << "accepted";
+    } catch (const ParseError& e) {
+        EXPECT_EQ(e.line(), 2);
+        EXPECT_TRUE(containsText(e.what(), "groundtruth.txt:2")) << e.what();
+        EXPECT_TRUE(containsText(e.reason(), "given twice")) << e.what();
+    }
+}
+
 // ----------------------------------------------------------------------------------------------
 // openImageSource
 
