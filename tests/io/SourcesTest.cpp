@@ -186,12 +186,13 @@ struct PpmPgmFolder {
     std::string depthPattern() const { return dir.path() + "/depth/%04i.pgm"; }
 };
 
-TEST(PpmPgmSource, StopsCleanlyAtFirstMissingIndex) {
-    PpmPgmFolder folder({0, 1, 2, 4});  // 3 is missing: 4 is never reached
+TEST(PpmPgmSource, AMissingFrameIsReportedAndTheSequenceGoesOn) {
+    PpmPgmFolder folder({0, 1, 2, 4});  // 3 is missing
     PpmPgmSource source(folder.rgbPattern(), folder.depthPattern(), folder.calib);
-    EXPECT_EQ(source.frameCount(), 3);
+    EXPECT_EQ(source.frameCount(), 5);
+    EXPECT_TRUE(containsText(source.description(), "1 of them missing")) << source.description();
     RGBDFrame frame;
-    for (int i = 0; i < 3; ++i) {
+    for (int i : {0, 1, 2}) {
         SCOPED_TRACE(i);
         ASSERT_TRUE(source.next(frame));
         EXPECT_EQ(frame.index, i);
@@ -200,9 +201,38 @@ TEST(PpmPgmSource, StopsCleanlyAtFirstMissingIndex) {
         EXPECT_TRUE(samePixels(frame.rgb, makeRgb(kSmall, i)));
         EXPECT_FALSE(frame.has_ground_truth);
     }
+    try {
+        source.next(frame);
+        FAIL() << "the gap at index 3 went unreported";
+    } catch (const IoError& e) {
+        EXPECT_EQ(e.frame(), 3);
+        EXPECT_TRUE(containsText(e.file(), "0003.pgm")) << e.what();
+        EXPECT_TRUE(containsText(e.reason(), "missing")) << e.what();
+    }
+    ASSERT_TRUE(source.next(frame));
+    EXPECT_EQ(frame.index, 4);
+    EXPECT_TRUE(samePixels(frame.depth_raw, makeDepth(kSmall, 4)));
     EXPECT_FALSE(source.next(frame));
     EXPECT_FALSE(source.next(frame));
     EXPECT_TRUE(source.groundTruth().empty());
+}
+
+TEST(PpmPgmSource, AMissingColourFileIsThatFramesError) {
+    PpmPgmFolder folder({0, 1, 2});
+    std::filesystem::remove(folder.dir.path() + "/rgb/0001.ppm");
+    PpmPgmSource source(folder.rgbPattern(), folder.depthPattern(), folder.calib);
+    EXPECT_EQ(source.frameCount(), 3);
+    RGBDFrame frame;
+    ASSERT_TRUE(source.next(frame));
+    try {
+        source.next(frame);
+        FAIL() << "a frame without its colour file went unreported";
+    } catch (const IoError& e) {
+        EXPECT_EQ(e.frame(), 1);
+        EXPECT_TRUE(containsText(e.file(), "0001.ppm")) << e.what();
+    }
+    ASSERT_TRUE(source.next(frame));
+    EXPECT_EQ(frame.index, 2);
 }
 
 TEST(PpmPgmSource, FirstIndexAndDepthOnly) {
