@@ -9,6 +9,8 @@ packages=(
   libopencv-dev        # image codecs (PNG/JPEG), video decoding (iPhone rgb.mp4), undistortion maps
   libopenni2-dev       # optional: OpenNI2 cameras and .oni recordings (VOXFUSE_OPENNI2); pulls in its drivers
   libcli11-dev         # command-line parsing
+  nlohmann-json3-dev   # the JSON reports (summary.json, timings.json, voxfuse_bench.json)
+  libturbojpeg0-dev    # JPEG colour images, with damaged files reported rather than decoded grey
   zlib1g-dev           # checksums of map files
   libgtest-dev libgmock-dev
   liboctomap-dev       # optional: the OctoMap occupancy map (--occupancy)
