@@ -44,6 +44,9 @@ class Programs:
         self.bench = find("apps/voxfuse_bench", "voxfuse_bench")
         self.synth = find("apps/synth/voxfuse_synth", "voxfuse_synth")
         self.env = dict(os.environ, LD_LIBRARY_PATH=folder + ":" + os.environ.get("LD_LIBRARY_PATH", ""))
+        # AddressSanitizer reserves terabytes of address space: no limit for such a build.
+        ldd = subprocess.run(["ldd", self.voxfuse], capture_output=True, text=True, env=self.env).stdout
+        self.limit = limit_memory if "libasan" not in ldd else None
 
 
 # ---------------------------------------------------------------------------------------------
@@ -567,7 +570,7 @@ def run_case(case, programs, fixtures, work, number):
             case.setup(case_dir)
         argv = [programs.voxfuse if case.program == "voxfuse" else programs.bench] + [expand(a, values) for a in case.argv]
         start = time.time()
-        proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=programs.env, cwd=case_dir, preexec_fn=limit_memory)
+        proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=programs.env, cwd=case_dir, preexec_fn=programs.limit)
         timed_out = False
         try:
             if case.interrupt:
@@ -596,7 +599,7 @@ def run_case(case, programs, fixtures, work, number):
         if not answer:
             answer = next((l.strip() for l in reversed(text.splitlines()) if l.strip()), "")
         crashed = (proc.returncode < 0 and not case.interrupt) or proc.returncode in (134, 136, 139) or any(
-            s in text for s in ("terminate called", "AddressSanitizer", "runtime error:", "Segmentation fault", "core dumped"))
+            s in text for s in ("terminate called", "AddressSanitizer", "LeakSanitizer", "runtime error:", "Segmentation fault", "core dumped"))
         if timed_out:
             verdict = "hang"
         elif crashed:
