@@ -18,6 +18,7 @@
 #include <opencv2/imgproc.hpp>
 #include <turbojpeg.h>
 
+#include "ImageHeader.h"
 #include "voxfuse/core/Error.h"
 #include "voxfuse/io/AtomicFile.h"
 
@@ -162,22 +163,27 @@ std::string describeMat(const cv::Mat& m) {
     return depth + " " + std::to_string(m.channels()) + "-channel";
 }
 
-// A PNG's size from its header (IHDR), so that an absurd one is refused before it is decoded.
-void requirePlausiblePngSize(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    unsigned char head[24] = {};
-    if (!in.read(reinterpret_cast<char*>(head), sizeof head) || std::memcmp(head, "\x89PNG\r\n\x1a\n", 8) != 0 ||
-        std::memcmp(head + 12, "IHDR", 4) != 0)
-        return;  // not a PNG: the decoder says what it is
-    auto be32 = [&](int at) { return double((std::uint32_t(head[at]) << 24) | (head[at + 1] << 16) | (head[at + 2] << 8) | head[at + 3]); };
-    if (be32(16) * be32(20) > kMaxImagePixels)
-        throw IoError(path, "the PNG says it is " + std::to_string(std::uint64_t(be32(16))) + "x" + std::to_string(std::uint64_t(be32(20))) +
+// Only the formats VoxFuse reads reach a decoder, and only with a size a frame can have: OpenCV
+// allocates what a header claims (up to 2^30 pixels) before it reads a pixel.
+image_header::Header requirePlausibleImage(const std::string& path) {
+    const image_header::Header h = image_header::read(path);
+    if (h.format == image_header::Format::Unknown)
+        throw IoError(path, "cannot decode image: not a format VoxFuse reads (PNG, JPEG, PPM/PGM, TIFF or BMP)");
+    const char* format = image_header::name(h.format);
+    if (h.width >= 0 && double(h.width) * double(h.height) > kMaxImagePixels)
+        throw IoError(path, std::string("the ") + format + " says it is " + std::to_string(h.width) + "x" + std::to_string(h.height) +
                                 " pixels: too large for an image of a frame (corrupt header?)");
+    std::error_code ec;
+    const std::uintmax_t size = std::filesystem::file_size(path, ec);
+    if (!ec && h.minimum_bytes > size)
+        throw IoError(path, std::string("truncated: a ") + std::to_string(h.width) + "x" + std::to_string(h.height) + " " + format +
+                                " needs " + std::to_string(h.minimum_bytes) + " bytes, the file has " + std::to_string(size));
+    return h;
 }
 
 cv::Mat readWithOpenCV(const std::string& path) {
     requireImageFile(path);
-    requirePlausiblePngSize(path);
+    requirePlausibleImage(path);
     cv::Mat m;
     try {
         m = cv::imread(path, cv::IMREAD_UNCHANGED);
@@ -280,12 +286,6 @@ void writePGM16(const std::string& path, const Image<std::uint16_t>& depth) {
 
 namespace {
 
-bool startsLikeJpeg(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    unsigned char head[3] = {};
-    return in.read(reinterpret_cast<char*>(head), 3) && head[0] == 0xff && head[1] == 0xd8 && head[2] == 0xff;
-}
-
 // JPEG through TurboJPEG rather than OpenCV: OpenCV decodes a truncated or damaged JPEG into a
 // partly grey image and leaves only libjpeg's warning on stderr; here a warning is an error. CMYK
 // JPEGs (TurboJPEG does not convert them to RGB) go to OpenCV. False: not decoded here.
@@ -312,8 +312,9 @@ bool readJpeg(const std::string& path, Image<Vec4u8>& image) {
 
 Image<Vec4u8> readColorImage(const std::string& path) {
     if (hasExtension(path, ".ppm")) return readPPM(path);
+    requireImageFile(path);
     Image<Vec4u8> jpeg;
-    if (startsLikeJpeg(path) && readJpeg(path, jpeg)) return jpeg;
+    if (requirePlausibleImage(path).format == image_header::Format::Jpeg && readJpeg(path, jpeg)) return jpeg;
     cv::Mat m = readWithOpenCV(path);
     if (m.depth() == CV_16U) {
         m.convertTo(m, CV_8U, 1.0 / 257.0);  // 65535 -> 255

@@ -258,6 +258,27 @@ TEST(ImageIO, ADamagedJpegColourFrameNamesItsFileAndFrameAndTheSequenceGoesOn) {
     EXPECT_EQ(frame.index, 2);
 }
 
+// Found by fuzzing: a PPM header in a file of another name went to OpenCV, which allocated the 3 GB
+// it claimed before reading a pixel.
+TEST(ImageIO, OnlyKnownFormatsOfAPlausibleSizeReachTheDecoders) {
+    ScratchDir dir;
+    const std::string bomb = dir.file("colour.jpg");
+    writeBytes(bomb, "P6\n224111\n4520\n56\n");
+    expectIoError([](const std::string& p) { readColorImage(p); }, bomb, "the PPM/PGM says it is 224111x4520 pixels");
+    const std::string short_pgm = dir.file("labels.png");
+    writeBytes(short_pgm, "P5\n64 48\n255\n" + std::string(100, '\0'));
+    expectIoError([](const std::string& p) { readLabelImage(p, -1); }, short_pgm, "truncated: a 64x48 PPM/PGM needs");
+    const std::string gif = dir.file("colour.png");
+    writeBytes(gif, "GIF89a\x01\x00\x01\x00\x00\x00\x00;");
+    expectIoError([](const std::string& p) { readColorImage(p); }, gif, "not a format VoxFuse reads");
+    const std::string tiff = dir.file("labels.tif");  // one directory: width 70000, height 70000
+    std::string t = std::string("II*\0\x08\0\0\0", 8) + std::string("\x02\0", 2);
+    t += std::string("\x00\x01\x04\x00\x01\x00\x00\x00\x70\x11\x01\x00", 12);
+    t += std::string("\x01\x01\x04\x00\x01\x00\x00\x00\x70\x11\x01\x00", 12);
+    writeBytes(tiff, t);
+    expectIoError([](const std::string& p) { readLabelImage(p, -1); }, tiff, "the TIFF says it is 70000x70000 pixels");
+}
+
 TEST(ImageIO, AFolderForAnImageSaysSo) {
     ScratchDir dir;
     expectIoError([](const std::string& p) { readColorImage(p); }, dir.path(), "is a folder, not an image file");
