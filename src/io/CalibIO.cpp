@@ -113,6 +113,8 @@ Mat4f readExtrinsics(CalibLineReader& reader) {
     // pasted; catching it here beats a silently skewed colour mapping.
     const std::string problem = text::rotationProblem(R);
     if (!problem.empty()) reader.failAt(first_line, "the rotation part of the rgb-to-depth extrinsics is " + problem);
+    const std::string position = text::positionProblem(T(0, 3), T(1, 3), T(2, 3));
+    if (!position.empty()) reader.failAt(first_line, "the rgb-to-depth extrinsics' " + position);
     return T;
 }
 

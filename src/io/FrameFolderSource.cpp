@@ -79,8 +79,10 @@ void FrameFolderSource::loadPoses() {
         if (std::abs(m[12]) > 1e-6 || std::abs(m[13]) > 1e-6 || std::abs(m[14]) > 1e-6 || std::abs(m[15] - 1.0) > 1e-6)
             throw IoError(pose_path, "the last row of a 4x4 camera-to-world pose must be 0 0 0 1");
         const double R[9] = {m[0], m[1], m[2], m[4], m[5], m[6], m[8], m[9], m[10]};
-        const std::string problem = text::rotationProblem(R);
-        if (!problem.empty()) throw IoError(pose_path, "the rotation of the 4x4 camera-to-world pose is " + problem);
+        std::string problem = text::rotationProblem(R);
+        if (!problem.empty()) problem = "the rotation of the 4x4 camera-to-world pose is " + problem;
+        else problem = text::positionProblem(m[3], m[7], m[11]);
+        if (!problem.empty()) throw IoError(pose_path, problem);
         for (int i = 0; i < 16; ++i) f.T_world_camera.m[i] = float(m[std::size_t(i)]);
         f.has_pose = true;
         ground_truth_.push_back(TimedPose{f.number / kFramesPerSecond, f.T_world_camera});

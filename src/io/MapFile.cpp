@@ -15,6 +15,7 @@
 #include <utility>
 #include <vector>
 
+#include "TextParsing.h"
 #include "voxfuse/core/Error.h"
 #include "voxfuse/engines/EnginePairs.h"
 #include "voxfuse/io/AtomicFile.h"
@@ -281,6 +282,11 @@ MapFileInfo readHeader(FieldReader& r) {
         info.camera.height < 0 || info.camera.width > 1 << 16 || info.camera.height > 1 << 16 ||
         !(std::isfinite(info.camera.fx) && std::isfinite(info.camera.fy) && std::isfinite(info.camera.cx) && std::isfinite(info.camera.cy)))
         r.fail("corrupt: the scene settings, poses or camera are out of range");
+    // Rays are cast from the resume pose as soon as the map is loaded: it must be a camera's.
+    for (const Mat4f* pose : {&info.T_world_camera, &info.T_source_world}) {
+        const std::string problem = text::rigidPoseProblem(pose->m);
+        if (!problem.empty()) r.fail("corrupt: " + std::string(pose == &info.T_world_camera ? "the resume pose: " : "the world origin: ") + problem);
+    }
     // What a map of this version can hold; the engine's own checks would refuse the rest without
     // naming the file.
     const VoxelBlockHashSettings& h = info.hash_settings;

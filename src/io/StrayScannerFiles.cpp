@@ -134,7 +134,8 @@ std::vector<OdometryRow> readOdometry(const std::string& path) {
                              float(v[std::size_t(columns.z)])};
         const double qx = v[std::size_t(columns.qx)], qy = v[std::size_t(columns.qy)], qz = v[std::size_t(columns.qz)],
                      qw = v[std::size_t(columns.qw)];
-        const std::string problem = text::quaternionProblem(qx, qy, qz, qw);
+        std::string problem = text::positionProblem(row.position.x, row.position.y, row.position.z);
+        if (problem.empty()) problem = text::quaternionProblem(qx, qy, qz, qw);
         if (!problem.empty()) throw ParseError(path, line_number, problem);
         const double norm = std::sqrt(qx * qx + qy * qy + qz * qz + qw * qw);
         row.quaternion_xyzw = Vec4f{float(qx / norm), float(qy / norm), float(qz / norm), float(qw / norm)};

@@ -165,6 +165,21 @@ std::string rotationProblem(const double* R) {
     return {};
 }
 
+std::string positionProblem(double x, double y, double z) {
+    for (double v : {x, y, z})
+        if (!(std::abs(v) <= kMaxPositionM))
+            return "position " + formatDouble(v) + " m is further than " + formatDouble(kMaxPositionM) + " m from the origin";
+    return {};
+}
+
+std::string rigidPoseProblem(const float* T) {
+    if (T[12] != 0.f || T[13] != 0.f || T[14] != 0.f || T[15] != 1.f) return "the last row of the pose is not 0 0 0 1";
+    const double R[9] = {T[0], T[1], T[2], T[4], T[5], T[6], T[8], T[9], T[10]};
+    const std::string rotation = rotationProblem(R);
+    if (!rotation.empty()) return "the pose's rotation is " + rotation;
+    return positionProblem(T[3], T[7], T[11]);
+}
+
 std::string formatFloat(float value) {
     char buffer[64];
     const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);

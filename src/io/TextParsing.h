@@ -55,6 +55,12 @@ bool finiteAsFloat(double value);
 // not finite as a float, or a zero length.
 std::string quaternionProblem(double x, double y, double z, double w);
 
+// Camera positions further than this from the origin are no camera's (and their voxel coordinates
+// would not fit the engines' ints): 1000 km.
+constexpr double kMaxPositionM = 1e6;
+// "" for a position within kMaxPositionM of the origin on every axis, else why not.
+std::string positionProblem(double x, double y, double z);
+
 // "" when the 3x3 matrix (row-major, 9 values) is a rotation (R R^T = I and det R = +1, within 1e-2),
 // else why it is not one.
 std::string rotationProblem(const double* R);
@@ -62,6 +68,10 @@ std::string rotationProblem(const double* R);
 // `text` quoted for an error message: control and non-ASCII bytes as \xNN (a file cannot send escape
 // sequences to the user's terminal), cut after 80 characters.
 std::string excerpt(std::string_view text);
+
+// "" when a 4x4 pose (row-major, 16 values) is rigid: a rotation, a plausible position, last row
+// 0 0 0 1; else why not.
+std::string rigidPoseProblem(const float* T);
 
 // Parses every token of `tokens` as a double; on failure returns false and sets `bad` to the token.
 bool parseDoubles(const std::vector<std::string_view>& tokens, std::vector<double>& values, std::string& bad);

@@ -58,7 +58,8 @@ std::vector<TimedPose> readTumTrajectory(const std::string& path) {
         for (int i = 1; i < 4; ++i)
             if (!text::finiteAsFloat(v[std::size_t(i)]))
                 throw ParseError(path, line_number, "non-finite position " + text::excerpt(tokens[std::size_t(i)]) + " (stored as a float)");
-        const std::string problem = text::quaternionProblem(v[4], v[5], v[6], v[7]);
+        std::string problem = text::positionProblem(v[1], v[2], v[3]);
+        if (problem.empty()) problem = text::quaternionProblem(v[4], v[5], v[6], v[7]);
         if (!problem.empty()) throw ParseError(path, line_number, problem);
         Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);  // Eigen takes (w, x, y, z)
         q.normalize();

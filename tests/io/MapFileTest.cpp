@@ -199,6 +199,21 @@ TEST(MapFileTest, AMapOfOtherSettingsIsRefusedByName) {
     }
 }
 
+// Found by fuzzing: a map whose resume pose was finite but no rotation (3e38 in it) loaded, and the
+// raycast from it cast -inf to int.
+TEST(MapFileTest, AResumePoseThatIsNoCameraIsRefused) {
+    const auto scene = fusedScene<VoxelS>(VoxelBlockHash());
+    for (auto [what, change] : {std::pair{"a shear", std::pair{1, 3e38f}}, {"a position 10^7 m away", std::pair{3, 1e7f}}}) {
+        SCOPED_TRACE(what);
+        MapFileInfo pose = somePose();
+        pose.T_world_camera.m[change.first] = change.second;
+        const std::string path = tempPath("bad_pose.vfm");
+        writeMapFile(path, scene, pose);
+        const std::string error = loadError(path);
+        EXPECT_NE(error.find("corrupt: the resume pose"), std::string::npos) << error;
+    }
+}
+
 TEST(MapFileTest, AFailedWriteLeavesNothingBehind) {
     const auto scene = fusedScene<VoxelS>(VoxelBlockHash());
     const std::string nowhere = tempPath("no_such_folder/map.vfm");
