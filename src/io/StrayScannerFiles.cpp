@@ -102,6 +102,7 @@ std::vector<OdometryRow> readOdometry(const std::string& path) {
         const int line_number = in.lineNumber();
         if (text::isBlankOrComment(line)) continue;
         const auto tokens = splitCsv(line);
+        if (tokens.empty()) throw ParseError(path, line_number, "a line without values");  // found by fuzzing
         double probe = 0.0;
         if (first && !text::parseDouble(tokens.front(), probe)) {
             columns = OdometryColumns::fromHeader(tokens, path, line_number);
