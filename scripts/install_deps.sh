@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Installs what VoxFuse needs to build and test on Debian 12. Idempotent: installs only what is missing.
-# The CUDA toolkit is optional and not installed here (CMake uses it when nvcc is found).
+# The CUDA toolkit is optional and not installed here (CMake uses it when nvcc is found). Packages
+# named as arguments are installed too (scripts/fuzz.sh adds clang's).
+#   ./scripts/install_deps.sh [PACKAGE...]
 set -euo pipefail
 
 packages=(
@@ -9,6 +11,8 @@ packages=(
   libopencv-dev        # image codecs (PNG/JPEG), video decoding (iPhone rgb.mp4), undistortion maps
   libopenni2-dev       # optional: OpenNI2 cameras and .oni recordings (VOXFUSE_OPENNI2); pulls in its drivers
   libcli11-dev         # command-line parsing
+  nlohmann-json3-dev   # the JSON reports (summary.json, timings.json, voxfuse_bench.json)
+  libturbojpeg0-dev    # JPEG colour images, with damaged files reported rather than decoded grey
   zlib1g-dev           # checksums of map files
   libgtest-dev libgmock-dev
   liboctomap-dev       # optional: the OctoMap occupancy map (--occupancy)
@@ -16,6 +20,7 @@ packages=(
   xvfb xauth libgl1-mesa-dri   # the viewer's screenshot test under a virtual display
   pybind11-dev python3-dev python3-venv python3-numpy python3-pytest  # the Python package and its tests
   dpkg-dev             # dpkg-shlibdeps, for the Debian package's dependencies (cpack -G DEB)
+  "$@"
 )
 
 missing=()

@@ -94,45 +94,45 @@ void printOccupancy(const OccupancyStats& s, const OccupancySettings& settings) 
                 s.insert_ms > 0.0 ? double(s.points_inserted) / s.insert_ms / 1000.0 : 0.0);
 }
 
-void writeMeshingJson(JsonWriter& j, const MeshingBench& b) {
-    j.beginObject("meshing");
-    j.value("repeats", b.repeats);
-    j.value("median_ms", b.median_ms);
-    j.value("min_ms", b.min_ms);
-    j.value("vertices", b.vertices);
-    j.value("triangles", b.triangles);
-    j.value("mesh_mb", b.mesh_mb);
-    if (b.peak_extra_mb >= 0.0) j.value("peak_extra_mb", b.peak_extra_mb);
-    if (b.gpu_peak_extra_mb >= 0.0) j.value("gpu_peak_extra_mb", b.gpu_peak_extra_mb);
-    j.endObject();
+Json meshingJson(const MeshingBench& b) {
+    Json j;
+    j["repeats"] = b.repeats;
+    j["median_ms"] = b.median_ms;
+    j["min_ms"] = b.min_ms;
+    j["vertices"] = b.vertices;
+    j["triangles"] = b.triangles;
+    j["mesh_mb"] = b.mesh_mb;
+    if (b.peak_extra_mb >= 0.0) j["peak_extra_mb"] = b.peak_extra_mb;
+    if (b.gpu_peak_extra_mb >= 0.0) j["gpu_peak_extra_mb"] = b.gpu_peak_extra_mb;
+    return j;
 }
 
-void writeCloudJson(JsonWriter& j, const CloudBench& b) {
-    j.beginObject("point_cloud");
-    j.value("repeats", b.repeats);
-    j.value("extract_median_ms", b.extract_median_ms);
-    j.value("points", b.points);
+Json cloudJson(const CloudBench& b) {
+    Json j;
+    j["repeats"] = b.repeats;
+    j["extract_median_ms"] = b.extract_median_ms;
+    j["points"] = b.points;
     if (b.cell_m > 0.f) {
-        j.value("cell_m", double(b.cell_m));
-        j.value("downsample_median_ms", b.downsample_median_ms);
-        j.value("downsampled_points", b.downsampled_points);
+        j["cell_m"] = double(b.cell_m);
+        j["downsample_median_ms"] = b.downsample_median_ms;
+        j["downsampled_points"] = b.downsampled_points;
     }
-    j.endObject();
+    return j;
 }
 
-void writeOccupancyJson(JsonWriter& j, const OccupancyStats& s, const OccupancySettings& settings) {
+Json occupancyJson(const OccupancyStats& s, const OccupancySettings& settings) {
     const double ms = perFrameMs(s);
-    j.beginObject("occupancy");
-    j.value("resolution_m", double(settings.resolution_m));
-    j.value("pixel_step", settings.pixel_step);
-    j.value("frame_step", settings.frame_step);
-    j.value("frames_submitted", (long long)s.frames_submitted);
-    j.value("frames_inserted", (long long)s.frames_inserted);
-    j.value("frames_dropped", (long long)s.frames_dropped);
-    j.value("points_inserted", (long long)s.points_inserted);
-    j.value("worker_ms_per_frame", ms);
-    j.value("worker_fps", ms > 0.0 ? 1000.0 / ms : 0.0);
-    j.endObject();
+    Json j;
+    j["resolution_m"] = double(settings.resolution_m);
+    j["pixel_step"] = settings.pixel_step;
+    j["frame_step"] = settings.frame_step;
+    j["frames_submitted"] = (long long)s.frames_submitted;
+    j["frames_inserted"] = (long long)s.frames_inserted;
+    j["frames_dropped"] = (long long)s.frames_dropped;
+    j["points_inserted"] = (long long)s.points_inserted;
+    j["worker_ms_per_frame"] = ms;
+    j["worker_fps"] = ms > 0.0 ? 1000.0 / ms : 0.0;
+    return j;
 }
 
 }  // namespace voxfuse::app

@@ -4,7 +4,7 @@
 
 #include <string>
 
-#include "JsonWriter.h"
+#include "JsonFile.h"
 #include "voxfuse/engines/MainEngine.h"
 #include "voxfuse/mapping/OccupancyMapper.h"
 
@@ -38,8 +38,9 @@ void printCloud(const CloudBench& b);
 // After OccupancyMapper::finish(): frames inserted and dropped, and the worker's own throughput.
 void printOccupancy(const OccupancyStats& s, const OccupancySettings& settings);
 
-void writeMeshingJson(JsonWriter& j, const MeshingBench& b);
-void writeCloudJson(JsonWriter& j, const CloudBench& b);
-void writeOccupancyJson(JsonWriter& j, const OccupancyStats& s, const OccupancySettings& settings);
+// The "meshing", "point_cloud" and "occupancy" objects of voxfuse_bench.json.
+Json meshingJson(const MeshingBench& b);
+Json cloudJson(const CloudBench& b);
+Json occupancyJson(const OccupancyStats& s, const OccupancySettings& settings);
 
 }  // namespace voxfuse::app

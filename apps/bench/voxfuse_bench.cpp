@@ -8,13 +8,15 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <map>
 
-#include "JsonWriter.h"
+#include "Interrupt.h"
+#include "JsonFile.h"
 #include "MapOutputBench.h"
 #include "RelocalisationOptions.h"
+#include "OptionChecks.h"
+#include "ProgramMain.h"
 #include "ResourceUsage.h"
 #include "RunRecord.h"
 #include "SequenceRunner.h"
@@ -22,8 +24,10 @@
 #include "SyntheticSource.h"
 #include "voxfuse/core/Error.h"
 #include "voxfuse/core/Timer.h"
+#include "voxfuse/io/AtomicFile.h"
 #if VOXFUSE_WITH_IO
 #include "LabelInput.h"
+#include "voxfuse/io/UndistortedImageSource.h"
 #endif
 
 namespace fs = std::filesystem;
@@ -64,7 +68,7 @@ std::string defaultSource() {
 std::unique_ptr<ImageSource> openSource(const std::string& path) {
     if (app::SyntheticSource::isSyntheticName(path)) return app::SyntheticSource::open(path);
 #if VOXFUSE_WITH_IO
-    return openImageSource(path);
+    return openImageSource(path);  // undistorted after the labels are attached (framesForEngine)
 #else
     throw ConfigError("this build has no image I/O (VOXFUSE_IO=OFF): the source must be synthetic or synthetic:N, not '" + path + "'");
 #endif
@@ -89,8 +93,8 @@ int main(int argc, char** argv) {
     cli.add_option("source", source_path,
                    "sequence (default: ../shared/data/tum_fr3_teddy_200, else the bundled data), or synthetic[:N] for N frames of the "
                    "synthetic room rendered in memory");
-    cli.add_option("--frames", max_frames, "at most N frames (0 = all)");
-    cli.add_option("--warmup", warmup, "frames left out of the statistics")->capture_default_str();
+    cli.add_option("--frames", max_frames, "at most N frames (0 = all)")->check(app::nonNegativeInt());
+    cli.add_option("--warmup", warmup, "frames left out of the statistics")->capture_default_str()->check(app::nonNegativeInt());
 #if VOXFUSE_WITH_IO
     app::addVoxelAndLabelOptions(cli, labels, "s");
 #else
@@ -99,35 +103,45 @@ int main(int argc, char** argv) {
     cli.add_option("--index", index, "voxel index")->capture_default_str()->check(CLI::IsMember({"dense", "hash"}));
     cli.add_option("--device", device, "where the whole frame loop runs: image processing, tracking, allocation, integration, raycast, and the map outputs")
         ->capture_default_str()->check(CLI::IsMember({"cpu", "cuda"}));
-    cli.add_option("--voxel-size", s.scene.voxel_size_m, "voxel edge (m)")->capture_default_str();
-    cli.add_option("--mu", s.scene.mu_m, "truncation band (m)")->capture_default_str();
+    cli.add_option("--voxel-size", s.scene.voxel_size_m, "voxel edge (m)")->capture_default_str()->check(app::floatIn(0.0, 1.0, true));
+    cli.add_option("--mu", s.scene.mu_m, "truncation band (m)")->capture_default_str()->check(app::floatIn(0.0, 10.0, true));
     cli.add_option("--poses", poses, "track the camera, or use the source's ground truth")
         ->capture_default_str()->check(CLI::IsMember({"track", "groundtruth"}));
     app::addRelocalisationOptions(cli, s.relocalisation);
     cli.add_flag("--mesh", mesh, "after the run, time marching cubes on the map (median of --repeats), its size and peak memory");
     cli.add_flag("--cloud", cloud, "after the run, time the point cloud extraction");
     cli.add_option("--cloud-voxel", cloud_voxel_m, "also time downsampling the cloud to cells of this size (m); implies --cloud")
-        ->check(CLI::PositiveNumber);
-    cli.add_option("--repeats", repeats, "runs of each map output timed")->capture_default_str()->check(CLI::Range(1, 100));
+        ->check(app::floatIn(1e-4, 1000.0));
+    cli.add_option("--repeats", repeats, "runs of each map output timed")->capture_default_str()->check(app::intIn(1, 100));
     cli.add_option("--occupancy", occupancy_settings.resolution_m, "build an OctoMap with RES-metre cells beside the run; report its thread's throughput")
-        ->check(CLI::PositiveNumber);
+        ->check(app::floatIn(0.001, 10.0));
     cli.add_option("--occupancy-pixel-step", occupancy_settings.pixel_step, "occupancy: every Nth pixel in x and y")
-        ->capture_default_str()->check(CLI::PositiveNumber);
+        ->capture_default_str()->check(app::intIn(1, 64));
     int active_blocks = 0;
     cli.add_flag("--swap", s.swap.enabled, "swapping: only the map near the view stays in the voxel array, the rest in memory or --swap-file");
     cli.add_option("--active-blocks", active_blocks, "swapping: blocks the active voxel array holds at most (implies --swap)")
-        ->check(CLI::PositiveNumber);
+        ->check(app::intIn(1, 1 << 22));
     cli.add_option("--swap-file", s.swap.swap_file, "swapping: keep the swapped-out map in this file (implies --swap)");
     cli.add_option("--swap-blocks-per-frame", s.swap.blocks_per_frame, "swapping: blocks moved each way per frame at most")
-        ->capture_default_str()->check(CLI::PositiveNumber);
+        ->capture_default_str()->check(app::intIn(1, 1 << 20));
     cli.add_option("--json", json_path, "where to write the JSON report")->capture_default_str();
     CLI11_PARSE(cli, argc, argv);
 
-    try {
+    app::interrupt::install("voxfuse_bench");
+    return app::runReportingErrors("voxfuse_bench", [&] {
+        if (cli.count("--swap-blocks-per-frame") > 0 && !s.swap.enabled && active_blocks == 0 && s.swap.swap_file.empty())
+            throw ConfigError("--swap-blocks-per-frame needs swapping (--swap, --active-blocks or --swap-file)");
+        if (cli.count("--occupancy-pixel-step") > 0 && !(occupancy_settings.resolution_m > 0.f))
+            throw ConfigError("--occupancy-pixel-step needs --occupancy");
+        if (max_frames > 0 && max_frames <= warmup)
+            throw ConfigError("--frames " + std::to_string(max_frames) + " leaves no frame after the " + std::to_string(warmup) +
+                              " warm-up frames (--warmup)");
+        requireWritable(json_path);  // before the run, not after it
         if (source_path.empty()) source_path = defaultSource();
         std::unique_ptr<ImageSource> source = openSource(source_path);
 #if VOXFUSE_WITH_IO
         app::attachLabelInput(source, source_path, labels, s, "voxfuse_bench");
+        source = framesForEngine(std::move(source), false);
 #else
         s.voxel_type = parseVoxelType(voxel);
 #endif
@@ -147,7 +161,7 @@ int main(int argc, char** argv) {
         std::vector<std::string> level_names;
         std::map<std::string, std::vector<double>> level_samples, level_iterations;
         const Timer wall;
-        while ((max_frames <= 0 || int(record.frames.size()) < max_frames) && runner.step()) {
+        while ((max_frames <= 0 || int(record.frames.size()) < max_frames) && !app::interrupt::requested() && runner.step()) {
             const FrameResult& fr = runner.lastRecord().result;
             if (occupancy && fr.fused) occupancy->submit(engine->view().depth, engine->view().calib.depth, fr.T_world_camera);
             if (!record.tracked || int(record.frames.size()) <= warmup) continue;
@@ -161,11 +175,14 @@ int main(int argc, char** argv) {
             }
         }
         record.wall_s = wall.elapsedMs() / 1000.0;
+        record.interrupted = app::interrupt::requested();
         if (occupancy) occupancy->finish();
         record.peak_rss_mb = app::peakRssMb();
         record.scene_mb = double(engine->sceneBytes()) / (1024.0 * 1024.0);
         record.allocation = engine->allocationStats();
-        if (int(record.frames.size()) <= warmup) throw ConfigError("not enough frames for statistics after the warm-up");
+        if (int(record.frames.size()) <= warmup)
+            throw ConfigError(std::to_string(record.frames.size()) + " frames were processed, no more than the " + std::to_string(warmup) +
+                              " warm-up frames (--warmup): none is left for the statistics");
 
         std::vector<std::string> order;
         std::map<std::string, std::vector<double>> samples;
@@ -243,71 +260,54 @@ int main(int argc, char** argv) {
         }
         if (occupancy) app::printOccupancy(occupancy->stats(), occupancy->settings());
 
-        std::ofstream out(json_path);
-        if (!out) throw IoError(json_path, "cannot open for writing");
-        app::JsonWriter j(out);
-        j.beginObject();
-        j.value("source", record.source);
-        j.value("voxel", toString(s.voxel_type));
-        j.value("index", toString(s.index_type));
-        j.value("voxel_size_m", double(s.scene.voxel_size_m));
-        j.value("device", deviceName(s.device));
-        if (s.device == Device::CUDA) j.value("gpu", device_memory::cudaDescription());
-        j.value("frames", int(record.frames.size()));
-        j.value("warmup_frames", warmup);
-        j.beginObject("stages");
-        for (const auto& name : order) {
-            j.beginObject(name.c_str());
-            j.value("median_ms", summaries[name].median_ms);
-            j.value("mean_ms", summaries[name].mean_ms);
-            j.value("p90_ms", summaries[name].p90_ms);
-            j.endObject();
-        }
-        j.endObject();
-        j.beginObject("tracker_levels");
-        for (const auto& level : level_names) j.value(level.c_str() + 2, summaries[level].median_ms);
-        j.endObject();
-        j.beginObject("tracker_iterations");  // mean Gauss-Newton iterations per frame and level
-        for (const auto& level : level_names) j.value(level.c_str() + 2, meanOf(level_iterations[level]));
-        j.endObject();
+        app::Json j;
+        j["source"] = record.source;
+        j["interrupted"] = record.interrupted;
+        j["voxel"] = toString(s.voxel_type);
+        j["index"] = toString(s.index_type);
+        j["voxel_size_m"] = double(s.scene.voxel_size_m);
+        j["device"] = deviceName(s.device);
+        if (s.device == Device::CUDA) j["gpu"] = device_memory::cudaDescription();
+        j["frames"] = int(record.frames.size());
+        j["warmup_frames"] = warmup;
+        app::Json& stages = j["stages"] = app::Json::object();
+        for (const auto& name : order)
+            stages[name] = {{"median_ms", summaries[name].median_ms}, {"mean_ms", summaries[name].mean_ms}, {"p90_ms", summaries[name].p90_ms}};
+        app::Json& levels = j["tracker_levels"] = app::Json::object();
+        for (const auto& level : level_names) levels[level.substr(2)] = summaries[level].median_ms;
+        app::Json& iterations = j["tracker_iterations"] = app::Json::object();  // mean Gauss-Newton iterations per frame
+        for (const auto& level : level_names) iterations[level.substr(2)] = meanOf(level_iterations[level]);
         if (record.has_trajectory_error) {
-            j.value("ate_rmse_m", record.trajectory_error.ate_rmse_m);
-            j.value("rpe_trans_m_per_s", record.trajectory_error.rpe_trans_m_per_s);
+            j["ate_rmse_m"] = record.trajectory_error.ate_rmse_m;
+            j["rpe_trans_m_per_s"] = record.trajectory_error.rpe_trans_m_per_s;
         }
-        j.value("tracking_failed_frames", app::countQuality(record, TrackingQuality::Failed));
-        j.value("frames_lost", app::countStatus(record, TrackingStatus::Lost));
-        j.value("relocalisation_attempts", app::countRelocalisationAttempts(record));
-        j.value("relocalisations", app::countStatus(record, TrackingStatus::Relocalised));
-        j.value("engine_fps", engine_fps);
-        j.value("wall_fps", app::framesPerSecond(record));
-        j.value("peak_rss_mb", record.peak_rss_mb);
-        j.value("scene_mb", record.scene_mb);
-        j.value("blocks_allocated", record.allocation.blocks_allocated);
+        j["tracking_failed_frames"] = app::countQuality(record, TrackingQuality::Failed);
+        j["frames_lost"] = app::countStatus(record, TrackingStatus::Lost);
+        j["relocalisation_attempts"] = app::countRelocalisationAttempts(record);
+        j["relocalisations"] = app::countStatus(record, TrackingStatus::Relocalised);
+        j["engine_fps"] = engine_fps;
+        j["wall_fps"] = app::framesPerSecond(record);
+        j["peak_rss_mb"] = record.peak_rss_mb;
+        j["scene_mb"] = record.scene_mb;
+        j["blocks_allocated"] = record.allocation.blocks_allocated;
         if (s.swap.enabled) {
-            j.beginObject("swapping");
-            j.value("swap_file", s.swap.swap_file);
-            j.value("active_block_limit", s.hash.max_block_count);
-            j.value("most_blocks_active", most_active);
-            j.value("blocks_stored", record.allocation.blocks_stored);
-            j.value("blocks_per_frame_limit", s.swap.blocks_per_frame);
-            j.value("mean_swapped_in_per_frame", meanOf(swapped_in));
-            j.value("most_swapped_in_per_frame", most(swapped_in));
-            j.value("mean_swapped_out_per_frame", meanOf(swapped_out));
-            j.value("most_swapped_out_per_frame", most(swapped_out));
-            j.endObject();
+            app::Json& swapping = j["swapping"];
+            swapping["swap_file"] = s.swap.swap_file;
+            swapping["active_block_limit"] = s.hash.max_block_count;
+            swapping["most_blocks_active"] = most_active;
+            swapping["blocks_stored"] = record.allocation.blocks_stored;
+            swapping["blocks_per_frame_limit"] = s.swap.blocks_per_frame;
+            swapping["mean_swapped_in_per_frame"] = meanOf(swapped_in);
+            swapping["most_swapped_in_per_frame"] = most(swapped_in);
+            swapping["mean_swapped_out_per_frame"] = meanOf(swapped_out);
+            swapping["most_swapped_out_per_frame"] = most(swapped_out);
         }
-        j.value("allocation_failures", (long long)record.allocation.allocation_failures_total);
-        if (mesh) app::writeMeshingJson(j, meshing);
-        if (cloud || cloud_voxel_m > 0.f) app::writeCloudJson(j, cloud_bench);
-        if (occupancy) app::writeOccupancyJson(j, occupancy->stats(), occupancy->settings());
-        j.endObject();
+        j["allocation_failures"] = (long long)record.allocation.allocation_failures_total;
+        if (mesh) j["meshing"] = app::meshingJson(meshing);
+        if (cloud || cloud_voxel_m > 0.f) j["point_cloud"] = app::cloudJson(cloud_bench);
+        if (occupancy) j["occupancy"] = app::occupancyJson(occupancy->stats(), occupancy->settings());
+        app::writeJsonFile(json_path, j);
         std::printf("  JSON: %s\n", json_path.c_str());
-        return 0;
-    } catch (const Error& e) {
-        std::cerr << "voxfuse_bench: error: " << e.what() << "\n";
-        return 2;
-    } catch (const std::exception& e) {
-        std::cerr << "voxfuse_bench: error: " << e.what() << "\n";
-        return 2;
-    }
+        return app::interrupt::exitStatus();
+    });
 }

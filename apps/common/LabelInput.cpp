@@ -3,6 +3,7 @@
 #include <filesystem>
 #include <iostream>
 
+#include "OptionChecks.h"
 #include "voxfuse/core/Error.h"
 
 namespace fs = std::filesystem;
@@ -19,7 +20,7 @@ void addVoxelAndLabelOptions(CLI::App& cli, LabelInputOptions& o, const std::str
     cli.add_option("--label-match", o.match, "how label images find their frames: by file order (index), by timestamp, or auto")
         ->capture_default_str()->check(CLI::IsMember({"auto", "index", "timestamp"}));
     cli.add_option("--label-ignore", o.ignore_id, "class id that means 'no label' in the label images (-1: none)")
-        ->capture_default_str()->check(CLI::Range(-1, 65535));
+        ->capture_default_str()->check(intIn(-1, 65535));
     cli.add_option("--label-update", o.update,
                    "class update on disagreement: switch with probability 1/(count+1) (probabilistic, the report's rule) or "
                    "majority vote (vote: more robust to noisy segmentations)")

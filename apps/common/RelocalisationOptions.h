@@ -3,6 +3,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "OptionChecks.h"
 #include "voxfuse/engines/Relocaliser.h"
 
 namespace voxfuse::app {
@@ -14,7 +15,7 @@ inline void addRelocalisationOptions(CLI::App& cli, RelocalisationSettings& sett
            "once tracking is lost, find the camera again from keyframes (nothing is fused until then)")
         ->default_str(settings.enabled ? "on" : "off")->check(CLI::IsMember({"on", "off"}));
     cli.add_option("--relocalise-candidates", settings.candidates, "relocalisation: keyframes tried per lost frame, most alike first")
-        ->capture_default_str()->check(CLI::PositiveNumber);
+        ->capture_default_str()->check(app::intIn(1, 1000));
 }
 
 }  // namespace voxfuse::app

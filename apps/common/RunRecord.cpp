@@ -2,11 +2,10 @@
 
 #include <algorithm>
 #include <cstdio>
-#include <fstream>
 #include <map>
 #include <sstream>
 
-#include "JsonWriter.h"
+#include "JsonFile.h"
 #include "Statistics.h"
 #include "voxfuse/core/Error.h"
 
@@ -29,12 +28,6 @@ std::map<std::string, double> stageMedians(const RunRecord& run) {
     std::map<std::string, double> medians;
     for (auto& [name, v] : samples) medians[name] = median(v);
     return medians;
-}
-
-std::ofstream openForWriting(const std::string& path) {
-    std::ofstream out(path);
-    if (!out) throw IoError(path, "cannot open for writing");
-    return out;
 }
 
 }  // namespace
@@ -66,84 +59,78 @@ double medianTotalMs(const RunRecord& run) {
 double framesPerSecond(const RunRecord& run) { return run.wall_s > 0.0 ? double(run.frames.size()) / run.wall_s : 0.0; }
 
 void writeTimingsJson(const std::string& path, const RunRecord& run) {
-    std::ofstream out = openForWriting(path);
-    JsonWriter j(out);
-    const auto names = stageNames(run);
     const auto medians = stageMedians(run);
-    j.beginObject();
-    j.beginObject("median_ms");
-    for (const auto& n : names) j.value(n.c_str(), medians.at(n));
-    j.value("total", medianTotalMs(run));
-    j.endObject();
-    j.beginArray("frames");
+    Json j;
+    Json& median_ms = j["median_ms"] = Json::object();
+    for (const auto& n : stageNames(run)) median_ms[n] = medians.at(n);
+    median_ms["total"] = medianTotalMs(run);
+    Json& frames = j["frames"] = Json::array();
     for (const auto& f : run.frames) {
-        j.beginObject();
-        j.value("index", f.index);
-        j.value("timestamp", f.timestamp_s);
-        j.value("fused", f.result.fused);
-        j.value("tracking", toString(f.result.quality));
-        j.value("status", toString(f.result.status));
-        j.value("keyframes", f.result.keyframes);
-        if (run.tracked) {
-            j.value("inlier_ratio", double(f.result.tracking.inlier_ratio));
-            j.value("residual", double(f.result.tracking.residual_m));
+        Json frame;
+        frame["index"] = f.index;
+        frame["timestamp"] = f.timestamp_s;
+        frame["fused"] = f.result.fused;
+        if (run.tracked) {  // with given poses there is no tracking to report
+            frame["tracking"] = toString(f.result.quality);
+            frame["status"] = toString(f.result.status);
+            frame["keyframes"] = f.result.keyframes;
+            frame["inlier_ratio"] = double(f.result.tracking.inlier_ratio);
+            frame["residual"] = double(f.result.tracking.residual_m);
         }
-        for (const auto& s : f.result.stages) j.value(s.stage, s.ms);
-        j.value("total", f.result.total_ms);
+        for (const auto& s : f.result.stages) frame[s.stage] = s.ms;
+        frame["total"] = f.result.total_ms;
         if (run.settings.index_type == IndexType::Hash) {
-            j.value("visible_blocks", f.result.allocation.visible_blocks);
-            j.value("allocation_failures", f.result.allocation.allocation_failures_this_frame);
+            frame["visible_blocks"] = f.result.allocation.visible_blocks;
+            frame["allocation_failures"] = f.result.allocation.allocation_failures_this_frame;
         }
         if (run.settings.swap.enabled) {
-            j.value("swapped_in", f.result.allocation.blocks_swapped_in_this_frame);
-            j.value("swapped_out", f.result.allocation.blocks_swapped_out_this_frame);
-            j.value("blocks_stored", f.result.allocation.blocks_stored);
+            frame["swapped_in"] = f.result.allocation.blocks_swapped_in_this_frame;
+            frame["swapped_out"] = f.result.allocation.blocks_swapped_out_this_frame;
+            frame["blocks_stored"] = f.result.allocation.blocks_stored;
         }
-        j.endObject();
+        frames.push_back(std::move(frame));
     }
-    j.endArray();
-    j.endObject();
+    writeJsonFile(path, j);
 }
 
 void writeSummaryJson(const std::string& path, const RunRecord& run) {
-    std::ofstream out = openForWriting(path);
-    JsonWriter j(out);
     int fused = 0;
     for (const auto& f : run.frames) fused += f.result.fused ? 1 : 0;
-    j.beginObject();
-    j.value("source", run.source);
-    j.value("frames", int(run.frames.size()));
-    j.value("frames_fused", fused);
-    j.value("frames_without_pose", run.frames_without_pose);
-    j.value("frames_unreadable", run.frames_unreadable);
-    j.value("frames_dropped", run.frames_dropped);
-    if (run.has_labels) j.value("frames_with_labels", run.frames_with_labels);
-    j.value("poses", run.tracked ? "tracked" : "groundtruth");
-    j.value("tracking_poor_frames", countQuality(run, TrackingQuality::Poor));
-    j.value("tracking_failed_frames", countQuality(run, TrackingQuality::Failed));
-    j.value("frames_lost", countStatus(run, TrackingStatus::Lost));
-    j.value("relocalisation_attempts", countRelocalisationAttempts(run));
-    j.value("relocalisations", countStatus(run, TrackingStatus::Relocalised));
-    j.value("keyframes", run.frames.empty() ? 0 : run.frames.back().result.keyframes);
+    Json j;
+    j["source"] = run.source;
+    j["interrupted"] = run.interrupted;
+    j["frames"] = int(run.frames.size());
+    j["frames_fused"] = fused;
+    j["frames_without_pose"] = run.frames_without_pose;
+    j["frames_unreadable"] = run.frames_unreadable;
+    j["frames_dropped"] = run.frames_dropped;
+    if (run.has_labels) j["frames_with_labels"] = run.frames_with_labels;
+    j["poses"] = run.tracked ? "tracked" : "groundtruth";
+    j["tracking_poor_frames"] = countQuality(run, TrackingQuality::Poor);
+    j["tracking_failed_frames"] = countQuality(run, TrackingQuality::Failed);
+    j["frames_lost"] = countStatus(run, TrackingStatus::Lost);
+    j["relocalisation_attempts"] = countRelocalisationAttempts(run);
+    j["relocalisations"] = countStatus(run, TrackingStatus::Relocalised);
+    j["keyframes"] = run.frames.empty() ? 0 : run.frames.back().result.keyframes;
     if (run.has_trajectory_error) {
         const TrajectoryError& e = run.trajectory_error;
-        j.value("ate_rmse_m", e.ate_rmse_m);
-        j.value("ate_mean_m", e.ate_mean_m);
-        j.value("ate_median_m", e.ate_median_m);
-        j.value("ate_max_m", e.ate_max_m);
-        j.value("ate_pairs", e.pairs);
-        j.value("rpe_trans_m_per_s", e.rpe_trans_m_per_s);
-        j.value("rpe_rot_deg_per_s", e.rpe_rot_deg_per_s);
-        j.value("rpe_pairs", e.rpe_pairs);
+        j["ate_rmse_m"] = e.ate_rmse_m;
+        j["ate_mean_m"] = e.ate_mean_m;
+        j["ate_median_m"] = e.ate_median_m;
+        j["ate_max_m"] = e.ate_max_m;
+        j["ate_pairs"] = e.pairs;
+        j["rpe_trans_m_per_s"] = e.rpe_trans_m_per_s;
+        j["rpe_rot_deg_per_s"] = e.rpe_rot_deg_per_s;
+        j["rpe_pairs"] = e.rpe_pairs;
     }
-    j.value("median_ms", medianTotalMs(run));
-    j.value("fps", framesPerSecond(run));
-    j.value("wall_s", run.wall_s);
-    j.value("peak_rss_mb", run.peak_rss_mb);
-    j.value("scene_mb", run.scene_mb);
-    j.value("blocks_allocated", run.allocation.blocks_allocated);
-    j.value("allocation_failures", (long long)run.allocation.allocation_failures_total);
-    j.value("blocks_removed", (long long)run.allocation.blocks_removed_total);
+    j["median_ms"] = medianTotalMs(run);
+    j["fps"] = framesPerSecond(run);
+    j["wall_s"] = run.wall_s;
+    j["peak_rss_mb"] = run.peak_rss_mb;
+    j["scene_mb"] = run.scene_mb;
+    j["blocks_allocated"] = run.allocation.blocks_allocated;
+    j["allocation_failures"] = (long long)run.allocation.allocation_failures_total;
+    j["blocks_removed"] = (long long)run.allocation.blocks_removed_total;
     if (run.settings.swap.enabled) {
         int most_in = 0, most_out = 0;
         long long moved = 0;
@@ -152,39 +139,38 @@ void writeSummaryJson(const std::string& path, const RunRecord& run) {
             most_out = std::max(most_out, f.result.allocation.blocks_swapped_out_this_frame);
             moved += f.result.allocation.blocks_swapped_in_this_frame + f.result.allocation.blocks_swapped_out_this_frame;
         }
-        j.beginObject("swapping");
-        j.value("blocks_stored", run.allocation.blocks_stored);
-        j.value("active_block_limit", run.settings.hash.max_block_count);
-        j.value("blocks_per_frame_limit", run.settings.swap.blocks_per_frame);
-        j.value("most_swapped_in_per_frame", most_in);
-        j.value("most_swapped_out_per_frame", most_out);
-        j.value("blocks_moved", moved);
-        j.value("swap_file", run.settings.swap.swap_file);
-        j.endObject();
+        Json& swapping = j["swapping"];
+        swapping["blocks_stored"] = run.allocation.blocks_stored;
+        swapping["active_block_limit"] = run.settings.hash.max_block_count;
+        swapping["blocks_per_frame_limit"] = run.settings.swap.blocks_per_frame;
+        swapping["most_swapped_in_per_frame"] = most_in;
+        swapping["most_swapped_out_per_frame"] = most_out;
+        swapping["blocks_moved"] = moved;
+        swapping["swap_file"] = run.settings.swap.swap_file;
     }
-    if (!run.map_loaded.empty()) j.value("map_loaded", run.map_loaded);
-    if (!run.map_saved.empty()) j.value("map_saved", run.map_saved);
-    j.beginObject("settings");
-    j.value("voxel", toString(run.settings.voxel_type));
-    j.value("index", toString(run.settings.index_type));
-    j.value("device", deviceName(run.settings.device));
-    if (run.settings.device == Device::CUDA) j.value("gpu", device_memory::cudaDescription());
-    j.value("voxel_size_m", double(run.settings.scene.voxel_size_m));
-    j.value("mu_m", double(run.settings.scene.mu_m));
-    j.value("max_weight", run.settings.scene.max_weight);
-    j.value("min_depth_m", double(run.settings.scene.view_frustum_min_m));
-    j.value("max_depth_m", double(run.settings.scene.view_frustum_max_m));
+    if (!run.map_loaded.empty()) j["map_loaded"] = run.map_loaded;
+    if (!run.map_saved.empty()) j["map_saved"] = run.map_saved;
+    Json& settings = j["settings"];
+    settings["voxel"] = toString(run.settings.voxel_type);
+    settings["index"] = toString(run.settings.index_type);
+    settings["device"] = deviceName(run.settings.device);
+    if (run.settings.device == Device::CUDA) settings["gpu"] = device_memory::cudaDescription();
+    settings["voxel_size_m"] = double(run.settings.scene.voxel_size_m);
+    settings["mu_m"] = double(run.settings.scene.mu_m);
+    settings["max_weight"] = run.settings.scene.max_weight;
+    settings["min_depth_m"] = double(run.settings.scene.view_frustum_min_m);
+    settings["max_depth_m"] = double(run.settings.scene.view_frustum_max_m);
     if (voxelTypeHasLabels(run.settings.voxel_type))
-        j.value("label_update", run.settings.scene.label_update == LabelUpdate::Vote ? "vote" : "probabilistic");
+        settings["label_update"] = run.settings.scene.label_update == LabelUpdate::Vote ? "vote" : "probabilistic";
     if (run.tracked) {
-        j.value("tracker", toString(run.settings.tracker.kind));
+        settings["tracker"] = toString(run.settings.tracker.kind);
         std::string levels;
         for (const auto& l : run.settings.tracker.levels) levels += char(l.motion);
-        j.value("tracker_levels", levels);
-        j.value("relocalisation", run.settings.relocalisation.enabled);
+        settings["tracker_levels"] = levels;
+        settings["relocalisation"] = run.settings.relocalisation.enabled;
     }
-    j.endObject();
-    j.endObject();
+    j["outputs"] = run.outputs;
+    writeJsonFile(path, j);
 }
 
 std::string summaryText(const RunRecord& run, const std::string& out_dir) {
@@ -192,7 +178,7 @@ std::string summaryText(const RunRecord& run, const std::string& out_dir) {
     int fused = 0;
     for (const auto& f : run.frames) fused += f.result.fused ? 1 : 0;
     char line[256];
-    s << "VoxFuse run\n";
+    s << (run.interrupted ? "VoxFuse run (interrupted: the outputs hold the frames done)\n" : "VoxFuse run\n");
     s << "  source       " << run.source << "\n";
     std::snprintf(line, sizeof line, "  frames       %zu processed, %d fused, %d without pose, %d unreadable, %d dropped (live)\n",
                   run.frames.size(), fused, run.frames_without_pose, run.frames_unreadable, run.frames_dropped);
@@ -262,7 +248,11 @@ std::string summaryText(const RunRecord& run, const std::string& out_dir) {
           << (run.map_saved.empty() ? "" : "saved to " + run.map_saved) << "\n";
     std::snprintf(line, sizeof line, "  peak memory  %.0f MB\n", run.peak_rss_mb);
     s << line;
-    s << "  outputs      " << out_dir << "/ (trajectory.txt, timings.json, summary.json, render_*.png and any map outputs)\n";
+    s << "  outputs      " << out_dir << "/:";
+    const std::size_t shown = std::min<std::size_t>(run.outputs.size(), 6);
+    for (std::size_t i = 0; i < shown; ++i) s << " " << run.outputs[i];
+    if (run.outputs.size() > shown) s << " and " << run.outputs.size() - shown << " more";
+    s << "\n";
     return s.str();
 }
 

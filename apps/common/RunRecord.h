@@ -33,6 +33,8 @@ struct RunRecord {
     bool tracked = false;             // poses came from the tracker (not ground truth)
     std::string map_loaded;           // the map file the run continued, if any
     std::string map_saved;            // the map file the run wrote, if any
+    bool interrupted = false;         // stopped early by Ctrl-C or SIGTERM (the outputs hold the frames done)
+    std::vector<std::string> outputs; // the files this run wrote in its output folder (summary.json last)
     bool has_trajectory_error = false;
     TrajectoryError trajectory_error; // against the source's ground truth, when it has one
 };
@@ -48,7 +50,8 @@ double framesPerSecond(const RunRecord& run);
 
 // DIR/timings.json: per-stage ms of every frame and the medians.
 void writeTimingsJson(const std::string& path, const RunRecord& run);
-// DIR/summary.json: frames, median_ms, fps, peak_rss_mb and the settings used.
+// DIR/summary.json: frames, median_ms, fps, peak_rss_mb, the settings used, whether the run was
+// interrupted and the files it wrote.
 void writeSummaryJson(const std::string& path, const RunRecord& run);
 // The one-screen summary printed at the end.
 std::string summaryText(const RunRecord& run, const std::string& out_dir);

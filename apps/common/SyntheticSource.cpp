@@ -14,6 +14,7 @@ namespace voxfuse::app {
 namespace {
 constexpr float kDepthScale = 5000.f;  // raw depth = metres * 5000, as the bundled TUM-layout data
 constexpr double kFirstTimestamp = 1000.0;
+constexpr int kMaxFrames = 1000000;  // 9 hours at 30 Hz; the poses are made up front
 constexpr float kCorridorLength = 20.f;
 }  // namespace
 
@@ -68,8 +69,8 @@ std::unique_ptr<SyntheticSource> SyntheticSource::open(const std::string& path) 
         } catch (const std::exception&) {
             used = 0;
         }
-        if (used == 0 || used != path.size() - colon - 1 || frames < 1)
-            throw ConfigError("synthetic source: '" + path + "' should be NAME:N with N >= 1 frames");
+        if (used == 0 || used != path.size() - colon - 1 || frames < 1 || frames > kMaxFrames)
+            throw ConfigError("synthetic source: '" + path + "' should be NAME:N with 1 <= N <= " + std::to_string(kMaxFrames) + " frames");
     }
     return std::make_unique<SyntheticSource>(kind, frames);
 }

@@ -2,14 +2,17 @@
 // reconstruction as it grows, InfiniTAM style.
 
 #include <CLI/CLI.hpp>
-#include <cstdio>
+#include <charconv>
 #include <filesystem>
 #include <iostream>
 
 #include "LabelInput.h"
 #include "RelocalisationOptions.h"
+#include "OptionChecks.h"
+#include "ProgramMain.h"
 #include "ViewerApp.h"
 #include "voxfuse/core/Error.h"
+#include "voxfuse/io/UndistortedImageSource.h"
 
 #ifndef VOXFUSE_DEFAULT_DATA_DIR
 #define VOXFUSE_DEFAULT_DATA_DIR "data/synthetic_room"
@@ -47,16 +50,21 @@ std::string defaultSource() {
 
 // "WxH" -> the window size; ConfigError for anything else.
 void parseWindowSize(const std::string& text, viewer::ViewerOptions& out) {
+    const auto x = text.find_first_of("xX");
     int width = 0, height = 0;
-    char x = 0, extra = 0;
-    if (std::sscanf(text.c_str(), "%d%c%d%c", &width, &x, &height, &extra) != 3 || (x != 'x' && x != 'X') || width < 64 || height < 64)
-        throw ConfigError("--size must be WIDTHxHEIGHT with both at least 64, e.g. 1200x640 (got '" + text + "')");
+    auto number = [](const std::string& part, int& value) {
+        const auto result = std::from_chars(part.data(), part.data() + part.size(), value);
+        return !part.empty() && result.ec == std::errc() && result.ptr == part.data() + part.size();
+    };
+    if (x == std::string::npos || !number(text.substr(0, x), width) || !number(text.substr(x + 1), height) || width < 64 || height < 64 ||
+        width > 16384 || height > 16384)
+        throw ConfigError("--size must be WIDTHxHEIGHT, each 64 to 16384, e.g. 1200x640 (got '" + text + "')");
     out.window_width = width;
     out.window_height = height;
 }
 
 int run(Options& o) {
-    if (o.source.empty() && o.source_options.rgb_pattern.empty()) o.source = defaultSource();
+    if (o.source.empty() && o.source_options.rgb_pattern.empty() && o.source_options.depth_pattern.empty()) o.source = defaultSource();
     if (!o.size.empty()) parseWindowSize(o.size, o.viewer);
     std::unique_ptr<ImageSource> source = openImageSource(o.source, o.source_options);
     MainEngineSettings& s = o.engine;
@@ -70,6 +78,7 @@ int run(Options& o) {
         s = settingsForMap(map, s);
     }
     app::attachLabelInput(source, o.source, o.labels, s, "voxfuse_viewer");
+    source = framesForEngine(std::move(source), false);  // the same undistorted frames as voxfuse
     std::cerr << "voxfuse_viewer: " << source->description() << "\n";
 
     s.index_type = parseIndexType(o.index);
@@ -96,27 +105,18 @@ int main(int argc, char** argv) {
     cli.add_option("--calib", o.source_options.calib_path, "InfiniTAM calib.txt (overrides the source's own)");
     app::addVoxelAndLabelOptions(cli, o.labels, "s_rgb");
     cli.add_option("--index", o.index, "voxel index")->capture_default_str()->check(CLI::IsMember({"dense", "hash"}));
-    cli.add_option("--voxel-size", o.engine.scene.voxel_size_m, "voxel edge in metres")->capture_default_str()->check(CLI::PositiveNumber);
+    cli.add_option("--voxel-size", o.engine.scene.voxel_size_m, "voxel edge in metres")->capture_default_str()->check(app::floatIn(0.0, 1.0, true));
     cli.add_option("--device", o.device, "where the frame loop runs and the map lives: cpu, or cuda for the GPU (image processing, tracking, fusion, raycast, meshes)")->capture_default_str()->check(CLI::IsMember({"cpu", "cuda"}));
     cli.add_option("--poses", o.poses, "track the camera, or take the source's ground truth")
         ->capture_default_str()->check(CLI::IsMember({"track", "groundtruth"}));
     app::addRelocalisationOptions(cli, o.engine.relocalisation);
     cli.add_option("--out", o.viewer.out_dir, "folder for the mesh (m), the map (s) and screenshot (p)")->capture_default_str();
     cli.add_option("--load-map", o.load_map, "continue the map in this file (.vfm; see voxfuse --save-map and key s)")->check(CLI::ExistingFile);
-    cli.add_option("--frames", o.viewer.max_frames, "stop processing after N frames (0 = all)")->check(CLI::NonNegativeNumber);
+    cli.add_option("--frames", o.viewer.max_frames, "stop processing after N frames (0 = all)")->check(app::nonNegativeInt());
     cli.add_flag("--paused", o.paused, "start paused (n steps, space runs)");
     cli.add_option("--size", o.size, "window size WIDTHxHEIGHT (default 1200x640)");
     cli.add_option("--screenshot", o.viewer.screenshot_path, "save the window as PNG once processing stops (end of source or --frames)");
     cli.add_flag("--exit", o.viewer.exit_when_done, "quit once processing stops (after --screenshot); for scripts and tests");
     CLI11_PARSE(cli, argc, argv);
-
-    try {
-        return run(o);
-    } catch (const Error& e) {
-        std::cerr << "voxfuse_viewer: error: " << e.what() << "\n";
-        return 2;
-    } catch (const std::exception& e) {
-        std::cerr << "voxfuse_viewer: unexpected error: " << e.what() << "\n";
-        return 3;
-    }
+    return app::runReportingErrors("voxfuse_viewer", [&] { return run(o); });
 }

@@ -58,7 +58,7 @@ def test_library_errors_carry_the_message(room_frames, tmp_path):
         voxfuse.Pipeline(calib, voxelsize=0.01)
     with pytest.raises(TypeError, match="setting 'voxel_size' cannot be 'big'"):
         voxfuse.Settings(voxel_size="big")
-    with pytest.raises(voxfuse.Error, match="Pipeline settings:1: iterations: expected 1 or 3 values"):
+    with pytest.raises(voxfuse.Error, match="Pipeline settings: iterations: expected 1 or 3 values"):
         voxfuse.Pipeline(calib, tracker_iterations=[5, 5])
     with pytest.raises(voxfuse.ConfigError, match="render mode"):
         voxfuse.Pipeline(calib, voxel_size=0.01).render("fancy")

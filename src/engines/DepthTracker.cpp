@@ -41,7 +41,7 @@ public:
         color_ok = color_ok && model_ok && photometric_->colorModel(model, settings_.color_point_step);
         stats_.prepare_ms = prepare.elapsedMs();
 
-        if (!model_ok && !seen_model_) {
+        if (frame_ok && !model_ok && !seen_model_) {
             // No map yet (the first frame, or nothing fused so far): this frame's pose defines it.
             state.quality = TrackingQuality::Good;
             state.inlier_ratio = 1.f;

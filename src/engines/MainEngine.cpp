@@ -4,7 +4,10 @@
 
 #include <chrono>
 #include <climits>
+#include <cmath>
+#include <cstdio>
 #include <cstring>
+#include <fstream>
 #include <type_traits>
 
 #include "PoseUpdate.h"
@@ -526,20 +529,109 @@ auto visitVoxelType(VoxelType type, F&& f) {
 
 }  // namespace
 
+namespace {
+
+// Voxel coordinates of a dense volume stay within this of the origin: there a float still holds every
+// integer coordinate exactly, and offset + size never overflows an int.
+constexpr int kMaxDenseCoordinate = 1 << 24;
+
+std::string gib(double bytes) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.1f GiB", bytes / double(1ull << 30));
+    return text;
+}
+
+// What the kernel says it could give this process now, in bytes: MemAvailable plus free swap
+// (Linux); 0 when unknown.
+double availableHostBytes() {
+    std::ifstream meminfo("/proc/meminfo");
+    std::string key;
+    double kb = 0.0, total_kb = 0.0;
+    int found = 0;
+    while (meminfo >> key >> kb) {
+        if (key == "MemAvailable:" || key == "SwapFree:") {
+            total_kb += kb;
+            ++found;
+        }
+        meminfo.ignore(256, '\n');
+    }
+    return found > 0 ? total_kb * 1024.0 : 0.0;
+}
+
+std::size_t voxelBytes(VoxelType type) {
+    return visitVoxelType(type, [](auto tag) { return sizeof(typename decltype(tag)::Voxel); });
+}
+
+// The memory the index needs before the first frame: the dense array, or the hash's tables (its
+// voxel blocks grow with the scene).
+double indexBytes(const MainEngineSettings& s) {
+    if (s.index_type == IndexType::Dense)
+        return double(s.dense_size.x) * double(s.dense_size.y) * double(s.dense_size.z) * double(voxelBytes(s.voxel_type));
+    const double entries = double(s.hash.bucket_count) * s.hash.entries_per_bucket + s.hash.excess_entry_count;
+    return entries * double(sizeof(HashEntry) + sizeof(int) + 1) + double(s.hash.excess_entry_count + 2.0 * s.hash.max_block_count) * sizeof(int);
+}
+
+std::string indexDescription(const MainEngineSettings& s) {
+    if (s.index_type == IndexType::Dense)
+        return "the dense volume of " + std::to_string(s.dense_size.x) + "x" + std::to_string(s.dense_size.y) + "x" +
+               std::to_string(s.dense_size.z) + " '" + toString(s.voxel_type) + "' voxels";
+    return "the hash table of " + std::to_string((long long)s.hash.bucket_count * s.hash.entries_per_bucket + s.hash.excess_entry_count) +
+           " entries";
+}
+
+std::string indexRemedy(const MainEngineSettings& s) {
+    return s.index_type == IndexType::Dense ? "use a smaller --volume-size, or the hash index (--index hash), whose memory follows the scene"
+                                            : "use fewer --hash-buckets / --hash-excess";
+}
+
+void validateDepthRange(const SceneParams& p) {
+    if (!(p.view_frustum_min_m >= 0.f && std::isfinite(p.view_frustum_min_m) && std::isfinite(p.view_frustum_max_m) &&
+          p.view_frustum_max_m > p.view_frustum_min_m))
+        throw ConfigError("the depth range needs 0 <= minimum < maximum, both finite (--min-depth, --max-depth); got " +
+                          std::to_string(p.view_frustum_min_m) + " .. " + std::to_string(p.view_frustum_max_m) + " m");
+}
+
+void validateDenseVolume(const MainEngineSettings& s) {
+    for (int a = 0; a < 3; ++a) {
+        const long long lo = s.dense_offset[a], hi = lo + s.dense_size[a];
+        if (s.dense_size[a] <= 0) throw ConfigError("dense volume size must be positive (--volume-size), got " + std::to_string(s.dense_size[a]) + " on axis " + "xyz"[a]);
+        if (lo < -kMaxDenseCoordinate || hi > kMaxDenseCoordinate)
+            throw ConfigError(std::string("the dense volume must lie within +-") + std::to_string(kMaxDenseCoordinate) +
+                              " voxels of the origin (--volume-offset, --volume-size); on axis " + "xyz"[a] + " it spans " +
+                              std::to_string(lo) + " .. " + std::to_string(hi));
+    }
+}
+
+}  // namespace
+
 std::unique_ptr<MainEngine> MainEngine::create(const MainEngineSettings& s, const RGBDCalib& calib) {
     if (!calib.depth.valid()) throw ConfigError("the depth camera calibration is missing or invalid");
-    if (!(s.scene.voxel_size_m > 0.f) || !(s.scene.mu_m > s.scene.voxel_size_m))
-        throw ConfigError("need voxel size > 0 and mu > voxel size (got voxel " + std::to_string(s.scene.voxel_size_m) +
+    if (!(s.scene.voxel_size_m > 0.f && std::isfinite(s.scene.voxel_size_m)) || !(s.scene.mu_m > s.scene.voxel_size_m && std::isfinite(s.scene.mu_m)))
+        throw ConfigError("need voxel size > 0 and mu > voxel size, both finite (got voxel " + std::to_string(s.scene.voxel_size_m) +
                           " m, mu " + std::to_string(s.scene.mu_m) + " m)");
     if (s.scene.max_weight < 1 || s.scene.max_weight > 255) throw ConfigError("max weight must be in 1..255");
-    if (s.dense_size.x <= 0 || s.dense_size.y <= 0 || s.dense_size.z <= 0) throw ConfigError("dense volume size must be positive");
+    validateDepthRange(s.scene);
+    if (s.index_type == IndexType::Dense) validateDenseVolume(s);
     if (s.swap.enabled && s.index_type != IndexType::Hash) throw ConfigError("swapping needs the hash index (--index hash)");
     if (s.swap.enabled && s.swap.blocks_per_frame < 1) throw ConfigError("swapping moves at least one block per frame");
     if (s.tracking_raycast_downsample != 1 && s.tracking_raycast_downsample != 2 && s.tracking_raycast_downsample != 4)
         throw ConfigError("the tracking raycast's downsampling must be 1, 2 or 4 (got " + std::to_string(s.tracking_raycast_downsample) + ")");
     if (s.device == Device::CUDA && !device_memory::cudaAvailable())
         throw DeviceError("CUDA was requested but is not usable: " + device_memory::cudaDescription());
-    return visitVoxelType(s.voxel_type, [&](auto tag) { return createForVoxel<typename decltype(tag)::Voxel>(s, calib); });
+    // Said before the allocation, which would otherwise fail as a bare std::bad_alloc (or, with the
+    // kernel's overcommit, kill the process when the memory is first touched).
+    const double needed = indexBytes(s), available = availableHostBytes();
+    if (s.device == Device::CPU && available > 0.0 && needed > available)
+        throw ConfigError(indexDescription(s) + " needs " + gib(needed) + " of memory; this machine has " + gib(available) +
+                          " available: " + indexRemedy(s));
+    try {
+        return visitVoxelType(s.voxel_type, [&](auto tag) { return createForVoxel<typename decltype(tag)::Voxel>(s, calib); });
+    } catch (const std::bad_alloc&) {
+        throw ConfigError(indexDescription(s) + " needs " + gib(needed) + " of memory, more than could be allocated: " + indexRemedy(s));
+    } catch (const DeviceError& e) {
+        if (s.device != Device::CUDA || std::string(e.what()).find("memory") == std::string::npos) throw;
+        throw DeviceError(std::string(e.what()) + " (" + indexDescription(s) + " needs " + gib(needed) + " of GPU memory: " + indexRemedy(s) + ")");
+    }
 }
 
 MainEngineSettings settingsForMap(const MapFileInfo& info, MainEngineSettings base) {

@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <functional>
 #include <map>
 #include <sstream>
@@ -254,25 +253,16 @@ TrackerSettings parseTrackerSettings(const std::string& text, const std::string&
 }
 
 TrackerSettings parseTrackerSettingsFile(const std::string& path) {
-    std::ifstream in(path);
-    if (!in) throw IoError(path, "cannot open tracker settings file");
-    std::ostringstream text;
-    text << in.rdbuf();
-    if (in.bad()) throw IoError(path, "read error");
-    return parseTrackerSettings(text.str(), path);
+    return parseTrackerSettings(text::readSmallTextFile(path, "tracker settings file"), path);
 }
 
 TrackerSettings trackerSettingsWith(const TrackerOverrides& o) {
     std::string text, name = o.origin;
     if (!o.settings_file.empty()) {
-        std::ifstream in(o.settings_file);
-        if (!in) throw IoError(o.settings_file, "cannot open the tracker settings file");
-        std::ostringstream file;
-        file << in.rdbuf();
-        if (in.bad()) throw IoError(o.settings_file, "read error");
-        text = file.str() + "\n";
-        name = o.settings_file + " and " + o.origin;
+        text = text::readSmallTextFile(o.settings_file, "tracker settings file") + "\n";
+        name = o.settings_file;
     }
+    const int file_lines = int(std::count(text.begin(), text.end(), '\n'));
     auto list = [](const auto& values) {
         std::ostringstream out;
         out.precision(9);
@@ -283,7 +273,13 @@ TrackerSettings trackerSettingsWith(const TrackerOverrides& o) {
     if (!o.levels.empty()) text += "levels = " + o.levels + "\n";
     if (!o.iterations.empty()) text += "iterations =" + list(o.iterations) + "\n";
     if (!o.max_distance_m.empty()) text += "max_distance_m =" + list(o.max_distance_m) + "\n";
-    return parseTrackerSettings(text, name);
+    try {
+        return parseTrackerSettings(text, name);
+    } catch (const ParseError& e) {
+        // A line after the file's is one of the single values: no line number to give for those.
+        if (e.line() <= file_lines) throw;
+        throw ConfigError(o.origin + (o.settings_file.empty() ? "" : " (over " + o.settings_file + ")") + ": " + e.reason());
+    }
 }
 
 }  // namespace voxfuse

@@ -66,11 +66,23 @@ void FrameFolderSource::findFrames() {
 void FrameFolderSource::loadPoses() {
     for (FrameFiles& f : frames_) {
         const std::string pose_path = f.stem + ".pose.txt";
-        if (!frame_reading::fileExists(pose_path)) continue;
+        if (!frame_reading::optionalFilePresent(pose_path)) continue;
         const std::vector<double> m = text::readNumberMatrix(pose_path, 4, 4);
-        if (!std::all_of(m.begin(), m.end(), [](double v) { return std::isfinite(v); })) continue;
+        // Some tools mark lost tracking with -inf in every value of the top three rows: the frame has no
+        // pose (counted).
+        if (std::none_of(m.begin(), m.begin() + 12, [](double v) { return std::isfinite(v); })) {
+            ++lost_poses_;
+            continue;
+        }
+        if (!std::all_of(m.begin(), m.end(), [](double v) { return text::finiteAsFloat(v); }))
+            throw IoError(pose_path, "non-finite values in the 4x4 pose (stored as floats); a frame without a pose has -inf in all of its top three rows");
         if (std::abs(m[12]) > 1e-6 || std::abs(m[13]) > 1e-6 || std::abs(m[14]) > 1e-6 || std::abs(m[15] - 1.0) > 1e-6)
             throw IoError(pose_path, "the last row of a 4x4 camera-to-world pose must be 0 0 0 1");
+        const double R[9] = {m[0], m[1], m[2], m[4], m[5], m[6], m[8], m[9], m[10]};
+        std::string problem = text::rotationProblem(R);
+        if (!problem.empty()) problem = "the rotation of the 4x4 camera-to-world pose is " + problem;
+        else problem = text::positionProblem(m[3], m[7], m[11]);
+        if (!problem.empty()) throw IoError(pose_path, problem);
         for (int i = 0; i < 16; ++i) f.T_world_camera.m[i] = float(m[std::size_t(i)]);
         f.has_pose = true;
         ground_truth_.push_back(TimedPose{f.number / kFramesPerSecond, f.T_world_camera});
@@ -81,7 +93,7 @@ void FrameFolderSource::calibrateFromK() {
     std::string k_path;
     for (const char* name : {"intrinsics.K.txt", "camera-intrinsics.txt"}) {
         const std::string candidate = (fs::path(folder_) / name).string();
-        if (frame_reading::fileExists(candidate)) {
+        if (frame_reading::optionalFilePresent(candidate)) {
             k_path = candidate;
             break;
         }
@@ -89,15 +101,19 @@ void FrameFolderSource::calibrateFromK() {
     if (k_path.empty())
         throw IoError(folder_, "no intrinsics.K.txt or camera-intrinsics.txt (and no calibration file given)");
     const std::vector<double> K = text::readNumberMatrix(k_path, 3, 3);
-    if (!std::all_of(K.begin(), K.end(), [](double v) { return std::isfinite(v); }))
-        throw IoError(k_path, "non-finite value in K");
-    if (K[0] <= 0.0 || K[4] <= 0.0) throw IoError(k_path, "focal lengths K(0,0) and K(1,1) must be positive");
+    if (!std::all_of(K.begin(), K.end(), [](double v) { return text::finiteAsFloat(v); }))
+        throw IoError(k_path, "non-finite value in K (stored as floats)");
+    if (!(float(K[0]) > 0.f) || !(float(K[4]) > 0.f)) throw IoError(k_path, "focal lengths K(0,0) and K(1,1) must be positive");
     if (K[1] != 0.0 || K[3] != 0.0 || K[6] != 0.0 || K[7] != 0.0 || K[8] != 1.0)
         throw IoError(k_path, "expected K = [fx 0 cx; 0 fy cy; 0 0 1] (no skew)");
 
     // The files do not say the image size; the first depth image does.
     const Image<std::uint16_t> first_depth = readDepthPNG(frames_.front().depth_path);
     Intrinsics depth{first_depth.width(), first_depth.height(), float(K[0]), float(K[4]), float(K[2]), float(K[5])};
+    if (!(depth.cx >= -0.5f && depth.cx <= float(depth.width) - 0.5f && depth.cy >= -0.5f && depth.cy <= float(depth.height) - 0.5f))
+        throw IoError(k_path, "the principal point (" + text::formatFloat(depth.cx) + ", " + text::formatFloat(depth.cy) +
+                                  ") lies outside the " + std::to_string(depth.width) + "x" + std::to_string(depth.height) +
+                                  " depth images (" + frames_.front().depth_path + ")");
     Intrinsics rgb = depth;
     if (!frames_.front().colour_path.empty()) {
         const Vec2i colour_size = readColorImage(frames_.front().colour_path).size();
@@ -134,7 +150,8 @@ bool FrameFolderSource::next(RGBDFrame& frame) {
 std::string FrameFolderSource::description() const {
     return "frame folder " + folder_ + " (" + std::to_string(frames_.size()) + " frames, numbers " +
            std::to_string(frames_.front().number) + ".." + std::to_string(frames_.back().number) + ", " +
-           std::to_string(ground_truth_.size()) + " with poses)";
+           std::to_string(ground_truth_.size()) + " with poses" +
+           (lost_poses_ > 0 ? ", " + std::to_string(lost_poses_) + " whose pose files mark lost tracking (-inf)" : std::string()) + ")";
 }
 
 }  // namespace voxfuse

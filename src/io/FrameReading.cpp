@@ -3,7 +3,6 @@
 #include <cctype>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 
 #include "TextParsing.h"
 #include "voxfuse/core/Error.h"
@@ -48,29 +47,34 @@ bool fileExists(const std::string& path) {
     return std::filesystem::is_regular_file(path, ec);
 }
 
+bool optionalFilePresent(const std::string& path) {
+    std::error_code ec;
+    if (!std::filesystem::exists(path, ec)) return false;
+    if (!std::filesystem::is_regular_file(path, ec)) throw IoError(path, "is a folder, not a file");
+    return true;
+}
+
 std::vector<ListedImage> readTimestampedImageList(const std::string& list_path, int& missing) {
-    std::ifstream in(list_path);
-    if (!in) throw IoError(list_path, "cannot open the image list");
+    text::LineReader in(list_path, "image list");
     const std::filesystem::path folder = std::filesystem::path(list_path).parent_path();
     std::vector<ListedImage> images;
     std::string line;
-    int line_number = 0;
-    while (std::getline(in, line)) {
-        ++line_number;
+    while (in.next(line)) {
+        const int line_number = in.lineNumber();
         if (text::isBlankOrComment(line)) continue;
         const auto tokens = text::splitWhitespace(line);
         if (tokens.size() != 2)
             throw ParseError(list_path, line_number, "expected 'timestamp filename', got " + std::to_string(tokens.size()) + " fields");
         double time = 0.0;
         if (!text::parseDouble(tokens[0], time) || !std::isfinite(time))
-            throw ParseError(list_path, line_number, "not a timestamp: '" + std::string(tokens[0]) + "'");
+            throw ParseError(list_path, line_number, "not a timestamp: " + text::excerpt(tokens[0]));
         const std::filesystem::path file{std::string(tokens[1])};
         const std::string resolved = (file.is_absolute() ? file : folder / file).string();
-        const bool on_disk = fileExists(resolved);
+        std::error_code ec;
+        const bool on_disk = std::filesystem::exists(resolved, ec);
         images.push_back({time, resolved, on_disk});
         missing += !on_disk;
     }
-    if (in.bad()) throw IoError(list_path, "read error in the image list");
     return images;
 }
 

@@ -13,6 +13,9 @@ namespace voxfuse {
 namespace frame_reading {
 
 bool fileExists(const std::string& path);
+// For files a source reads when they are there (groundtruth.txt, calib.txt, pose files): false when
+// nothing has the name, true for a file, IoError "is a folder, not a file" for anything else.
+bool optionalFilePresent(const std::string& path);
 
 struct ListedImage {
     double time_s;
@@ -22,7 +25,8 @@ struct ListedImage {
 
 // A list of images in the layout of TUM's rgb.txt: '#' comments and blank lines, else one
 // "timestamp filename" line per image, in file order. Images not on disk are kept with on_disk false
-// (their place may matter) and counted in `missing`. Throws IoError when the list cannot be read,
+// (their place may matter) and counted in `missing`; a listed name that is a folder counts as on
+// disk, so that reading it says what it is. Throws IoError when the list cannot be read,
 // ParseError naming the line for a malformed one.
 std::vector<ListedImage> readTimestampedImageList(const std::string& list_path, int& missing);
 

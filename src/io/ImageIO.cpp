@@ -10,13 +10,17 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <memory>
 #include <vector>
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <turbojpeg.h>
 
+#include "ImageHeader.h"
 #include "voxfuse/core/Error.h"
+#include "voxfuse/io/AtomicFile.h"
 
 namespace voxfuse {
 
@@ -25,9 +29,18 @@ namespace {
 // ---------------------------------------------------------------------------------------------
 // Netpbm (P5/P6)
 
-std::vector<unsigned char> readWholeFile(const std::string& path) {
+// Image files larger than this many pixels are refused before they are decoded: a few bytes of
+// header can otherwise ask for gigabytes (no camera delivers more than 2^26 pixels per frame).
+constexpr double kMaxImagePixels = double(1 << 26);
+
+void requireImageFile(const std::string& path) {
     std::error_code ec;
+    if (std::filesystem::is_directory(path, ec)) throw IoError(path, "is a folder, not an image file");
     if (!std::filesystem::exists(path, ec)) throw IoError(path, "no such file");
+}
+
+std::vector<unsigned char> readWholeFile(const std::string& path) {
+    requireImageFile(path);
     std::ifstream in(path, std::ios::binary);
     if (!in) throw IoError(path, "cannot open for reading");
     std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -121,12 +134,10 @@ void requirePixelBytes(const std::string& path, const std::vector<unsigned char>
 }
 
 void writeWholeFile(const std::string& path, const std::string& header, const std::vector<unsigned char>& data) {
-    std::ofstream out(path, std::ios::binary);
-    if (!out) throw IoError(path, "cannot open for writing");
-    out.write(header.data(), std::streamsize(header.size()));
-    out.write(reinterpret_cast<const char*>(data.data()), std::streamsize(data.size()));
-    out.flush();
-    if (!out) throw IoError(path, "write failed");
+    AtomicFile file(path);
+    file.stream().write(header.data(), std::streamsize(header.size()));
+    file.stream().write(reinterpret_cast<const char*>(data.data()), std::streamsize(data.size()));
+    file.commit();
 }
 
 std::string netpbmHeader(const char* magic, Vec2i size, int maxval) {
@@ -152,9 +163,27 @@ std::string describeMat(const cv::Mat& m) {
     return depth + " " + std::to_string(m.channels()) + "-channel";
 }
 
-cv::Mat readWithOpenCV(const std::string& path) {
+// Only the formats VoxFuse reads reach a decoder, and only with a size a frame can have: OpenCV
+// allocates what a header claims (up to 2^30 pixels) before it reads a pixel.
+image_header::Header requirePlausibleImage(const std::string& path) {
+    const image_header::Header h = image_header::read(path);
+    if (h.format == image_header::Format::Unknown)
+        throw IoError(path, "cannot decode image: not a format VoxFuse reads (PNG, JPEG, PPM/PGM, TIFF or BMP)");
+    const char* format = image_header::name(h.format);
+    if (h.width >= 0 && double(h.width) * double(h.height) > kMaxImagePixels)
+        throw IoError(path, std::string("the ") + format + " says it is " + std::to_string(h.width) + "x" + std::to_string(h.height) +
+                                " pixels: too large for an image of a frame (corrupt header?)");
     std::error_code ec;
-    if (!std::filesystem::exists(path, ec)) throw IoError(path, "no such file");
+    const std::uintmax_t size = std::filesystem::file_size(path, ec);
+    if (!ec && h.minimum_bytes > size)
+        throw IoError(path, std::string("truncated: a ") + std::to_string(h.width) + "x" + std::to_string(h.height) + " " + format +
+                                " needs " + std::to_string(h.minimum_bytes) + " bytes, the file has " + std::to_string(size));
+    return h;
+}
+
+cv::Mat readWithOpenCV(const std::string& path) {
+    requireImageFile(path);
+    requirePlausibleImage(path);
     cv::Mat m;
     try {
         m = cv::imread(path, cv::IMREAD_UNCHANGED);
@@ -165,15 +194,18 @@ cv::Mat readWithOpenCV(const std::string& path) {
     return m;
 }
 
+// The codec writes a temporary file that replaces `path` once complete (io/AtomicFile.h).
 void writeWithOpenCV(const std::string& path, const cv::Mat& m) {
-    bool ok = false;
-    std::string detail;
-    try {
-        ok = cv::imwrite(path, m);
-    } catch (const cv::Exception& e) {
-        detail = ": " + e.msg;
-    }
-    if (!ok) throw IoError(path, "cannot write image (folder missing or not writable, or unknown extension)" + detail);
+    writeFileAtomically(path, [&](const std::string& temporary) {
+        bool ok = false;
+        std::string detail;
+        try {
+            ok = cv::imwrite(temporary, m);
+        } catch (const cv::Exception& e) {
+            detail = " (" + e.msg + ")";
+        }
+        if (!ok) throw IoError(path, "cannot write the image: " + (detail.empty() ? writeFailureReason(path, errno) : "unknown format" + detail));
+    });
 }
 
 template <typename T>
@@ -252,8 +284,37 @@ void writePGM16(const std::string& path, const Image<std::uint16_t>& depth) {
     writeWholeFile(path, netpbmHeader("P5", depth.size(), 65535), data);
 }
 
+namespace {
+
+// JPEG through TurboJPEG rather than OpenCV: OpenCV decodes a truncated or damaged JPEG into a
+// partly grey image and leaves only libjpeg's warning on stderr; here a warning is an error. CMYK
+// JPEGs (TurboJPEG does not convert them to RGB) go to OpenCV. False: not decoded here.
+bool readJpeg(const std::string& path, Image<Vec4u8>& image) {
+    const std::vector<unsigned char> bytes = readWholeFile(path);
+    const std::unique_ptr<void, int (*)(tjhandle)> tj(tjInitDecompress(), tjDestroy);
+    if (!tj) throw IoError(path, "cannot start the JPEG decoder");
+    int width = 0, height = 0, subsampling = 0, colorspace = 0;
+    if (tjDecompressHeader3(tj.get(), bytes.data(), static_cast<unsigned long>(bytes.size()), &width, &height, &subsampling, &colorspace) != 0)
+        throw IoError(path, std::string("corrupt JPEG: ") + tjGetErrorStr2(tj.get()));
+    if (colorspace == TJCS_CMYK || colorspace == TJCS_YCCK) return false;
+    if (width <= 0 || height <= 0) throw IoError(path, "corrupt JPEG: the header gives no image size");
+    if (double(width) * double(height) > kMaxImagePixels)
+        throw IoError(path, "the JPEG says it is " + std::to_string(width) + "x" + std::to_string(height) +
+                                " pixels: too large for an image of a frame (corrupt header?)");
+    image.resize(Vec2i{width, height});
+    if (tjDecompress2(tj.get(), bytes.data(), static_cast<unsigned long>(bytes.size()), reinterpret_cast<unsigned char*>(image.host()), width, 0,
+                      height, TJPF_RGBA, TJFLAG_STOPONWARNING) != 0)
+        throw IoError(path, std::string("corrupt JPEG: ") + tjGetErrorStr2(tj.get()) + " (the file is damaged or truncated)");
+    return true;
+}
+
+}  // namespace
+
 Image<Vec4u8> readColorImage(const std::string& path) {
     if (hasExtension(path, ".ppm")) return readPPM(path);
+    requireImageFile(path);
+    Image<Vec4u8> jpeg;
+    if (requirePlausibleImage(path).format == image_header::Format::Jpeg && readJpeg(path, jpeg)) return jpeg;
     cv::Mat m = readWithOpenCV(path);
     if (m.depth() == CV_16U) {
         m.convertTo(m, CV_8U, 1.0 / 257.0);  // 65535 -> 255

@@ -1,15 +1,19 @@
 # Included by src/CMakeLists.txt: what the input front-ends (src/io) need beyond the core library.
 #  - OpenCV videoio (the colour video of iPhone captures) and calib3d (lens undistortion maps).
+#  - TurboJPEG: JPEG colour images, whose damage it reports.
 #  - OpenNI2, optional: live cameras and .oni playback. VOXFUSE_OPENNI2 defaults to ON when it is
 #    found (Debian: libopenni2-dev); without it OpenNISource throws an IoError saying so.
 
 find_package(OpenCV REQUIRED COMPONENTS videoio calib3d)
 target_link_libraries(voxfuse PRIVATE opencv_videoio opencv_calib3d)
 
-find_package(PkgConfig QUIET)
-if(PKG_CONFIG_FOUND)
-  pkg_check_modules(OPENNI2 QUIET libopenni2)
-endif()
+# TurboJPEG (Debian: libturbojpeg0-dev) decodes JPEG colour so that a damaged or truncated file is an
+# error naming it; OpenCV would decode it into a partly grey image with only a warning on stderr.
+find_package(PkgConfig REQUIRED)
+pkg_check_modules(TURBOJPEG REQUIRED IMPORTED_TARGET libturbojpeg)
+target_link_libraries(voxfuse PRIVATE PkgConfig::TURBOJPEG)
+
+pkg_check_modules(OPENNI2 QUIET libopenni2)
 if(NOT OPENNI2_FOUND)
   find_path(OPENNI2_INCLUDE_DIRS OpenNI.h PATH_SUFFIXES openni2)
   find_library(OPENNI2_LINK_LIBRARIES OpenNI2)

@@ -2,11 +2,11 @@
 
 #include "voxfuse/io/MapFile.h"
 
-#include <unistd.h>
 #include <zlib.h>
 
 #include <algorithm>
 #include <cerrno>
+#include <climits>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -15,8 +15,10 @@
 #include <utility>
 #include <vector>
 
+#include "TextParsing.h"
 #include "voxfuse/core/Error.h"
 #include "voxfuse/engines/EnginePairs.h"
+#include "voxfuse/io/AtomicFile.h"
 #include "voxfuse/objects/GlobalCache.h"
 #include "voxfuse/objects/Scene.h"
 #include "voxfuse/shared/HashAccess.h"
@@ -36,7 +38,7 @@ constexpr std::uint32_t kHeaderBytes = kVoxelTypeNameBytes + 4 * 26 + 3 + 2 * 64
 // ---- Bytes out: little-endian fields into a buffer, flushed to the file in chunks, with a running CRC ----
 class FieldWriter {
 public:
-    FieldWriter(std::ofstream& out, const std::string& path) : out_(out), path_(path) {}
+    explicit FieldWriter(AtomicFile& file) : file_(file) {}
     void u8(std::uint8_t v) { buffer_.push_back(v); }
     void u16(std::uint16_t v) { bytes(v, 2); }
     void i16(std::int16_t v) { u16(std::uint16_t(v)); }
@@ -52,8 +54,8 @@ public:
     // Sends the buffered bytes to the file, adding them to the checksum first when `checksummed`.
     void flush(bool checksummed = true) {
         if (checksummed) crc_ = crc32(crc_, buffer_.data(), unsigned(buffer_.size()));
-        out_.write(reinterpret_cast<const char*>(buffer_.data()), std::streamsize(buffer_.size()));
-        if (!out_) throw IoError(path_, std::string("cannot write the map: ") + std::strerror(errno));
+        file_.stream().write(reinterpret_cast<const char*>(buffer_.data()), std::streamsize(buffer_.size()));
+        file_.check();
         buffer_.clear();
     }
     void flushIfFull() {
@@ -67,8 +69,7 @@ private:
     void bytes(std::uint64_t v, int n) {
         for (int i = 0; i < n; ++i) buffer_.push_back(std::uint8_t(v >> (8 * i)));
     }
-    std::ofstream& out_;
-    std::string path_;
+    AtomicFile& file_;
     std::vector<std::uint8_t> buffer_;
     uLong crc_ = crc32(0L, Z_NULL, 0);
 };
@@ -281,6 +282,28 @@ MapFileInfo readHeader(FieldReader& r) {
         info.camera.height < 0 || info.camera.width > 1 << 16 || info.camera.height > 1 << 16 ||
         !(std::isfinite(info.camera.fx) && std::isfinite(info.camera.fy) && std::isfinite(info.camera.cx) && std::isfinite(info.camera.cy)))
         r.fail("corrupt: the scene settings, poses or camera are out of range");
+    // Rays are cast from the resume pose as soon as the map is loaded: it must be a camera's.
+    for (const Mat4f* pose : {&info.T_world_camera, &info.T_source_world}) {
+        const std::string problem = text::rigidPoseProblem(pose->m);
+        if (!problem.empty()) r.fail("corrupt: " + std::string(pose == &info.T_world_camera ? "the resume pose: " : "the world origin: ") + problem);
+    }
+    // What a map of this version can hold; the engine's own checks would refuse the rest without
+    // naming the file.
+    const VoxelBlockHashSettings& h = info.hash_settings;
+    if (info.hash && (h.bucket_count < 1 || (h.entries_per_bucket != 1 && h.entries_per_bucket != 2) || h.excess_entry_count < 0 ||
+                      (long long)h.bucket_count * h.entries_per_bucket + h.excess_entry_count > INT_MAX || h.max_block_count < 1 ||
+                      h.max_block_count > (1 << 22) || h.blocks_per_growth < 1))
+        r.fail("corrupt: the hash settings are out of range (" + std::to_string(h.bucket_count) + " buckets of " +
+               std::to_string(h.entries_per_bucket) + ", " + std::to_string(h.excess_entry_count) + " excess entries, at most " +
+               std::to_string(h.max_block_count) + " blocks)");
+    if (!info.hash)
+        for (int a = 0; a < 3; ++a)
+            if (info.dense_size[a] < 1 || info.dense_size[a] > (1 << 16) || std::abs((long long)info.dense_offset[a]) > (1 << 24))
+                r.fail("corrupt: the dense volume is out of range (offset " + std::to_string(info.dense_offset[a]) + ", size " +
+                       std::to_string(info.dense_size[a]) + " on axis " + "xyz"[a] + ")");
+    if (!info.hash && info.record_count != std::uint64_t(info.dense_size.x) * std::uint64_t(info.dense_size.y) * std::uint64_t(info.dense_size.z))
+        r.fail("corrupt: " + std::to_string(info.record_count) + " voxels for a " + std::to_string(info.dense_size.x) + "x" +
+               std::to_string(info.dense_size.y) + "x" + std::to_string(info.dense_size.z) + " volume");
     return info;
 }
 
@@ -437,39 +460,25 @@ void writeMapFile(const std::string& path, const Scene<TVoxel, TIndex>& scene, c
     info.integration_count = scene.integrationCount();
     info.record_count = recordCount(scene, cache);
 
-    // A temporary name in the target's folder (rename stays within one file system), renamed at the end.
-    const std::filesystem::path target(path);
-    if (std::filesystem::is_directory(target)) throw IoError(path, "is a folder, not a map file");
-    const std::string temporary = path + ".tmp" + std::to_string(::getpid());
-    try {
-        std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-        if (!out) throw IoError(path, std::string("cannot create the map file: ") + std::strerror(errno));
-        FieldWriter w(out, path);
-        w.raw(kMagic, 8);
-        w.u32(info.version);
-        w.u32(kHeaderBytes);
-        w.flush(false);
-        w.resetCrc();
-        writeHeaderFields(w, info, voxelRecordBytes<TVoxel>());
-        w.flush();
-        w.u32(w.crc());
-        w.flush(false);
-        w.resetCrc();
-        writeBody(w, scene, cache);
-        w.flush();
-        w.u32(w.crc());
-        w.raw(kEndMagic, 8);
-        w.flush(false);
-        out.close();
-        if (!out) throw IoError(path, std::string("cannot finish the map file: ") + std::strerror(errno));
-        std::error_code ec;
-        std::filesystem::rename(temporary, target, ec);
-        if (ec) throw IoError(path, "cannot move the finished map into place: " + ec.message());
-    } catch (...) {
-        std::error_code ignored;
-        std::filesystem::remove(temporary, ignored);
-        throw;
-    }
+    // Written under a temporary name beside the target and renamed at the end (io/AtomicFile.h).
+    AtomicFile file(path);
+    FieldWriter w(file);
+    w.raw(kMagic, 8);
+    w.u32(info.version);
+    w.u32(kHeaderBytes);
+    w.flush(false);
+    w.resetCrc();
+    writeHeaderFields(w, info, voxelRecordBytes<TVoxel>());
+    w.flush();
+    w.u32(w.crc());
+    w.flush(false);
+    w.resetCrc();
+    writeBody(w, scene, cache);
+    w.flush();
+    w.u32(w.crc());
+    w.raw(kEndMagic, 8);
+    w.flush(false);
+    file.commit();
 }
 
 template <class TVoxel, class TIndex>

@@ -7,22 +7,20 @@
 #include <charconv>
 #include <cstdint>
 #include <cstring>
-#include <fstream>
 #include <string>
 #include <vector>
 
 #include "voxfuse/core/Error.h"
+#include "voxfuse/io/AtomicFile.h"
 
 namespace voxfuse {
 namespace {
 
-// Buffers bytes in little-endian order whatever the host's order, and writes them in large chunks.
+// Buffers bytes in little-endian order whatever the host's order, and writes them in large chunks to
+// a file that appears under its name only once complete (io/AtomicFile.h).
 class BinaryFile {
 public:
-    explicit BinaryFile(const std::string& path) : path_(path), out_(path, std::ios::binary | std::ios::trunc) {
-        if (!out_) throw IoError(path, "cannot open for writing");
-        buffer_.reserve(kChunk + 64);
-    }
+    explicit BinaryFile(const std::string& path) : file_(path) { buffer_.reserve(kChunk + 64); }
     void text(const std::string& s) {
         buffer_.append(s);
         flushIfFull();
@@ -52,11 +50,10 @@ public:
         u8(c.y);
         u8(c.z);
     }
-    // Flushes and closes; throws when any write failed (e.g. a full disk).
+    // Flushes and moves the file into place; throws when any write failed (e.g. a full disk).
     void finish() {
         flush();
-        out_.close();
-        if (!out_) throw IoError(path_, "write failed (disk full or file not writable?)");
+        file_.commit();
     }
 
 private:
@@ -65,12 +62,11 @@ private:
         if (buffer_.size() >= kChunk) flush();
     }
     void flush() {
-        out_.write(buffer_.data(), std::streamsize(buffer_.size()));
+        file_.stream().write(buffer_.data(), std::streamsize(buffer_.size()));
         buffer_.clear();
-        if (!out_) throw IoError(path_, "write failed (disk full or file not writable?)");
+        file_.check();
     }
-    std::string path_;
-    std::ofstream out_;
+    AtomicFile file_;
     std::string buffer_;
 };
 

@@ -61,24 +61,33 @@ PpmPgmSource::PpmPgmSource(std::string rgb_pattern, std::string depth_pattern, c
     if (first_index_ < 0) throw ConfigError("first index must not be negative, got " + std::to_string(first_index_));
     calib_ = readCalib(calib_path);
 
-    // Counted up front so that frameCount() is known and ground truth can be matched by count.
-    auto present = [&](int index) {
+    // Counted up front so that frameCount() is known and ground truth can be matched by count. A gap
+    // of up to kMaxGap indices does not end the sequence: its frames are reported missing by next().
+    auto complete = [&](int index) {
         return frame_reading::fileExists(fileName(depth_pattern_, index)) &&
                (rgb_pattern_.empty() || frame_reading::fileExists(fileName(rgb_pattern_, index)));
     };
-    while (first_index_ + frame_count_ < INT_MAX && present(first_index_ + frame_count_)) ++frame_count_;
-    if (frame_count_ == 0) {
+    auto anyFile = [&](int index) {
+        return frame_reading::fileExists(fileName(depth_pattern_, index)) ||
+               (!rgb_pattern_.empty() && frame_reading::fileExists(fileName(rgb_pattern_, index)));
+    };
+    if (!complete(first_index_)) {
         const std::string depth_file = fileName(depth_pattern_, first_index_);
         const std::string missing = frame_reading::fileExists(depth_file) ? fileName(rgb_pattern_, first_index_) : depth_file;
         throw IoError(missing, "no frames: the first file of the sequence does not exist");
     }
+    int last = first_index_;
+    for (int index = first_index_ + 1; index < INT_MAX && index - last <= kMaxGap; ++index)
+        if (anyFile(index)) last = index;
+    frame_count_ = last - first_index_ + 1;
+    for (int index = first_index_; index <= last; ++index) missing_frames_ += !complete(index);
     loadGroundTruth();
 }
 
 void PpmPgmSource::loadGroundTruth() {
     const std::filesystem::path depth_folder = std::filesystem::path(fileName(depth_pattern_, first_index_)).parent_path();
     const std::string path = (depth_folder / "groundtruth.txt").string();
-    if (!frame_reading::fileExists(path)) return;
+    if (!frame_reading::optionalFilePresent(path)) return;
     std::vector<TimedPose> poses = readTumTrajectory(path);
     if (int(poses.size()) != frame_count_) {
         std::cerr << "voxfuse: warning: ignoring " << path << ": it holds " << poses.size() << " poses for "
@@ -94,6 +103,13 @@ bool PpmPgmSource::next(RGBDFrame& frame) {
     const int position = position_++;  // moves on even if this frame throws
     const int file_index = first_index_ + position;
     const std::string depth_path = fileName(depth_pattern_, file_index);
+    for (const std::string* pattern : {&depth_pattern_, &rgb_pattern_}) {
+        if (pattern->empty()) continue;
+        const std::string path = fileName(*pattern, file_index);
+        if (!frame_reading::fileExists(path))
+            throw IoError(path, "missing: a gap in the sequence (index " + std::to_string(file_index) + "); it goes on to index " +
+                                    std::to_string(first_index_ + frame_count_ - 1), position);
+    }
     // Read into locals first so that a failing frame leaves `frame` as it was.
     Image<std::uint16_t> depth = frame_reading::readDepth(depth_path, position, calib_.depth);
     Image<Vec4u8> rgb;
@@ -111,6 +127,7 @@ bool PpmPgmSource::next(RGBDFrame& frame) {
 std::string PpmPgmSource::description() const {
     return "PPM/PGM sequence " + depth_pattern_ + (rgb_pattern_.empty() ? "" : " + " + rgb_pattern_) + " (" +
            std::to_string(frame_count_) + " frames from index " + std::to_string(first_index_) +
+           (missing_frames_ > 0 ? ", " + std::to_string(missing_frames_) + " of them missing" : std::string()) +
            (ground_truth_.empty() ? "" : ", with ground truth") + ")";
 }
 

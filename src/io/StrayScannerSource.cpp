@@ -9,6 +9,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "FrameReading.h"
+#include "ImageHeader.h"
 #include "StrayScannerFiles.h"
 #include "VideoFrameReader.h"
 #include "voxfuse/core/Error.h"
@@ -45,6 +46,10 @@ Intrinsics scaledTo(const Intrinsics& k, Vec2i size) {
 
 Image<std::uint8_t> readConfidence(const std::string& path, int frame, Vec2i depth_size) {
     if (!frame_reading::fileExists(path)) throw IoError(path, "missing confidence map", frame);
+    // Never more pixels than the depth map it belongs to: a corrupt header must not make imread allocate gigabytes.
+    const image_header::Header h = image_header::read(path);
+    if (h.format != image_header::Format::Png || h.width != depth_size.x || h.height != depth_size.y)
+        throw IoError(path, "a confidence map must be a PNG of the depth map's size (" + sizeText(depth_size) + ")", frame);
     const cv::Mat m = cv::imread(path, cv::IMREAD_UNCHANGED);
     if (m.empty()) throw IoError(path, "cannot decode the confidence map", frame);
     if (m.channels() != 1 || (m.depth() != CV_8U && m.depth() != CV_16U))

@@ -6,7 +6,7 @@
 
 #include "BoundedFrameQueue.h"
 #include "voxfuse/core/Error.h"
-#include "voxfuse/io/FrameUndistorter.h"
+#include "voxfuse/io/UndistortedImageSource.h"
 
 namespace voxfuse {
 
@@ -21,9 +21,11 @@ bool dropsWhenFull(const ThreadedSourceOptions& options, const ImageSource& sour
     return source.isLive();
 }
 
-std::unique_ptr<ImageSource> requireSource(std::unique_ptr<ImageSource> source) {
+// The source the reader thread reads: undistorting when asked to (io/UndistortedImageSource.h), so
+// that the remapping runs on the reader thread too.
+std::unique_ptr<ImageSource> readerSource(std::unique_ptr<ImageSource> source, const ThreadedSourceOptions& options) {
     if (!source) throw ConfigError("ThreadedImageSource: no source given");
-    return source;
+    return options.undistort ? undistorted(std::move(source)) : std::move(source);
 }
 
 }  // namespace
@@ -32,22 +34,19 @@ std::unique_ptr<ImageSource> requireSource(std::unique_ptr<ImageSource> source) 
 // the consumer's queries never touch the source while the reader thread is inside source->next().
 struct ThreadedImageSource::State {
     State(std::unique_ptr<ImageSource> src, const ThreadedSourceOptions& options)
-        : source(requireSource(std::move(src))),
-          undistorter(options.undistort ? source->calib() : RGBDCalib{}),
-          calib(undistorter.active() ? undistorter.undistortedCalib() : source->calib()),
+        : source(readerSource(std::move(src), options)),
+          calib(source->calib()),
           frame_count(source->frameCount()),
           live(source->isLive()),
           drop_oldest(dropsWhenFull(options, *source)),
           ground_truth(source->groundTruth()),
           description("threaded (queue of " + std::to_string(options.queue_capacity) +
-                      (drop_oldest ? ", dropping the oldest frame when full" : ", lossless") +
-                      (undistorter.active() ? ", undistorting" : "") + ") " + source->description()),
+                      (drop_oldest ? ", dropping the oldest frame when full" : ", lossless") + ") " + source->description()),
           queue(std::size_t(options.queue_capacity), drop_oldest) {}
 
     void readerLoop();
 
     std::unique_ptr<ImageSource> source;
-    const FrameUndistorter undistorter;
     const RGBDCalib calib;
     const int frame_count;
     const bool live;
@@ -65,7 +64,6 @@ void ThreadedImageSource::State::readerLoop() {
         bool fatal = false;
         try {
             if (source->next(entry.frame)) {
-                undistorter.apply(entry.frame);
                 entry.kind = QueuedFrame::Kind::Frame;
             } else {
                 entry.kind = QueuedFrame::Kind::End;

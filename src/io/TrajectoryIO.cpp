@@ -11,6 +11,7 @@
 #include <Eigen/Geometry>
 
 #include "TextParsing.h"
+#include "voxfuse/io/AtomicFile.h"
 #include "voxfuse/core/EigenInterop.h"
 #include "voxfuse/core/Error.h"
 
@@ -39,13 +40,12 @@ Eigen::Vector3d translationOf(const Mat4f& T) { return {T(0, 3), T(1, 3), T(2, 3
 }  // namespace
 
 std::vector<TimedPose> readTumTrajectory(const std::string& path) {
-    std::ifstream in(path);
-    if (!in) throw IoError(path, "cannot open trajectory file");
+    text::LineReader in(path, "trajectory file");
     std::vector<TimedPose> poses;
     std::string line;
-    int line_number = 0;
-    while (std::getline(in, line)) {
-        ++line_number;
+    int previous_line = 0;
+    while (in.next(line)) {
+        const int line_number = in.lineNumber();
         if (text::isBlankOrComment(line)) continue;
         const auto tokens = text::splitWhitespace(line);
         if (tokens.size() != 8)
@@ -53,23 +53,36 @@ std::vector<TimedPose> readTumTrajectory(const std::string& path) {
                              "expected 8 numbers (timestamp tx ty tz qx qy qz qw), got " + std::to_string(tokens.size()));
         std::vector<double> v;
         std::string bad;
-        if (!text::parseDoubles(tokens, v, bad)) throw ParseError(path, line_number, "not a number: '" + bad + "'");
-        for (double x : v)
-            if (!std::isfinite(x)) throw ParseError(path, line_number, "non-finite value");
+        if (!text::parseDoubles(tokens, v, bad)) throw ParseError(path, line_number, "not a number: " + text::excerpt(bad));
+        if (!std::isfinite(v[0])) throw ParseError(path, line_number, "non-finite timestamp " + text::excerpt(tokens[0]));
+        for (int i = 1; i < 4; ++i)
+            if (!text::finiteAsFloat(v[std::size_t(i)]))
+                throw ParseError(path, line_number, "non-finite position " + text::excerpt(tokens[std::size_t(i)]) + " (stored as a float)");
+        std::string problem = text::positionProblem(v[1], v[2], v[3]);
+        if (problem.empty()) problem = text::quaternionProblem(v[4], v[5], v[6], v[7]);
+        if (!problem.empty()) throw ParseError(path, line_number, problem);
         Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);  // Eigen takes (w, x, y, z)
-        if (q.norm() < 1e-9) throw ParseError(path, line_number, "zero-length quaternion");
         q.normalize();
+        const TimedPose pose{v[0], poseFrom({v[1], v[2], v[3]}, q)};
         if (!poses.empty() && v[0] < poses.back().timestamp_s)
             throw ParseError(path, line_number, "timestamps must not decrease (" + std::string(tokens[0]) + " comes after a later one)");
-        poses.push_back(TimedPose{v[0], poseFrom({v[1], v[2], v[3]}, q)});
+        if (!poses.empty() && v[0] == poses.back().timestamp_s) {
+            // The same sample written twice is harmless; two poses for one time are a broken file.
+            const Mat4f& earlier = poses.back().T_world_camera;
+            if (!std::equal(std::begin(earlier.m), std::end(earlier.m), std::begin(pose.T_world_camera.m)))
+                throw ParseError(path, line_number, "timestamp " + std::string(tokens[0]) + " is given twice (line " +
+                                                        std::to_string(previous_line) + ") with different poses");
+            continue;
+        }
+        poses.push_back(pose);
+        previous_line = line_number;
     }
-    if (in.bad()) throw IoError(path, "read error");
     return poses;
 }
 
 void writeTumTrajectory(const std::string& path, const std::vector<TimedPose>& poses) {
-    std::ofstream out(path);
-    if (!out) throw IoError(path, "cannot open for writing");
+    AtomicFile file(path);
+    std::ostream& out = file.stream();
     out.imbue(std::locale::classic());
     out << "# timestamp tx ty tz qx qy qz qw\n";
     for (const TimedPose& p : poses) {
@@ -80,8 +93,7 @@ void writeTumTrajectory(const std::string& path, const std::vector<TimedPose>& p
         out << ' ' << t.x() << ' ' << t.y() << ' ' << t.z() << ' ' << q.x() << ' ' << q.y() << ' ' << q.z() << ' '
             << q.w() << '\n';
     }
-    out.flush();
-    if (!out) throw IoError(path, "write failed");
+    file.commit();
 }
 
 bool interpolatePose(const std::vector<TimedPose>& poses, double t, double max_gap_s, Mat4f& T_world_camera) {

@@ -50,7 +50,7 @@ TumSource::TumSource(const std::string& folder, const std::string& calib_path) :
     chooseCalibration(calib_path);
     associate("rgb.txt", "depth.txt");
     const std::string gt_path = (fs::path(folder) / "groundtruth.txt").string();
-    if (frame_reading::fileExists(gt_path)) ground_truth_ = readTumTrajectory(gt_path);
+    if (frame_reading::optionalFilePresent(gt_path)) ground_truth_ = readTumTrajectory(gt_path);
 }
 
 void TumSource::chooseCalibration(const std::string& calib_path) {
@@ -58,7 +58,7 @@ void TumSource::chooseCalibration(const std::string& calib_path) {
     if (!calib_path.empty()) {
         calib_ = readCalib(calib_path);
         calib_origin_ = calib_path;
-    } else if (frame_reading::fileExists(own_calib)) {
+    } else if (frame_reading::optionalFilePresent(own_calib)) {
         calib_ = readCalib(own_calib);
         calib_origin_ = own_calib;
     } else if (const int freiburg = freiburgFromName(normalisedFolder(folder_))) {

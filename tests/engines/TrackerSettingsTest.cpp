@@ -92,6 +92,28 @@ TEST(TrackerSettingsTest, ReadsAFileAndReportsAMissingOne) {
     EXPECT_THROW(parseTrackerSettingsFile(path), IoError);
 }
 
+TEST(TrackerSettingsTest, SingleValuesAreNamedByTheirOriginAndAFolderIsNoFile) {
+    TrackerOverrides o;
+    o.levels = "rbb";
+    o.iterations = {5, 5};  // three levels
+    o.origin = "the --tracker options";
+    try {
+        trackerSettingsWith(o);
+        FAIL() << "two iteration counts for three levels were accepted";
+    } catch (const ParseError& e) {
+        FAIL() << "a line number for values that came from no file: " << e.what();
+    } catch (const ConfigError& e) {
+        EXPECT_NE(std::string(e.what()).find("the --tracker options: iterations: expected 1 or 3 values"), std::string::npos) << e.what();
+    }
+    const std::string folder = std::filesystem::temp_directory_path().string();
+    try {
+        parseTrackerSettingsFile(folder);
+        FAIL() << "a folder was read as a settings file";
+    } catch (const IoError& e) {
+        EXPECT_NE(e.reason().find("is a folder, not a file"), std::string::npos) << e.what();
+    }
+}
+
 TEST(TrackerSettingsTest, MakeTrackerRejectsInvalidSettings) {
     TrackerSettings s;
     s.levels.clear();

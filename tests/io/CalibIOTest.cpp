@@ -186,6 +186,51 @@ TEST(CalibIO, MalformedFilesNameFileLineAndReason) {
     }
 }
 
+// Values are checked as the floats they are stored in, and for what a camera can be.
+TEST(CalibIO, ValuesAreCheckedInTheTypeTheyAreUsedIn) {
+    const std::string good = calibText("affine 0.001 0");
+    const std::vector<MalformedCase> cases = {
+        {"focal length finite as a double, infinite as a float", replaceLine(good, 2, "1e39 503.905"), 2, "non-finite value '1e39'"},
+        {"focal length that rounds to zero as a float", replaceLine(good, 6, "1e-50 574.394"), 6, "focal lengths must be positive"},
+        {"principal point outside the image", replaceLine(good, 3, "900 272.202"), 3, "principal point (900, 272.202) lies outside"},
+        {"negative principal point", replaceLine(good, 7, "346.471 -20"), 7, "lies outside its 640x480 image"},
+        {"principal point 1e39", replaceLine(good, 7, "1e39 249.031"), 7, "non-finite value"},
+        {"absurd image size", replaceLine(good, 5, "1000000 480"), 5, "larger than 16384 pixels"},
+        {"translation infinite as a float", replaceLine(good, 9, "0.999749 0.00518867 0.0217975 4e38"), 9, "non-finite value '4e38'"},
+        {"a reflection is no rotation", replaceLine(good, 11, "0.0218031 -0.00103363 -0.999762 0.0151706"), 9, "reflection"},
+        {"affine scale that rounds to zero", replaceLine(good, 13, "affine 1e-50 0"), 13, "affine depth scale must be positive"},
+        {"affine offset infinite as a float", replaceLine(good, 13, "affine 0.001 1e39"), 13, "non-finite value in the disparity"},
+        {"distortion infinite as a float", good + "distortion_rgb 0.1 1e39 0 0 0\n", 14, "non-finite value in distortion_rgb"},
+        {"a line longer than any calibration's", replaceLine(good, 2, std::string(70000, '5')), 2, "line longer than 65536 bytes"},
+        {"control bytes are shown escaped", replaceLine(good, 13, "\x1b[2Jaffine 0.001 0"), 13, "'\\x1b[2Jaffine'"},
+    };
+    ScratchDir dir;
+    for (const MalformedCase& c : cases) {
+        SCOPED_TRACE(c.what);
+        const std::string path = dir.file("bad.txt");
+        writeBytes(path, c.text);
+        try {
+            readCalib(path);
+            ADD_FAILURE() << "no ParseError for: " << c.what;
+        } catch (const ParseError& e) {
+            EXPECT_EQ(e.line(), c.line) << e.what();
+            EXPECT_NE(std::string(e.what()).find(path + ":" + std::to_string(c.line)), std::string::npos) << e.what();
+            EXPECT_NE(e.reason().find(c.reason_part), std::string::npos) << e.what();
+        }
+    }
+}
+
+TEST(CalibIO, AFolderGivenForTheFileSaysSo) {
+    ScratchDir dir;
+    try {
+        readCalib(dir.path());
+        FAIL() << "a folder was read as a calibration";
+    } catch (const IoError& e) {
+        EXPECT_EQ(e.file(), dir.path());
+        EXPECT_NE(e.reason().find("is a folder, not a file"), std::string::npos) << e.what();
+    }
+}
+
 TEST(CalibIO, MissingFileIsAnIoErrorNotAParseError) {
     const std::string path = "/nonexistent/voxfuse/calib.txt";
     try {

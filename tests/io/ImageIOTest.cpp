@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <fstream>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -8,6 +9,7 @@
 
 #include "IoTestUtil.h"
 #include "voxfuse/core/Error.h"
+#include "voxfuse/io/FrameFolderSource.h"
 #include "voxfuse/io/ImageIO.h"
 
 namespace voxfuse {
@@ -198,6 +200,99 @@ TEST(ImageIO, CorruptPngIsAnIoError) {
     const std::string truncated = dir.file("truncated.png");
     writeBytes(truncated, bytes.substr(0, bytes.size() / 2));
     expectIoError([](const std::string& p) { readDepthPNG(p); }, truncated, "cannot decode image");
+}
+
+// A damaged JPEG decodes into a partly grey image with only libjpeg's warning on stderr, unless the
+// warning is taken for the error it is.
+TEST(ImageIO, DamagedJpegIsAnErrorNamingTheFile) {
+    ScratchDir dir;
+    const std::string good = dir.file("good.jpg");
+    cv::Mat bgr(48, 64, CV_8UC3);
+    cv::randu(bgr, cv::Scalar::all(0), cv::Scalar::all(255));
+    ASSERT_TRUE(cv::imwrite(good, bgr));
+    const Image<Vec4u8> whole = readColorImage(good);
+    EXPECT_EQ(whole.size(), (Vec2i{64, 48}));
+
+    const std::string bytes = readBytes(good);
+    const std::string truncated = dir.file("truncated.jpg");
+    writeBytes(truncated, bytes.substr(0, bytes.size() * 2 / 3));
+    expectIoError([](const std::string& p) { readColorImage(p); }, truncated, "corrupt JPEG");
+
+    std::string garbled = bytes;
+    for (std::size_t i = garbled.size() / 2; i < garbled.size() / 2 + 16; ++i) garbled[i] = char(0xff);
+    const std::string garbled_path = dir.file("garbled.jpg");
+    writeBytes(garbled_path, garbled);
+    expectIoError([](const std::string& p) { readColorImage(p); }, garbled_path, "corrupt JPEG");
+
+    const std::string header_only = dir.file("header_only.jpg");
+    writeBytes(header_only, bytes.substr(0, 4));
+    expectIoError([](const std::string& p) { readColorImage(p); }, header_only, "corrupt JPEG");
+}
+
+TEST(ImageIO, ADamagedJpegColourFrameNamesItsFileAndFrameAndTheSequenceGoesOn) {
+    ScratchDir dir;
+    cv::Mat bgr(3, 4, CV_8UC3, cv::Scalar(10, 20, 30));
+    for (int number : {0, 1, 2}) {
+        char stem[32];
+        std::snprintf(stem, sizeof stem, "frame-%06d", number);
+        writeDepthPNG(dir.file(std::string(stem) + ".depth.png"), makeDepth({4, 3}, number));
+        ASSERT_TRUE(cv::imwrite(dir.file(std::string(stem) + ".color.jpg"), bgr));
+    }
+    writeBytes(dir.file("intrinsics.K.txt"), "5 0 1.5\n0 5 1\n0 0 1\n");
+    const std::string damaged = dir.file("frame-000001.color.jpg");
+    const std::string bytes = readBytes(damaged);
+    writeBytes(damaged, bytes.substr(0, bytes.size() / 2));
+
+    FrameFolderSource source(dir.path());
+    RGBDFrame frame;
+    ASSERT_TRUE(source.next(frame));
+    try {
+        source.next(frame);
+        FAIL() << "a damaged JPEG was decoded";
+    } catch (const IoError& e) {
+        EXPECT_EQ(e.file(), damaged);
+        EXPECT_EQ(e.frame(), 1);
+        EXPECT_NE(std::string(e.what()).find(damaged + ": frame 1: corrupt JPEG"), std::string::npos) << e.what();
+    }
+    ASSERT_TRUE(source.next(frame));
+    EXPECT_EQ(frame.index, 2);
+}
+
+// Found by fuzzing: a PPM header in a file of another name went to OpenCV, which allocated the 3 GB
+// it claimed before reading a pixel.
+TEST(ImageIO, OnlyKnownFormatsOfAPlausibleSizeReachTheDecoders) {
+    ScratchDir dir;
+    const std::string bomb = dir.file("colour.jpg");
+    writeBytes(bomb, "P6\n224111\n4520\n56\n");
+    expectIoError([](const std::string& p) { readColorImage(p); }, bomb, "the PPM/PGM says it is 224111x4520 pixels");
+    const std::string short_pgm = dir.file("labels.png");
+    writeBytes(short_pgm, "P5\n64 48\n255\n" + std::string(100, '\0'));
+    expectIoError([](const std::string& p) { readLabelImage(p, -1); }, short_pgm, "truncated: a 64x48 PPM/PGM needs");
+    const std::string gif = dir.file("colour.png");
+    writeBytes(gif, "GIF89a\x01\x00\x01\x00\x00\x00\x00;");
+    expectIoError([](const std::string& p) { readColorImage(p); }, gif, "not a format VoxFuse reads");
+    const std::string tiff = dir.file("labels.tif");  // one directory: width 70000, height 70000
+    std::string t = std::string("II*\0\x08\0\0\0", 8) + std::string("\x02\0", 2);
+    t += std::string("\x00\x01\x04\x00\x01\x00\x00\x00\x70\x11\x01\x00", 12);
+    t += std::string("\x01\x01\x04\x00\x01\x00\x00\x00\x70\x11\x01\x00", 12);
+    writeBytes(tiff, t);
+    expectIoError([](const std::string& p) { readLabelImage(p, -1); }, tiff, "the TIFF says it is 70000x70000 pixels");
+}
+
+TEST(ImageIO, AFolderForAnImageSaysSo) {
+    ScratchDir dir;
+    expectIoError([](const std::string& p) { readColorImage(p); }, dir.path(), "is a folder, not an image file");
+    expectIoError([](const std::string& p) { readPGM16(p); }, dir.path(), "is a folder, not an image file");
+}
+
+TEST(ImageIO, APngClaimingAHugeSizeIsRefusedBeforeDecoding) {
+    ScratchDir dir;
+    const std::string path = dir.file("huge.png");
+    writePNG(path, makeRgb({4, 4}, 0));
+    std::string bytes = readBytes(path);
+    bytes[16] = bytes[20] = char(0x7f);  // width and height near 2^31 (the IHDR's CRC no longer matches either)
+    writeBytes(path, bytes);
+    expectIoError([](const std::string& p) { readColorImage(p); }, path, "too large for an image of a frame");
 }
 
 TEST(ImageIO, EightBitPngAsDepthIsRejected) {

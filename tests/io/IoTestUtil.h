@@ -81,9 +81,14 @@ bool samePixels(const Image<T>& a, const Image<T>& b) {
     return std::memcmp(a.host(), b.host(), a.pixelCount() * sizeof(T)) == 0;
 }
 
-// The repository root, found from this file's location (tests/io/IoTestUtil.h).
+// The repository root: the build's VOXFUSE_SOURCE_DIR (__FILE__ may be relative: ccache with
+// CCACHE_BASEDIR makes it so), else found from this file's location (tests/io/IoTestUtil.h).
 inline std::filesystem::path repositoryDir() {
-    return std::filesystem::path(__FILE__).parent_path().parent_path().parent_path();
+#ifdef VOXFUSE_SOURCE_DIR
+    return std::filesystem::path(VOXFUSE_SOURCE_DIR);
+#else
+    return std::filesystem::absolute(std::filesystem::path(__FILE__)).parent_path().parent_path().parent_path();
+#endif
 }
 
 // ../shared/data beside the checkout, as a compile definition; empty when not defined.

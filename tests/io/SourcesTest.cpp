@@ -186,12 +186,13 @@ struct PpmPgmFolder {
     std::string depthPattern() const { return dir.path() + "/depth/%04i.pgm"; }
 };
 
-TEST(PpmPgmSource, StopsCleanlyAtFirstMissingIndex) {
-    PpmPgmFolder folder({0, 1, 2, 4});  // 3 is missing: 4 is never reached
+TEST(PpmPgmSource, AMissingFrameIsReportedAndTheSequenceGoesOn) {
+    PpmPgmFolder folder({0, 1, 2, 4});  // 3 is missing
     PpmPgmSource source(folder.rgbPattern(), folder.depthPattern(), folder.calib);
-    EXPECT_EQ(source.frameCount(), 3);
+    EXPECT_EQ(source.frameCount(), 5);
+    EXPECT_TRUE(containsText(source.description(), "1 of them missing")) << source.description();
     RGBDFrame frame;
-    for (int i = 0; i < 3; ++i) {
+    for (int i : {0, 1, 2}) {
         SCOPED_TRACE(i);
         ASSERT_TRUE(source.next(frame));
         EXPECT_EQ(frame.index, i);
@@ -200,9 +201,38 @@ TEST(PpmPgmSource, StopsCleanlyAtFirstMissingIndex) {
         EXPECT_TRUE(samePixels(frame.rgb, makeRgb(kSmall, i)));
         EXPECT_FALSE(frame.has_ground_truth);
     }
+    try {
+        source.next(frame);
+        FAIL() << "the gap at index 3 went unreported";
+    } catch (const IoError& e) {
+        EXPECT_EQ(e.frame(), 3);
+        EXPECT_TRUE(containsText(e.file(), "0003.pgm")) << e.what();
+        EXPECT_TRUE(containsText(e.reason(), "missing")) << e.what();
+    }
+    ASSERT_TRUE(source.next(frame));
+    EXPECT_EQ(frame.index, 4);
+    EXPECT_TRUE(samePixels(frame.depth_raw, makeDepth(kSmall, 4)));
     EXPECT_FALSE(source.next(frame));
     EXPECT_FALSE(source.next(frame));
     EXPECT_TRUE(source.groundTruth().empty());
+}
+
+TEST(PpmPgmSource, AMissingColourFileIsThatFramesError) {
+    PpmPgmFolder folder({0, 1, 2});
+    std::filesystem::remove(folder.dir.path() + "/rgb/0001.ppm");
+    PpmPgmSource source(folder.rgbPattern(), folder.depthPattern(), folder.calib);
+    EXPECT_EQ(source.frameCount(), 3);
+    RGBDFrame frame;
+    ASSERT_TRUE(source.next(frame));
+    try {
+        source.next(frame);
+        FAIL() << "a frame without its colour file went unreported";
+    } catch (const IoError& e) {
+        EXPECT_EQ(e.frame(), 1);
+        EXPECT_TRUE(containsText(e.file(), "0001.ppm")) << e.what();
+    }
+    ASSERT_TRUE(source.next(frame));
+    EXPECT_EQ(frame.index, 2);
 }
 
 TEST(PpmPgmSource, FirstIndexAndDepthOnly) {
@@ -361,6 +391,75 @@ TEST(FrameFolderSource, MissingIntrinsicsAndMalformedPoseAreErrors) {
     } catch (const ParseError& e) {
         EXPECT_EQ(e.line(), 3);
         EXPECT_TRUE(containsText(e.what(), "frame-000001.pose.txt:3")) << e.what();
+    }
+}
+
+TEST(FrameFolderSource, PosesAreRotationsOrMarkedLost) {
+    struct Case {
+        const char* what;
+        std::string pose;
+        const char* reason_part;  // "" when the pose is accepted
+    };
+    const std::vector<Case> cases = {
+        {"a scaled rotation", "2 0 0 0\n0 2 0 0\n0 0 2 0\n0 0 0 1\n", "is not a rotation"},
+        {"a reflection", "-1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n", "reflection"},
+        {"one non-finite value", "1 0 0 nan\n0 1 0 0\n0 0 1 0\n0 0 0 1\n", "non-finite values"},
+        {"finite as a double, infinite as a float", "1 0 0 1e39\n0 1 0 0\n0 0 1 0\n0 0 0 1\n", "non-finite values"},
+    };
+    for (const Case& c : cases) {
+        SCOPED_TRACE(c.what);
+        ScratchDir dir;
+        writeDepthPNG(dir.file("frame-000001.depth.png"), makeDepth(kSmall, 1));
+        writeBytes(dir.file("intrinsics.K.txt"), "5 0 1.5\n0 5 1\n0 0 1\n");
+        writeBytes(dir.file("frame-000001.pose.txt"), c.pose);
+        try {
+            FrameFolderSource source(dir.path());
+            ADD_FAILURE() << "accepted";
+        } catch (const IoError& e) {
+            EXPECT_TRUE(containsText(e.file(), "frame-000001.pose.txt")) << e.what();
+            EXPECT_TRUE(containsText(e.reason(), c.reason_part)) << e.what();
+        }
+    }
+    // Lost tracking marked with -inf is counted, and said.
+    ScratchDir dir;
+    writeDepthPNG(dir.file("frame-000001.depth.png"), makeDepth(kSmall, 1));
+    writeBytes(dir.file("intrinsics.K.txt"), "5 0 1.5\n0 5 1\n0 0 1\n");
+    writeBytes(dir.file("frame-000001.pose.txt"), "-inf -inf -inf -inf\n-inf -inf -inf -inf\n-inf -inf -inf -inf\n-inf -inf -inf -inf\n");
+    FrameFolderSource source(dir.path());
+    EXPECT_TRUE(source.groundTruth().empty());
+    EXPECT_TRUE(containsText(source.description(), "1 whose pose files mark lost tracking")) << source.description();
+}
+
+TEST(FrameFolderSource, IntrinsicsAreCheckedAgainstTheImages) {
+    ScratchDir dir;
+    writeDepthPNG(dir.file("frame-000001.depth.png"), makeDepth(kSmall, 1));
+    writeBytes(dir.file("intrinsics.K.txt"), "5 0 40\n0 5 1\n0 0 1\n");  // cx beyond the 4-pixel width
+    try {
+        FrameFolderSource source(dir.path());
+        FAIL() << "accepted";
+    } catch (const IoError& e) {
+        EXPECT_TRUE(containsText(e.file(), "intrinsics.K.txt")) << e.what();
+        EXPECT_TRUE(containsText(e.reason(), "principal point (40, 1) lies outside the 4x3 depth images")) << e.what();
+    }
+    writeBytes(dir.file("intrinsics.K.txt"), "1e39 0 1.5\n0 5 1\n0 0 1\n");
+    try {
+        FrameFolderSource source(dir.path());
+        FAIL() << "accepted";
+    } catch (const IoError& e) {
+        EXPECT_TRUE(containsText(e.reason(), "non-finite value in K")) << e.what();
+    }
+}
+
+TEST(TumSource, AGroundTruthWithTwoPosesForOneTimeIsRefused) {
+    HandMadeTumFolder folder;
+    writeBytes(folder.dir.file("groundtruth.txt"), "1.000 0 0 0 0 0 0 1\n1.000 1 0 0 0 0 0 1\n");
+    try {
+        TumSource source(folder.dir.path());
+        FAIL() << "accepted";
+    } catch (const ParseError& e) {
+        EXPECT_EQ(e.line(), 2);
+        EXPECT_TRUE(containsText(e.what(), "groundtruth.txt:2")) << e.what();
+        EXPECT_TRUE(containsText(e.reason(), "given twice")) << e.what();
     }
 }
 

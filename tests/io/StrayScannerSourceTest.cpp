@@ -285,6 +285,45 @@ TEST(StrayScannerSource, MalformedCsvLinesAreParseErrorsWithTheLine) {
     EXPECT_THROW(StrayScannerSource(capture.path()), ParseError);
 }
 
+TEST(StrayScannerSource, OdometryValuesAreCheckedAsFloatsAndOneFrameHasOnePose) {
+    StrayCapture capture(2);
+    const std::string odometry = capture.dir.file("odometry.csv");
+    const std::string header = "timestamp, frame, x, y, z, qx, qy, qz, qw\n";
+    struct Case {
+        const char* what;
+        std::string rows;
+        int line;
+        const char* reason_part;
+    };
+    const std::vector<Case> cases = {
+        {"position finite as a double, infinite as a float", "1.0, 0, 1e39, 0, 0, 0, 0, 0, 1\n", 2, "non-finite value '1e39'"},
+        {"one frame, two poses", "1.0, 0, 0, 0, 0, 0, 0, 0, 1\n1.1, 0, 0.5, 0, 0, 0, 0, 0, 1\n", 3, "frame 0 is given twice, differently (line 2"},
+        {"one time, two poses", "1.0, 0, 0, 0, 0, 0, 0, 0, 1\n1.0, 1, 0.5, 0, 0, 0, 0, 0, 1\n", 3, "timestamp 1.0 is given twice"},
+        {"a folder for the file", "", 0, "is a folder, not a file"},
+    };
+    for (const Case& c : cases) {
+        SCOPED_TRACE(c.what);
+        std::filesystem::remove_all(odometry);
+        if (c.line == 0)
+            std::filesystem::create_directory(odometry);
+        else
+            writeBytes(odometry, header + c.rows);
+        try {
+            StrayScannerSource source(capture.path());
+            ADD_FAILURE() << "accepted";
+        } catch (const IoError& e) {
+            EXPECT_EQ(e.file(), odometry) << e.what();
+            if (c.line > 0) {
+                EXPECT_NE(std::string(e.what()).find(odometry + ":" + std::to_string(c.line)), std::string::npos) << e.what();
+            }
+            EXPECT_NE(e.reason().find(c.reason_part), std::string::npos) << e.what();
+        }
+    }
+    std::filesystem::remove_all(odometry);
+    writeBytes(odometry, header + "1.0, 0, 0, 0, 0, 0, 0, 0, 1\n1.0, 0, 0, 0, 0, 0, 0, 0, 1\n");  // the same row twice is harmless
+    EXPECT_EQ(StrayScannerSource(capture.path()).groundTruth().size(), 1u);
+}
+
 TEST(StrayScannerSource, OdometryColumnsAreFoundByName) {
     StrayCapture capture(2);
     // Columns reordered, no frame column: row i belongs to frame i.

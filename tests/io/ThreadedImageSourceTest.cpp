@@ -2,6 +2,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <cstring>
 #include <condition_variable>
 #include <functional>
 #include <memory>
@@ -15,6 +16,7 @@
 #include "voxfuse/core/Error.h"
 #include "voxfuse/io/FrameUndistorter.h"
 #include "voxfuse/io/ThreadedImageSource.h"
+#include "voxfuse/io/UndistortedImageSource.h"
 
 namespace voxfuse {
 namespace {
@@ -307,6 +309,33 @@ TEST(ThreadedImageSource, UndistortsOnTheReaderThreadWithTheCalibrationsCoeffici
     EXPECT_TRUE(untouched->calib().depth_distortion.any());
     ASSERT_TRUE(untouched->next(frame));
     EXPECT_EQ(frame.depth_raw.at(0, 0), 1);
+}
+
+// One undistortion rule: the frames an engine gets do not depend on whether they were read ahead.
+TEST(FramesForEngine, UndistortWhetherOrNotTheyAreReadAhead) {
+    Watchdog watchdog(30s, "UndistortWhetherOrNotTheyAreReadAhead");
+    Script script;
+    script.frames = 3;
+    script.depth_distortion = LensDistortion{1.0f, 0.f, 0.f, 0.f, 0.f};
+    auto direct = framesForEngine(std::make_unique<ScriptedSource>(script, std::make_shared<Progress>()), false);
+    auto ahead = framesForEngine(std::make_unique<ScriptedSource>(script, std::make_shared<Progress>()), true);
+    EXPECT_FALSE(direct->calib().depth_distortion.any());
+    EXPECT_FALSE(ahead->calib().depth_distortion.any());
+    EXPECT_NE(dynamic_cast<ThreadedImageSource*>(ahead.get()), nullptr);
+    EXPECT_EQ(dynamic_cast<ThreadedImageSource*>(direct.get()), nullptr);
+    RGBDFrame a, b;
+    for (int i = 0; i < 3; ++i) {
+        ASSERT_TRUE(direct->next(a));
+        ASSERT_TRUE(ahead->next(b));
+        ASSERT_EQ(a.depth_raw.size(), b.depth_raw.size());
+        EXPECT_EQ(std::memcmp(a.depth_raw.host(), b.depth_raw.host(), a.depth_raw.pixelCount() * sizeof(std::uint16_t)), 0) << "frame " << i;
+    }
+    EXPECT_EQ(a.depth_raw.at(0, 0), 0);  // undistorted: the corner sees outside the raw image
+    // Without distortion the source itself is handed over, unwrapped.
+    Script plain;
+    plain.frames = 1;
+    auto unwrapped = framesForEngine(std::make_unique<ScriptedSource>(plain, std::make_shared<Progress>()), false);
+    EXPECT_NE(dynamic_cast<ScriptedSource*>(unwrapped.get()), nullptr);
 }
 
 }  // namespace

@@ -59,6 +59,9 @@ TEST(TrajectoryIO, MalformedLinesNameTheLine) {
         {"infinite value", "2.0 inf 0 0 0 0 0 1", "non-finite"},
         {"zero quaternion", "2.0 0 0 0 0 0 0 0", "zero-length quaternion"},
         {"time going back", "0.5 0 0 0 0 0 0 1", "timestamps must not decrease"},
+        {"position finite as a double, infinite as a float", "2.0 1e39 0 0 0 0 0 1", "non-finite position '1e39'"},
+        {"quaternion infinite as a float", "2.0 0 0 0 0 0 4e38 1", "non-finite quaternion"},
+        {"one time, two poses", "1.0 0.5 0 0 0 0 0 1", "timestamp 1.0 is given twice (line 2) with different poses"},
     };
     ScratchDir dir;
     for (const Case& c : cases) {
@@ -74,6 +77,13 @@ TEST(TrajectoryIO, MalformedLinesNameTheLine) {
             EXPECT_NE(e.reason().find(c.reason_part), std::string::npos) << e.what();
         }
     }
+}
+
+TEST(TrajectoryIO, ARepeatedIdenticalSampleIsKeptOnce) {
+    ScratchDir dir;
+    const std::string path = dir.file("traj.txt");
+    writeBytes(path, "1.0 1 2 3 0 0 0 1\n1.0 1 2 3 0 0 0 1\n2.0 1 2 3 0 0 0 1\n");
+    EXPECT_EQ(readTumTrajectory(path).size(), 2u);
 }
 
 TEST(TrajectoryIO, MissingFileIsAnIoError) {

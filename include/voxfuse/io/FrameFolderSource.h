@@ -16,8 +16,9 @@ public:
     // a colour file has no colour. Calibration: calib_path if given, else K for both cameras, the size
     // taken from the first depth image, colour and depth registered, depth in millimetres. When the
     // first colour image has another size, the colour intrinsics are scaled to it. Timestamps are
-    // frame number / 30. A pose file holding non-finite values (how some tools mark lost tracking)
-    // gives that frame no ground truth.
+    // frame number / 30. A pose file whose top three rows are all non-finite (how some tools mark lost tracking)
+    // gives that frame no ground truth, counted in the description; a pose file with some non-finite
+    // values, or whose rotation is not one, is an IoError naming it.
     //
     // Throws IoError when the folder has no frames or no intrinsics, ParseError for a malformed K or
     // pose file, IoError for an unreadable first depth or colour image.
@@ -51,6 +52,7 @@ private:
     std::vector<FrameFiles> frames_;
     std::vector<TimedPose> ground_truth_;
     std::size_t position_ = 0;
+    int lost_poses_ = 0;  // pose files that mark lost tracking
 };
 
 }  // namespace voxfuse

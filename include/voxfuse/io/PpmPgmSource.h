@@ -11,10 +11,13 @@ namespace voxfuse {
 
 class PpmPgmSource : public ImageSource {
 public:
+    static constexpr int kMaxGap = 1000;  // missing indices in a row that a sequence may step over
+
     // Each pattern must hold exactly one integer conversion (%d or %i, with optional flags, width
     // and precision; "%%" is a literal '%'), else ConfigError. An empty rgb_pattern means depth only.
-    // The sequence runs from first_index up to the first index whose depth (or rgb) file is missing;
-    // no file at first_index is an IoError. Ground truth: a TUM-format "groundtruth.txt" in the
+    // The sequence runs from first_index to the last index with a file, across gaps of up to kMaxGap
+    // indices: next() reports each missing frame as an IoError naming its file and goes on. No files
+    // at first_index is an IoError. Ground truth: a TUM-format "groundtruth.txt" in the
     // folder of the depth files is used when it holds exactly as many poses as there are frames,
     // pose i belonging to frame i (its own timestamps are replaced by the frames'); otherwise it is
     // ignored with a warning on stderr. Frame timestamps are file index / 30.
@@ -37,6 +40,7 @@ private:
     int first_index_;
     RGBDCalib calib_;
     int frame_count_ = 0;
+    int missing_frames_ = 0;  // indices in the range without their files
     int position_ = 0;  // 0-based index of the next frame
     std::vector<TimedPose> ground_truth_;  // empty, or one pose per frame
 };

@@ -1,0 +1,73 @@
+#pragma once
+// Checks of command-line numbers in the type they are used in, for CLI11 options: a float option
+// must be a number that is finite as a float (1e39 is finite as a double, infinite as a float) and
+// in its range; NaN is never in a range. CLI11's own PositiveNumber and Range let NaN through and
+// print their bounds as 300-digit numbers.
+
+#include <CLI/CLI.hpp>
+#include <charconv>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <string>
+
+namespace voxfuse::app {
+
+namespace option_checks {
+
+inline bool parseNumber(std::string text, double& value) {
+    if (!text.empty() && text.front() == '+') text.erase(0, 1);
+    const char* end = text.data() + text.size();
+    const auto result = std::from_chars(text.data(), end, value);
+    return !text.empty() && result.ec == std::errc() && result.ptr == end;
+}
+
+inline std::string bound(double v) {
+    std::ostringstream out;
+    out << v;
+    return out.str();
+}
+
+}  // namespace option_checks
+
+// A float in [lo, hi], or (lo, hi] with lo_open (hi may be infinity: no upper bound).
+inline CLI::Validator floatIn(double lo, double hi, bool lo_open = false) {
+    const std::string range = (lo_open ? "(" : "[") + option_checks::bound(lo) + ", " +
+                              (std::isinf(hi) ? std::string("inf)") : option_checks::bound(hi) + "]");
+    return CLI::Validator(
+        [=](std::string& text) -> std::string {
+            double v = 0.0;
+            if (!option_checks::parseNumber(text, v)) return "'" + text + "' is not a number";
+            if (!std::isfinite(v) || std::abs(v) > double(std::numeric_limits<float>::max()))
+                return "'" + text + "' is not a finite number (values are stored as floats)";
+            const double as_float = double(float(v));
+            if (!(lo_open ? as_float > lo : as_float >= lo) || !(as_float <= hi)) return "'" + text + "' is not in " + range;
+            return {};
+        },
+        "FLOAT in " + range);
+}
+
+inline CLI::Validator positiveFloat() { return floatIn(0.0, std::numeric_limits<double>::infinity(), true); }
+inline CLI::Validator nonNegativeFloat() { return floatIn(0.0, std::numeric_limits<double>::infinity()); }
+
+// An integer in [lo, hi].
+inline CLI::Validator intIn(long long lo, long long hi) {
+    const std::string range = "[" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
+    return CLI::Validator(
+        [=](std::string& text) -> std::string {
+            std::string digits = text;
+            if (!digits.empty() && digits.front() == '+') digits.erase(0, 1);
+            long long v = 0;
+            const char* end = digits.data() + digits.size();
+            const auto result = std::from_chars(digits.data(), end, v);
+            if (digits.empty() || result.ptr != end || result.ec == std::errc::invalid_argument) return "'" + text + "' is not an integer";
+            if (result.ec == std::errc::result_out_of_range || v < lo || v > hi) return "'" + text + "' is not in " + range;
+            return {};
+        },
+        "INT in " + range);
+}
+
+inline CLI::Validator positiveInt() { return intIn(1, std::numeric_limits<int>::max()); }
+inline CLI::Validator nonNegativeInt() { return intIn(0, std::numeric_limits<int>::max()); }
+
+}  // namespace voxfuse::app
