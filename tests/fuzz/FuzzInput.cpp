@@ -9,14 +9,25 @@
 
 namespace voxfuse::fuzz {
 
-std::string scratchFolder() {
-    static const std::string folder = [] {
+namespace {
+// The process's own folder, removed when the process exits normally (a crash keeps its inputs).
+struct ScratchFolder {
+    std::filesystem::path path;
+    ScratchFolder() {
         const char* tmp = std::getenv("TMPDIR");
-        const std::filesystem::path p = std::filesystem::path(tmp && *tmp ? tmp : "/tmp") / ("voxfuse_fuzz_" + std::to_string(::getpid()));
-        std::filesystem::create_directories(p);
-        return p.string();
-    }();
-    return folder;
+        path = std::filesystem::path(tmp && *tmp ? tmp : "/tmp") / ("voxfuse_fuzz_" + std::to_string(::getpid()));
+        std::filesystem::create_directories(path);
+    }
+    ~ScratchFolder() {
+        std::error_code ignored;
+        std::filesystem::remove_all(path, ignored);
+    }
+};
+}  // namespace
+
+std::string scratchFolder() {
+    static const ScratchFolder folder;
+    return folder.path.string();
 }
 
 std::string writeInput(const std::uint8_t* data, std::size_t size, const std::string& name) {

@@ -129,6 +129,24 @@ struct MalformedCase {
     const char* reason_part;
 };
 
+// Each case, written to a file, is refused with a ParseError naming the file, its line and the reason.
+void expectParseErrors(const std::vector<MalformedCase>& cases) {
+    ScratchDir dir;
+    for (const MalformedCase& c : cases) {
+        SCOPED_TRACE(c.what);
+        const std::string path = dir.file("bad.txt");
+        writeBytes(path, c.text);
+        try {
+            readCalib(path);
+            ADD_FAILURE() << "no ParseError for: " << c.what;
+        } catch (const ParseError& e) {
+            EXPECT_EQ(e.line(), c.line) << e.what();
+            EXPECT_NE(std::string(e.what()).find(path + ":" + std::to_string(c.line)), std::string::npos) << e.what();
+            EXPECT_NE(e.reason().find(c.reason_part), std::string::npos) << e.what();
+        }
+    }
+}
+
 std::string replaceLine(const std::string& text, int line_number, const std::string& replacement) {
     std::string out;
     int n = 1;
@@ -170,20 +188,7 @@ TEST(CalibIO, MalformedFilesNameFileLineAndReason) {
         {"empty file", "", 1, "unexpected end of file"},
         {"comment lines count", "# header\n# more\n" + replaceLine(good, 1, "640"), 3, "expected 2 integers"},
     };
-    ScratchDir dir;
-    for (const MalformedCase& c : cases) {
-        SCOPED_TRACE(c.what);
-        const std::string path = dir.file("bad.txt");
-        writeBytes(path, c.text);
-        try {
-            readCalib(path);
-            ADD_FAILURE() << "no ParseError for: " << c.what;
-        } catch (const ParseError& e) {
-            EXPECT_EQ(e.line(), c.line) << e.what();
-            EXPECT_NE(std::string(e.what()).find(path + ":" + std::to_string(c.line)), std::string::npos) << e.what();
-            EXPECT_NE(e.reason().find(c.reason_part), std::string::npos) << e.what();
-        }
-    }
+    expectParseErrors(cases);
 }
 
 // Values are checked as the floats they are stored in, and for what a camera can be.
@@ -204,20 +209,7 @@ TEST(CalibIO, ValuesAreCheckedInTheTypeTheyAreUsedIn) {
         {"a line longer than any calibration's", replaceLine(good, 2, std::string(70000, '5')), 2, "line longer than 65536 bytes"},
         {"control bytes are shown escaped", replaceLine(good, 13, "\x1b[2Jaffine 0.001 0"), 13, "'\\x1b[2Jaffine'"},
     };
-    ScratchDir dir;
-    for (const MalformedCase& c : cases) {
-        SCOPED_TRACE(c.what);
-        const std::string path = dir.file("bad.txt");
-        writeBytes(path, c.text);
-        try {
-            readCalib(path);
-            ADD_FAILURE() << "no ParseError for: " << c.what;
-        } catch (const ParseError& e) {
-            EXPECT_EQ(e.line(), c.line) << e.what();
-            EXPECT_NE(std::string(e.what()).find(path + ":" + std::to_string(c.line)), std::string::npos) << e.what();
-            EXPECT_NE(e.reason().find(c.reason_part), std::string::npos) << e.what();
-        }
-    }
+    expectParseErrors(cases);
 }
 
 TEST(CalibIO, AFolderGivenForTheFileSaysSo) {

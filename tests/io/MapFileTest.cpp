@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "DeviceTestSupport.h"
+#include "IoTestUtil.h"
 #include "SyntheticViews.h"
 #include "voxfuse/core/Error.h"
 #include "voxfuse/engines/AllocationEngine.h"
@@ -25,12 +26,6 @@ namespace fs = std::filesystem;
 
 namespace voxfuse {
 namespace {
-
-std::string tempPath(const std::string& name) {
-    const fs::path dir = fs::temp_directory_path() / "voxfuse_map_file_test";
-    fs::create_directories(dir);
-    return (dir / name).string();
-}
 
 std::vector<char> bytesOf(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
@@ -72,9 +67,10 @@ using VoxelTypes = ::testing::Types<VoxelS, VoxelF, VoxelSRgb, VoxelFRgb, VoxelS
 TYPED_TEST_SUITE(MapFileRoundTrip, VoxelTypes);
 
 TYPED_TEST(MapFileRoundTrip, HashMapLoadsVoxelForVoxelAndSavesToTheSameBytes) {
+    const test::ScratchDir scratch;
     using TVoxel = TypeParam;
     const auto scene = fusedScene<TVoxel>(VoxelBlockHash());
-    const std::string first = tempPath(std::string("hash_") + TVoxel::name + ".vfm"), second = first + ".again";
+    const std::string first = scratch.file(std::string("hash_") + TVoxel::name + ".vfm"), second = first + ".again";
     writeMapFile(first, scene, somePose());
 
     const MapFileInfo info = readMapFileInfo(first);
@@ -106,9 +102,10 @@ TYPED_TEST(MapFileRoundTrip, HashMapLoadsVoxelForVoxelAndSavesToTheSameBytes) {
 }
 
 TEST(MapFileTest, DenseMapRoundTripsAndMeshesLikeTheOriginal) {
+    const test::ScratchDir scratch;
     const PlainVoxelArray index({-60, -60, -20}, {140, 120, 80});
     const auto scene = fusedScene<VoxelSRgb>(index);
-    const std::string path = tempPath("dense.vfm");
+    const std::string path = scratch.file("dense.vfm");
     writeMapFile(path, scene, somePose());
     Scene<VoxelSRgb, PlainVoxelArray> loaded(test::centimetreSceneParams(), index, Device::CPU);
     readMapFile(path, loaded);
@@ -136,8 +133,9 @@ std::string loadError(const std::string& path) {
 }
 
 TEST(MapFileTest, BadFilesAreRefusedWithTheReason) {
+    const test::ScratchDir scratch;
     const auto scene = fusedScene<VoxelS>(VoxelBlockHash());
-    const std::string good = tempPath("good.vfm"), bad = tempPath("bad.vfm");
+    const std::string good = scratch.file("good.vfm"), bad = scratch.file("bad.vfm");
     writeMapFile(good, scene, somePose());
     const std::vector<char> bytes = bytesOf(good);
     ASSERT_GT(bytes.size(), 10000u);
@@ -180,12 +178,13 @@ TEST(MapFileTest, BadFilesAreRefusedWithTheReason) {
     writeBytes(bad, std::vector<char>{'h', 'e', 'l', 'l', 'o'});
     EXPECT_NE(loadError(bad).find("truncated"), std::string::npos);
     EXPECT_NE(loadError(fs::temp_directory_path().string()).find("is a folder"), std::string::npos);
-    EXPECT_NE(loadError(tempPath("missing.vfm")).find("cannot open"), std::string::npos);
+    EXPECT_NE(loadError(scratch.file("missing.vfm")).find("cannot open"), std::string::npos);
 }
 
 TEST(MapFileTest, AMapOfOtherSettingsIsRefusedByName) {
+    const test::ScratchDir scratch;
     const auto scene = fusedScene<VoxelSRgb>(VoxelBlockHash());
-    const std::string path = tempPath("rgb.vfm");
+    const std::string path = scratch.file("rgb.vfm");
     writeMapFile(path, scene, somePose());
     EXPECT_NE(loadError(path).find("holds 's_rgb' voxels, not 's'"), std::string::npos);
     VoxelBlockHashSettings other;
@@ -202,12 +201,13 @@ TEST(MapFileTest, AMapOfOtherSettingsIsRefusedByName) {
 // Found by fuzzing: a map whose resume pose was finite but no rotation (3e38 in it) loaded, and the
 // raycast from it cast -inf to int.
 TEST(MapFileTest, AResumePoseThatIsNoCameraIsRefused) {
+    const test::ScratchDir scratch;
     const auto scene = fusedScene<VoxelS>(VoxelBlockHash());
     for (auto [what, change] : {std::pair{"a shear", std::pair{1, 3e38f}}, {"a position 10^7 m away", std::pair{3, 1e7f}}}) {
         SCOPED_TRACE(what);
         MapFileInfo pose = somePose();
         pose.T_world_camera.m[change.first] = change.second;
-        const std::string path = tempPath("bad_pose.vfm");
+        const std::string path = scratch.file("bad_pose.vfm");
         writeMapFile(path, scene, pose);
         const std::string error = loadError(path);
         EXPECT_NE(error.find("corrupt: the resume pose"), std::string::npos) << error;
@@ -215,19 +215,22 @@ TEST(MapFileTest, AResumePoseThatIsNoCameraIsRefused) {
 }
 
 TEST(MapFileTest, AFailedWriteLeavesNothingBehind) {
+    const test::ScratchDir scratch;
     const auto scene = fusedScene<VoxelS>(VoxelBlockHash());
-    const std::string nowhere = tempPath("no_such_folder/map.vfm");
+    const std::string nowhere = scratch.path() + "/no_such_folder/map.vfm";
     try {
         writeMapFile(nowhere, scene, somePose());
         ADD_FAILURE() << "wrote into a missing folder";
     } catch (const IoError& e) {
         EXPECT_NE(std::string(e.what()).find("no such folder"), std::string::npos) << e.what();
     }
-    const std::string kept = tempPath("kept.vfm");
+    const std::string kept = scratch.file("kept.vfm");
     writeBytes(kept, {'o', 'l', 'd'});
-    EXPECT_THROW(writeMapFile(fs::temp_directory_path().string(), scene, somePose()), IoError) << "a folder is no map file";
-    EXPECT_EQ(bytesOf(kept), (std::vector<char>{'o', 'l', 'd'}));
-    for (const auto& entry : fs::directory_iterator(fs::path(kept).parent_path()))
+    const fs::path folder = fs::path(scratch.path()) / "a_folder";
+    fs::create_directories(folder);
+    EXPECT_THROW(writeMapFile(folder.string(), scene, somePose()), IoError) << "a folder is no map file";
+    EXPECT_EQ(bytesOf(kept), (std::vector<char>{'o', 'l', 'd'})) << "a file beside the failed write is untouched";
+    for (const auto& entry : fs::directory_iterator(scratch.path()))
         EXPECT_FALSE(isPartialFileName(entry.path().filename().string())) << "temporary file left: " << entry.path();
 }
 
@@ -238,6 +241,7 @@ protected:
 };
 
 TEST_P(MapFileEngineTest, ARunContinuedFromItsMapTracksOn) {
+    const test::ScratchDir scratch;
     MainEngineSettings s;
     s.device = GetParam();
     s.voxel_type = VoxelType::SRgb;
@@ -248,7 +252,7 @@ TEST_P(MapFileEngineTest, ARunContinuedFromItsMapTracksOn) {
     calib.disparity = DisparityCalib::affine(0.001f);
     const synth::SyntheticScene world = synth::SyntheticScene::boxAndSphere();
     auto pose = [](int k) { return test::lookAt({1.0f + 0.01f * k, -0.8f + 0.02f * k, 0.7f}, {0.3f, 0.f, 0.1f}); };
-    const std::string path = tempPath(std::string("engine_") + deviceName(GetParam()) + ".vfm");
+    const std::string path = scratch.file(std::string("engine_") + deviceName(GetParam()) + ".vfm");
 
     auto first = MainEngine::create(s, calib);
     for (int k = 0; k < 8; ++k) first->processFrame(test::toRgbdFrame(test::renderView(world, intr, pose(k)), k), nullptr);
