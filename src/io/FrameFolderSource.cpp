@@ -134,11 +134,9 @@ bool FrameFolderSource::next(RGBDFrame& frame) {
     if (position_ >= frames_.size()) return false;
     const int index = int(position_);
     const FrameFiles& f = frames_[position_++];  // moves on even if this frame throws
-    Image<std::uint16_t> depth = frame_reading::readDepth(f.depth_path, index, calib_.depth);
-    Image<Vec4u8> rgb;
-    if (!f.colour_path.empty()) rgb = frame_reading::readColour(f.colour_path, index, calib_.rgb);
-    frame.depth_raw = std::move(depth);
-    frame.rgb = std::move(rgb);
+    frame_reading::readDepth(f.depth_path, index, calib_.depth, read_.depth_raw);
+    if (!f.colour_path.empty()) frame_reading::readColour(f.colour_path, index, calib_.rgb, read_.rgb);
+    read_.handOver(frame, !f.colour_path.empty());
     frame.index = index;
     frame.timestamp_s = f.number / kFramesPerSecond;
     frame.depth_path = f.depth_path;

@@ -78,17 +78,14 @@ std::vector<ListedImage> readTimestampedImageList(const std::string& list_path, 
     return images;
 }
 
-Image<std::uint16_t> readDepth(const std::string& path, int frame, const Intrinsics& depth_camera) {
-    Image<std::uint16_t> depth =
-        withFrame(frame, [&] { return endsWith(path, ".pgm") ? readPGM16(path) : readDepthPNG(path); });
+void readDepth(const std::string& path, int frame, const Intrinsics& depth_camera, Image<std::uint16_t>& depth) {
+    withFrame(frame, [&] { endsWith(path, ".pgm") ? readPGM16(path, depth) : readDepthPNG(path, depth); });
     requireSize(path, frame, depth.size(), depth_camera, "depth");
-    return depth;
 }
 
-Image<Vec4u8> readColour(const std::string& path, int frame, const Intrinsics& rgb_camera) {
-    Image<Vec4u8> rgb = withFrame(frame, [&] { return readColorImage(path); });
+void readColour(const std::string& path, int frame, const Intrinsics& rgb_camera, Image<Vec4u8>& rgb) {
+    withFrame(frame, [&] { readColorImage(path, rgb); });
     requireSize(path, frame, rgb.size(), rgb_camera, "rgb");
-    return rgb;
 }
 
 }  // namespace frame_reading

@@ -32,11 +32,12 @@ std::vector<ListedImage> readTimestampedImageList(const std::string& list_path, 
 
 // .pgm -> 16-bit big-endian PGM, anything else -> 16-bit single-channel PNG (or any format OpenCV
 // reads as such). The image must have the calibrated depth camera's size.
-Image<std::uint16_t> readDepth(const std::string& path, int frame, const Intrinsics& depth_camera);
+// Decoded into `depth`, whose memory is reused when it has the size (io/ImageIO.h).
+void readDepth(const std::string& path, int frame, const Intrinsics& depth_camera, Image<std::uint16_t>& depth);
 
 // Any colour image (PPM by hand, the rest through OpenCV), converted to RGBA. The image must have
 // the calibrated RGB camera's size.
-Image<Vec4u8> readColour(const std::string& path, int frame, const Intrinsics& rgb_camera);
+void readColour(const std::string& path, int frame, const Intrinsics& rgb_camera, Image<Vec4u8>& rgb);
 
 }  // namespace frame_reading
 }  // namespace voxfuse

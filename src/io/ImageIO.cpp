@@ -39,13 +39,35 @@ void requireImageFile(const std::string& path) {
     if (!std::filesystem::exists(path, ec)) throw IoError(path, "no such file");
 }
 
-std::vector<unsigned char> readWholeFile(const std::string& path) {
+// Into `bytes`, whose capacity is kept: read frame after frame, it stops allocating.
+void readWholeFile(const std::string& path, std::vector<unsigned char>& bytes) {
     requireImageFile(path);
-    std::ifstream in(path, std::ios::binary);
+    std::ifstream in(path, std::ios::binary | std::ios::ate);
     if (!in) throw IoError(path, "cannot open for reading");
-    std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    if (in.bad()) throw IoError(path, "read error");
+    const std::streamoff size = in.tellg();
+    if (size < 0) throw IoError(path, "read error");
+    bytes.resize(std::size_t(size));
+    in.seekg(0);
+    if (!in.read(reinterpret_cast<char*>(bytes.data()), size)) throw IoError(path, "read error");
+}
+
+std::vector<unsigned char> readWholeFile(const std::string& path) {
+    std::vector<unsigned char> bytes;
+    readWholeFile(path, bytes);
     return bytes;
+}
+
+// What decoding a frame needs besides its image, kept per thread so that a sequence of frames of one
+// size allocates nothing per frame. Megabyte buffers made and freed every frame fragment glibc's heap
+// (once one is freed, later ones come from the heap rather than mmap, and the small long-lived
+// allocations between them keep it from shrinking): teddy's peak RSS grew by 100 MB that way.
+struct DecodeScratch {
+    std::vector<unsigned char> bytes;  // the file
+    cv::Mat decoded, converted;        // what OpenCV decoded; its 8-bit version where it had 16
+};
+DecodeScratch& decodeScratch() {
+    thread_local DecodeScratch scratch;
+    return scratch;
 }
 
 struct NetpbmHeader {
@@ -181,16 +203,23 @@ image_header::Header requirePlausibleImage(const std::string& path) {
     return h;
 }
 
-cv::Mat readWithOpenCV(const std::string& path) {
+// Decodes into `m`, whose memory is reused when the image has its size and type.
+void readWithOpenCV(const std::string& path, cv::Mat& m) {
     requireImageFile(path);
     requirePlausibleImage(path);
-    cv::Mat m;
+    std::vector<unsigned char>& bytes = decodeScratch().bytes;
+    readWholeFile(path, bytes);
     try {
-        m = cv::imread(path, cv::IMREAD_UNCHANGED);
+        cv::imdecode(bytes, cv::IMREAD_UNCHANGED, &m);
     } catch (const cv::Exception& e) {
         throw IoError(path, "cannot decode image: " + e.msg);
     }
     if (m.empty()) throw IoError(path, "cannot decode image (corrupt file or unsupported format)");
+}
+
+cv::Mat readWithOpenCV(const std::string& path) {
+    cv::Mat m;
+    readWithOpenCV(path, m);
     return m;
 }
 
@@ -209,12 +238,14 @@ void writeWithOpenCV(const std::string& path, const cv::Mat& m) {
 }
 
 template <typename T>
-Image<T> imageFromMat(const cv::Mat& m) {
-    Image<T> image(Vec2i{m.cols, m.rows});
+void copyMatToImage(const cv::Mat& m, Image<T>& image) {
+    image.resize(Vec2i{m.cols, m.rows});
     const std::size_t row_bytes = std::size_t(m.cols) * sizeof(T);
     for (int y = 0; y < m.rows; ++y) std::memcpy(&image.at(0, y), m.ptr(y), row_bytes);
-    return image;
 }
+
+// The image as a cv::Mat header over its own memory: OpenCV writes into it without allocating.
+cv::Mat matOver(Image<Vec4u8>& image) { return cv::Mat(image.height(), image.width(), CV_8UC4, image.host()); }
 
 bool hasExtension(const std::string& path, const char* extension) {
     std::string ext = std::filesystem::path(path).extension().string();
@@ -224,8 +255,9 @@ bool hasExtension(const std::string& path, const char* extension) {
 
 }  // namespace
 
-Image<Vec4u8> readPPM(const std::string& path) {
-    const auto bytes = readWholeFile(path);
+void readPPM(const std::string& path, Image<Vec4u8>& image) {
+    std::vector<unsigned char>& bytes = decodeScratch().bytes;
+    readWholeFile(path, bytes);
     const NetpbmHeader h = NetpbmHeaderParser(path, bytes).parse('6', "binary PPM colour image");
     if (h.maxval < 1 || h.maxval > 255)
         throw IoError(path, "maxval " + std::to_string(h.maxval) +
@@ -236,16 +268,22 @@ Image<Vec4u8> readPPM(const std::string& path) {
     std::uint8_t to8bit[256];
     for (unsigned v = 0; v < 256; ++v)
         to8bit[v] = std::uint8_t(std::min(255u, (v * 255u + unsigned(h.maxval) / 2) / unsigned(h.maxval)));
-    Image<Vec4u8> image(Vec2i{h.width, h.height});
+    image.resize(Vec2i{h.width, h.height});
     const unsigned char* src = bytes.data() + h.data_offset;
     Vec4u8* dst = image.host();
     for (std::size_t i = 0; i < image.pixelCount(); ++i, src += 3)
         dst[i] = Vec4u8{to8bit[src[0]], to8bit[src[1]], to8bit[src[2]], 255};
+}
+
+Image<Vec4u8> readPPM(const std::string& path) {
+    Image<Vec4u8> image;
+    readPPM(path, image);
     return image;
 }
 
-Image<std::uint16_t> readPGM16(const std::string& path) {
-    const auto bytes = readWholeFile(path);
+void readPGM16(const std::string& path, Image<std::uint16_t>& image) {
+    std::vector<unsigned char>& bytes = decodeScratch().bytes;
+    readWholeFile(path, bytes);
     const NetpbmHeader h = NetpbmHeaderParser(path, bytes).parse('5', "binary PGM depth image");
     if (h.maxval < 1 || h.maxval > 65535)
         throw IoError(path, "maxval " + std::to_string(h.maxval) + " out of range (1..65535)");
@@ -253,11 +291,16 @@ Image<std::uint16_t> readPGM16(const std::string& path) {
         throw IoError(path, "8-bit PGM (maxval " + std::to_string(h.maxval) +
                                 "): expected a 16-bit depth PGM (maxval 256..65535)");
     requirePixelBytes(path, bytes, h, 2);
-    Image<std::uint16_t> image(Vec2i{h.width, h.height});
+    image.resize(Vec2i{h.width, h.height});
     const unsigned char* src = bytes.data() + h.data_offset;
     std::uint16_t* dst = image.host();
     // Raw samples are kept as they are (not rescaled by maxval): they are depth units, not intensities.
     for (std::size_t i = 0; i < image.pixelCount(); ++i, src += 2) dst[i] = std::uint16_t((src[0] << 8) | src[1]);
+}
+
+Image<std::uint16_t> readPGM16(const std::string& path) {
+    Image<std::uint16_t> image;
+    readPGM16(path, image);
     return image;
 }
 
@@ -290,7 +333,8 @@ namespace {
 // partly grey image and leaves only libjpeg's warning on stderr; here a warning is an error. CMYK
 // JPEGs (TurboJPEG does not convert them to RGB) go to OpenCV. False: not decoded here.
 bool readJpeg(const std::string& path, Image<Vec4u8>& image) {
-    const std::vector<unsigned char> bytes = readWholeFile(path);
+    std::vector<unsigned char>& bytes = decodeScratch().bytes;
+    readWholeFile(path, bytes);
     const std::unique_ptr<void, int (*)(tjhandle)> tj(tjInitDecompress(), tjDestroy);
     if (!tj) throw IoError(path, "cannot start the JPEG decoder");
     int width = 0, height = 0, subsampling = 0, colorspace = 0;
@@ -310,31 +354,44 @@ bool readJpeg(const std::string& path, Image<Vec4u8>& image) {
 
 }  // namespace
 
-Image<Vec4u8> readColorImage(const std::string& path) {
-    if (hasExtension(path, ".ppm")) return readPPM(path);
+void readColorImage(const std::string& path, Image<Vec4u8>& rgba) {
+    if (hasExtension(path, ".ppm")) return readPPM(path, rgba);
     requireImageFile(path);
-    Image<Vec4u8> jpeg;
-    if (requirePlausibleImage(path).format == image_header::Format::Jpeg && readJpeg(path, jpeg)) return jpeg;
-    cv::Mat m = readWithOpenCV(path);
-    if (m.depth() == CV_16U) {
-        m.convertTo(m, CV_8U, 1.0 / 257.0);  // 65535 -> 255
-    } else if (m.depth() != CV_8U) {
-        throw IoError(path, "unsupported colour image: " + describeMat(m) + " (expected 8- or 16-bit)");
+    if (requirePlausibleImage(path).format == image_header::Format::Jpeg && readJpeg(path, rgba)) return;
+    DecodeScratch& scratch = decodeScratch();
+    readWithOpenCV(path, scratch.decoded);
+    const cv::Mat* m = &scratch.decoded;
+    if (m->depth() == CV_16U) {
+        m->convertTo(scratch.converted, CV_8U, 1.0 / 257.0);  // 65535 -> 255
+        m = &scratch.converted;
+    } else if (m->depth() != CV_8U) {
+        throw IoError(path, "unsupported colour image: " + describeMat(*m) + " (expected 8- or 16-bit)");
     }
-    cv::Mat rgba;
-    switch (m.channels()) {
-        case 1: cv::cvtColor(m, rgba, cv::COLOR_GRAY2RGBA); break;
-        case 3: cv::cvtColor(m, rgba, cv::COLOR_BGR2RGBA); break;
-        case 4: cv::cvtColor(m, rgba, cv::COLOR_BGRA2RGBA); break;
-        default: throw IoError(path, "unsupported colour image: " + describeMat(m) + " (expected 1, 3 or 4 channels)");
-    }
-    return imageFromMat<Vec4u8>(rgba);
+    const int channels = m->channels();
+    const int to_rgba = channels == 1 ? cv::COLOR_GRAY2RGBA : channels == 3 ? cv::COLOR_BGR2RGBA : channels == 4 ? cv::COLOR_BGRA2RGBA : -1;
+    if (to_rgba < 0) throw IoError(path, "unsupported colour image: " + describeMat(*m) + " (expected 1, 3 or 4 channels)");
+    rgba.resize(Vec2i{m->cols, m->rows});
+    cv::Mat into = matOver(rgba);
+    cv::cvtColor(*m, into, to_rgba);
+}
+
+Image<Vec4u8> readColorImage(const std::string& path) {
+    Image<Vec4u8> rgba;
+    readColorImage(path, rgba);
+    return rgba;
+}
+
+void readDepthPNG(const std::string& path, Image<std::uint16_t>& depth) {
+    cv::Mat& m = decodeScratch().decoded;
+    readWithOpenCV(path, m);
+    if (m.type() != CV_16UC1) throw IoError(path, "expected a 16-bit single-channel depth PNG, got " + describeMat(m));
+    copyMatToImage(m, depth);
 }
 
 Image<std::uint16_t> readDepthPNG(const std::string& path) {
-    const cv::Mat m = readWithOpenCV(path);
-    if (m.type() != CV_16UC1) throw IoError(path, "expected a 16-bit single-channel depth PNG, got " + describeMat(m));
-    return imageFromMat<std::uint16_t>(m);
+    Image<std::uint16_t> depth;
+    readDepthPNG(path, depth);
+    return depth;
 }
 
 void writePNG(const std::string& path, const Image<Vec4u8>& rgba) {

@@ -110,12 +110,9 @@ bool PpmPgmSource::next(RGBDFrame& frame) {
             throw IoError(path, "missing: a gap in the sequence (index " + std::to_string(file_index) + "); it goes on to index " +
                                     std::to_string(first_index_ + frame_count_ - 1), position);
     }
-    // Read into locals first so that a failing frame leaves `frame` as it was.
-    Image<std::uint16_t> depth = frame_reading::readDepth(depth_path, position, calib_.depth);
-    Image<Vec4u8> rgb;
-    if (!rgb_pattern_.empty()) rgb = frame_reading::readColour(fileName(rgb_pattern_, file_index), position, calib_.rgb);
-    frame.depth_raw = std::move(depth);
-    frame.rgb = std::move(rgb);
+    frame_reading::readDepth(depth_path, position, calib_.depth, read_.depth_raw);
+    if (!rgb_pattern_.empty()) frame_reading::readColour(fileName(rgb_pattern_, file_index), position, calib_.rgb, read_.rgb);
+    read_.handOver(frame, !rgb_pattern_.empty());
     frame.index = position;
     frame.timestamp_s = double(file_index) / 30.0;
     frame.depth_path = depth_path;

@@ -169,14 +169,12 @@ bool StrayScannerSource::next(RGBDFrame& frame) {
     if (position_ >= frames_.size()) return false;
     const int index = int(position_);
     const FrameFiles& f = frames_[position_++];  // moves on even if this frame throws
-    Image<std::uint16_t> depth = frame_reading::readDepth(f.depth_path, index, calib_.depth);
-    dropLowConfidence(depth, f, index);
-    Image<Vec4u8> rgb;
-    if (!video_->read(f.number, rgb, calib_.rgb.size()))
+    frame_reading::readDepth(f.depth_path, index, calib_.depth, read_.depth_raw);
+    dropLowConfidence(read_.depth_raw, f, index);
+    if (!video_->read(f.number, read_.rgb, calib_.rgb.size()))
         throw IoError(video_path_, "the video ends before frame " + std::to_string(f.number) + " (depth map " +
                                        f.depth_path + ")", index);
-    frame.depth_raw = std::move(depth);
-    frame.rgb = std::move(rgb);
+    read_.handOver(frame, true);
     frame.index = index;
     frame.timestamp_s = f.timestamp_s;
     frame.depth_path = f.depth_path;

@@ -123,10 +123,9 @@ bool TumSource::next(RGBDFrame& frame) {
     if (position_ >= pairs_.size()) return false;
     const int index = int(position_);
     const FramePair& pair = pairs_[position_++];  // moves on even if this frame throws
-    Image<std::uint16_t> depth = frame_reading::readDepth(pair.depth_path, index, calib_.depth);
-    Image<Vec4u8> rgb = frame_reading::readColour(pair.rgb_path, index, calib_.rgb);
-    frame.depth_raw = std::move(depth);
-    frame.rgb = std::move(rgb);
+    frame_reading::readDepth(pair.depth_path, index, calib_.depth, read_.depth_raw);
+    frame_reading::readColour(pair.rgb_path, index, calib_.rgb, read_.rgb);
+    read_.handOver(frame, true);
     frame.index = index;
     frame.timestamp_s = pair.depth_time_s;
     frame.rgb_timestamp_s = pair.rgb_time_s;

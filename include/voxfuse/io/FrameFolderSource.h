@@ -51,6 +51,7 @@ private:
     RGBDCalib calib_;
     std::vector<FrameFiles> frames_;
     std::vector<TimedPose> ground_truth_;
+    FrameImageBuffers read_;  // the next frame is decoded into these
     std::size_t position_ = 0;
     int lost_poses_ = 0;  // pose files that mark lost tracking
 };

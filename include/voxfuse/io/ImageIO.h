@@ -19,6 +19,15 @@ void writePGM16(const std::string& path, const Image<std::uint16_t>& depth);
 Image<Vec4u8> readColorImage(const std::string& path);         // PNG/JPEG/PPM..., any channel count -> RGBA
 Image<std::uint16_t> readDepthPNG(const std::string& path);    // must be single-channel 16-bit
 void writePNG(const std::string& path, const Image<Vec4u8>& rgba);
+
+// The same readers decoding into `image`, whose memory is kept when it has the file's size already:
+// a sequence of frames read into the same images allocates nothing per frame. After an error the
+// image's contents are unspecified.
+void readPPM(const std::string& path, Image<Vec4u8>& image);
+void readPGM16(const std::string& path, Image<std::uint16_t>& image);
+void readColorImage(const std::string& path, Image<Vec4u8>& image);
+void readDepthPNG(const std::string& path, Image<std::uint16_t>& image);
+
 void writeDepthPNG(const std::string& path, const Image<std::uint16_t>& depth);
 
 // A semantic label image: one class id per pixel, in a single-channel lossless file: PNG (1 to 16-bit

@@ -43,6 +43,7 @@ private:
     int missing_frames_ = 0;  // indices in the range without their files
     int position_ = 0;  // 0-based index of the next frame
     std::vector<TimedPose> ground_truth_;  // empty, or one pose per frame
+    FrameImageBuffers read_;  // the next frame is decoded into these
 };
 
 }  // namespace voxfuse

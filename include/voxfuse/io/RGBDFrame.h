@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <string>
+#include <utility>
 
 #include "voxfuse/core/Image.h"
 #include "voxfuse/objects/ClassLabel.h"
@@ -26,6 +27,22 @@ struct RGBDFrame {
     // frame has none.
     Image<ClassId> labels;
     std::string labels_path;
+};
+
+// The images a source decodes the next frame into before it hands them over by swapping them with the
+// frame's: a frame that fails to read leaves the caller's frame as it was, and the frame's previous
+// images come back to be decoded into, so reading a sequence allocates no image memory per frame.
+struct FrameImageBuffers {
+    Image<std::uint16_t> depth_raw;
+    Image<Vec4u8> rgb;
+
+    void handOver(RGBDFrame& frame, bool with_rgb) {
+        std::swap(depth_raw, frame.depth_raw);
+        if (with_rgb)
+            std::swap(rgb, frame.rgb);
+        else
+            frame.rgb = Image<Vec4u8>();
+    }
 };
 
 // A label image may have any resolution, but must show calib.labelCamera()'s field of view: its aspect

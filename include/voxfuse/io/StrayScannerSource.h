@@ -67,6 +67,7 @@ private:
     std::unique_ptr<VideoFrameReader> video_;
     std::vector<FrameFiles> frames_;
     std::vector<TimedPose> ground_truth_;
+    FrameImageBuffers read_;  // the next frame is decoded into these
     std::size_t position_ = 0;
 };
 

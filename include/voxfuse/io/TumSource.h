@@ -51,6 +51,7 @@ private:
     std::string calib_origin_;  // for description()
     std::vector<FramePair> pairs_;
     std::vector<TimedPose> ground_truth_;
+    FrameImageBuffers read_;  // the next frame is decoded into these
     std::size_t position_ = 0;
     int dropped_depth_frames_ = 0;
     int missing_listed_files_ = 0;
