@@ -88,7 +88,7 @@ public:
     void integrate(Scene<TVoxel, VoxelBlockHash>& scene, const View& view, const Mat4f& T_world_camera) override {
         requireSceneOn(kDevice, scene, "the integration engine");
         const VoxelBlockHash& hash = scene.index();
-        if (!hash.visibleListIsFor(T_world_camera, view.calib.depth))
+        if (!hash.visibleListCovers(T_world_camera, view.calib.depth))
             throw Error("hash integration: the visible list is not for this view (run the allocation engine on it first)");
         const IntegrationFrame frame = inputs_.frame(kDevice, scene.params(), view, T_world_camera, scene.takeIntegrationNumber());
         const int blocks = keepBlocksToUpdate(hash, scene.params(), view.calib.depth, frame);

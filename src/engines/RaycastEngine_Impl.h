@@ -88,7 +88,7 @@ private:
     void computeDepthRanges(const Scene<TVoxel, TIndex>& scene, const Intrinsics& intr, const Mat4f& T_world_camera, Vec2f* ranges) {
         const VoxelBlockHash& hash = scene.index();
         const SceneParams& params = scene.params();
-        const bool use_visible_list = hash.visibleListIsFor(T_world_camera, intr);
+        const bool use_visible_list = hash.visibleListCovers(T_world_camera, intr);
         const int candidates = use_visible_list ? hash.visibleCount() : hash.entryCount();
         const RangeTiles tiles{nullptr, (intr.width + kRangeTile - 1) / kRangeTile, (intr.height + kRangeTile - 1) / kRangeTile};
         grow(tile_ranges_, std::size_t(tiles.tiles_x) * std::size_t(tiles.tiles_y));

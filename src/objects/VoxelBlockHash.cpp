@@ -279,11 +279,15 @@ void VoxelBlockHash::setVisibleCount(int count) {
     stats_.visible_blocks = count;
 }
 
-bool VoxelBlockHash::visibleListIsFor(const Mat4f& T_world_camera, const Intrinsics& intrinsics) const {
-    const Intrinsics& a = visible_intrinsics_;
+bool VoxelBlockHash::visibleListCovers(const Mat4f& T_world_camera, const Intrinsics& intrinsics) const {
+    if (!visible_valid_ || std::memcmp(visible_T_world_camera_.m, T_world_camera.m, sizeof(T_world_camera.m)) != 0) return false;
+    if (intrinsics.width <= 0 || intrinsics.height <= 0) return false;
+    const int factor = visible_intrinsics_.width / intrinsics.width;
+    if (factor < 1) return false;
+    // (cx + 0.5) - 0.5 need not give cx back in floats: factor 1 compares the list's own.
+    const Intrinsics a = factor == 1 ? visible_intrinsics_ : visible_intrinsics_.downsampled(factor);
     const Intrinsics& b = intrinsics;
-    return visible_valid_ && std::memcmp(visible_T_world_camera_.m, T_world_camera.m, sizeof(T_world_camera.m)) == 0 &&
-           a.width == b.width && a.height == b.height && a.fx == b.fx && a.fy == b.fy && a.cx == b.cx && a.cy == b.cy;
+    return a.width == b.width && a.height == b.height && a.fx == b.fx && a.fy == b.fy && a.cx == b.cx && a.cy == b.cy;
 }
 
 }  // namespace voxfuse

@@ -245,6 +245,29 @@ TEST(VoxelBlockHashTest, RemovalKeepsTheVisibleListPointingAtTheSameBlocks) {
     EXPECT_EQ(hash.entry(hash.visibleEntries()[1]).pos.x, 7);
 }
 
+// A raycast at half resolution from the listed view sees nothing the list's camera does not: it may use
+// the list. Any other camera or pose may not.
+TEST(VoxelBlockHashTest, TheVisibleListCoversItsCameraAndItsDownsampledCamerasOnly) {
+    HashScene scene = makeScene(1, 1, 16, 32);
+    VoxelBlockHash& hash = scene.index();
+    const Intrinsics camera{640, 480, 525.f, 525.f, 319.5f, 239.5f};
+    Mat4f T_world_camera = Mat4f::identity();
+    T_world_camera.m[3] = 0.25f;
+    EXPECT_FALSE(hash.visibleListCovers(T_world_camera, camera)) << "no list built yet";
+    hash.setVisibleEntries({}, T_world_camera, camera);
+    EXPECT_TRUE(hash.visibleListCovers(T_world_camera, camera));
+    EXPECT_TRUE(hash.visibleListCovers(T_world_camera, camera.downsampled(2)));
+    EXPECT_TRUE(hash.visibleListCovers(T_world_camera, camera.downsampled(4)));
+    EXPECT_FALSE(hash.visibleListCovers(Mat4f::identity(), camera)) << "another pose";
+    EXPECT_FALSE(hash.visibleListCovers(T_world_camera, camera.resized(1280, 960))) << "a larger image";
+    Intrinsics wider = camera.downsampled(2);
+    wider.fx *= 0.9f;
+    EXPECT_FALSE(hash.visibleListCovers(T_world_camera, wider)) << "a wider field of view";
+    Intrinsics shifted = camera;
+    shifted.cx += 4.f;
+    EXPECT_FALSE(hash.visibleListCovers(T_world_camera, shifted)) << "another principal point";
+}
+
 TEST(VoxelBlockHashTest, RejectsSizesOutOfRange) {
     VoxelBlockHashSettings s;
     s.entries_per_bucket = 3;

@@ -101,8 +101,10 @@ public:
     // for a new view, or (block removal) for the view the list was built for.
     void setVisibleListFor(int count, const Mat4f& T_world_camera, const Intrinsics& intrinsics);
     void setVisibleCount(int count);
-    // True when the visible list was built for exactly this viewpoint and camera.
-    bool visibleListIsFor(const Mat4f& T_world_camera, const Intrinsics& intrinsics) const;
+    // True when the visible list was built for this viewpoint and a camera that sees all this one does:
+    // the same intrinsics, or these are the list's downsampled by an integer factor (the tracking
+    // raycast at half resolution), whose frustum lies inside the list's.
+    bool visibleListCovers(const Mat4f& T_world_camera, const Intrinsics& intrinsics) const;
 
     AllocationStats& stats() { return stats_; }
     const AllocationStats& stats() const { return stats_; }
