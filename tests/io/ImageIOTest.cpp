@@ -174,6 +174,37 @@ TEST(ImageIO, PngDepthRoundTrip) {
     EXPECT_TRUE(samePixels(depth, readDepthPNG(path)));
 }
 
+// Reading into an image reuses its memory when the size is the file's, and resizes it when not: the
+// per-thread decode buffers never leak one file's pixels into another's image.
+TEST(ImageIO, ReadingIntoAnImageReusesItsMemoryOnlyAtTheSameSize) {
+    ScratchDir dir;
+    const std::string small_png = dir.file("small.png"), large_png = dir.file("large.png"), small_ppm = dir.file("small.ppm");
+    const std::string small_depth = dir.file("small_d.png"), large_depth = dir.file("large_d.pgm");
+    writePNG(small_png, makeRgb({6, 4}, 1));
+    writePNG(large_png, makeRgb({9, 7}, 2));
+    writePPM(small_ppm, makeRgb({6, 4}, 3));
+    writeDepthPNG(small_depth, makeDepth({6, 4}, 4));
+    writePGM16(large_depth, makeDepth({9, 7}, 5));
+
+    Image<Vec4u8> rgb;
+    readColorImage(small_png, rgb);
+    const Vec4u8* memory = rgb.host();
+    readColorImage(small_ppm, rgb);
+    EXPECT_EQ(rgb.host(), memory);
+    EXPECT_TRUE(samePixels(rgb, makeRgb({6, 4}, 3)));
+    readColorImage(large_png, rgb);
+    EXPECT_TRUE(samePixels(rgb, makeRgb({9, 7}, 2)));
+    readColorImage(small_png, rgb);
+    EXPECT_TRUE(samePixels(rgb, makeRgb({6, 4}, 1)));
+
+    Image<std::uint16_t> depth;
+    readDepthPNG(small_depth, depth);
+    readPGM16(large_depth, depth);
+    EXPECT_TRUE(samePixels(depth, makeDepth({9, 7}, 5)));
+    readDepthPNG(small_depth, depth);
+    EXPECT_TRUE(samePixels(depth, makeDepth({6, 4}, 4)));
+}
+
 TEST(ImageIO, GreyImageBecomesRgba) {
     ScratchDir dir;
     const std::string path = dir.file("grey.pgm");  // 8-bit PGM, decoded by OpenCV

@@ -101,6 +101,27 @@ TEST(TumSource, AssociatesByNearestTimestampOnHandMadeFolder) {
     EXPECT_FALSE(source.next(frame));
 }
 
+// Frames read into one RGBDFrame trade images with the source: from the third frame on, each is
+// decoded into memory an earlier frame had, so a sequence allocates no image memory per frame.
+TEST(TumSource, FramesAreDecodedIntoTheMemoryOfEarlierFrames) {
+    HandMadeTumFolder folder;
+    TumSource source(folder.dir.path());
+    RGBDFrame frame;
+    ASSERT_TRUE(source.next(frame));
+    const std::uint16_t* first_depth = frame.depth_raw.host();
+    const Vec4u8* first_rgb = frame.rgb.host();
+    ASSERT_TRUE(source.next(frame));
+    EXPECT_NE(frame.depth_raw.host(), first_depth) << "the second frame needs images of its own: the first is the caller's";
+    // Were the first frame's images freed, these would take their memory (allocators reuse the last freed).
+    const Image<std::uint16_t> depth_blocker(kSmall);
+    const Image<Vec4u8> rgb_blocker(kSmall);
+    ASSERT_TRUE(source.next(frame));
+    EXPECT_EQ(frame.depth_raw.host(), first_depth);
+    EXPECT_EQ(frame.rgb.host(), first_rgb);
+    EXPECT_TRUE(samePixels(frame.depth_raw, makeDepth(kSmall, 23)));
+    EXPECT_TRUE(samePixels(frame.rgb, makeRgb(kSmall, 12)));
+}
+
 TEST(TumSource, GroundTruthIsInterpolatedWithinTheGap) {
     HandMadeTumFolder folder;
     TumSource source(folder.dir.path());
@@ -267,6 +288,7 @@ TEST(PpmPgmSource, CorruptMiddleFrameThrowsThenContinues) {
         EXPECT_TRUE(containsText(e.what(), "frame 1")) << e.what();
     }
     EXPECT_EQ(frame.index, 0);  // a failed read leaves the frame alone
+    EXPECT_TRUE(samePixels(frame.depth_raw, makeDepth(kSmall, 0)));
     ASSERT_TRUE(source.next(frame));
     EXPECT_EQ(frame.index, 2);
     EXPECT_TRUE(samePixels(frame.depth_raw, makeDepth(kSmall, 2)));
