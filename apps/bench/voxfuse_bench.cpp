@@ -78,7 +78,7 @@ std::unique_ptr<ImageSource> openSource(const std::string& path) {
 
 int main(int argc, char** argv) {
     CLI::App cli{"Per-stage timings of the VoxFuse pipeline on a sequence."};
-    std::string source_path, json_path = "voxfuse_bench.json", index = "hash", poses = "track", device = "cpu";
+    std::string source_path, json_path = "voxfuse_bench.json", timings_path, index = "hash", poses = "track", device = "cpu";
 #if VOXFUSE_WITH_IO
     app::LabelInputOptions labels;  // and --voxel
 #else
@@ -125,6 +125,7 @@ int main(int argc, char** argv) {
     cli.add_option("--swap-blocks-per-frame", s.swap.blocks_per_frame, "swapping: blocks moved each way per frame at most")
         ->capture_default_str()->check(app::intIn(1, 1 << 20));
     cli.add_option("--json", json_path, "where to write the JSON report")->capture_default_str();
+    cli.add_option("--timings", timings_path, "also write every frame's stage times and visible blocks to this JSON file (as voxfuse's timings.json)");
     CLI11_PARSE(cli, argc, argv);
 
     app::interrupt::install("voxfuse_bench");
@@ -137,6 +138,7 @@ int main(int argc, char** argv) {
             throw ConfigError("--frames " + std::to_string(max_frames) + " leaves no frame after the " + std::to_string(warmup) +
                               " warm-up frames (--warmup)");
         requireWritable(json_path);  // before the run, not after it
+        if (!timings_path.empty()) requireWritable(timings_path);
         if (source_path.empty()) source_path = defaultSource();
         std::unique_ptr<ImageSource> source = openSource(source_path);
 #if VOXFUSE_WITH_IO
@@ -308,6 +310,10 @@ int main(int argc, char** argv) {
         if (occupancy) j["occupancy"] = app::occupancyJson(occupancy->stats(), occupancy->settings());
         app::writeJsonFile(json_path, j);
         std::printf("  JSON: %s\n", json_path.c_str());
+        if (!timings_path.empty()) {
+            app::writeTimingsJson(timings_path, record);
+            std::printf("  per-frame timings: %s\n", timings_path.c_str());
+        }
         return app::interrupt::exitStatus();
     });
 }
