@@ -46,6 +46,9 @@ void readWholeFile(const std::string& path, std::vector<unsigned char>& bytes) {
     if (!in) throw IoError(path, "cannot open for reading");
     const std::streamoff size = in.tellg();
     if (size < 0) throw IoError(path, "read error");
+    // 2^26 pixels of 16-bit RGBA are 512 MiB even uncompressed: a larger file is no frame's image.
+    if (size > (std::streamoff(1) << 30))
+        throw IoError(path, "the file has " + std::to_string(size >> 20) + " MiB: too large for an image of a frame (at most 1 GiB)");
     bytes.resize(std::size_t(size));
     in.seekg(0);
     if (!in.read(reinterpret_cast<char*>(bytes.data()), size)) throw IoError(path, "read error");
@@ -57,10 +60,12 @@ std::vector<unsigned char> readWholeFile(const std::string& path) {
     return bytes;
 }
 
-// What decoding a frame needs besides its image, kept per thread so that a sequence of frames of one
-// size allocates nothing per frame. Megabyte buffers made and freed every frame fragment glibc's heap
-// (once one is freed, later ones come from the heap rather than mmap, and the small long-lived
-// allocations between them keep it from shrinking): teddy's peak RSS grew by 100 MB that way.
+// What decoding a frame needs besides its image, kept per thread so that reading a sequence makes as
+// few megabyte allocations per frame as the decoders allow. Buffers made and freed every frame
+// fragment glibc's heap (once one is freed, later ones come from the heap rather than mmap, and the
+// small long-lived allocations between them keep it from shrinking): teddy's peak RSS grew by 100 MB
+// that way. OpenCV's PNG decoder still makes its own image each call (OpenCV 4.6 decodes into a new
+// Mat and hands that over), freed before the next frame's.
 struct DecodeScratch {
     std::vector<unsigned char> bytes;  // the file
     cv::Mat decoded, converted;        // what OpenCV decoded; its 8-bit version where it had 16
@@ -203,7 +208,6 @@ image_header::Header requirePlausibleImage(const std::string& path) {
     return h;
 }
 
-// Decodes into `m`, whose memory is reused when the image has its size and type.
 void readWithOpenCV(const std::string& path, cv::Mat& m) {
     requireImageFile(path);
     requirePlausibleImage(path);

@@ -326,6 +326,30 @@ TEST(ImageIO, APngClaimingAHugeSizeIsRefusedBeforeDecoding) {
     expectIoError([](const std::string& p) { readColorImage(p); }, path, "too large for an image of a frame");
 }
 
+// A file is read whole before it is decoded: one larger than any frame's image is refused unread. The
+// file is sparse, so it takes no disk.
+TEST(ImageIO, AFileLargerThanAnyFrameImageIsRefusedUnread) {
+    ScratchDir dir;
+    for (const char* name : {"big.png", "big.ppm", "big.pgm"}) {
+        SCOPED_TRACE(name);
+        const std::string path = dir.file(name);
+        if (std::string(name) == "big.png")
+            writePNG(path, makeRgb({4, 4}, 0));
+        else if (std::string(name) == "big.ppm")
+            writePPM(path, makeRgb({4, 4}, 0));
+        else
+            writePGM16(path, makeDepth({4, 4}, 0));
+        std::filesystem::resize_file(path, (std::uintmax_t(1) << 30) + 1);
+        const auto read = [](const std::string& p) {
+            if (p.size() > 4 && p.substr(p.size() - 4) == ".pgm")
+                readPGM16(p);
+            else
+                readColorImage(p);
+        };
+        expectIoError(read, path, "too large for an image of a frame (at most 1 GiB)");
+    }
+}
+
 TEST(ImageIO, EightBitPngAsDepthIsRejected) {
     ScratchDir dir;
     const std::string path = dir.file("colour.png");
