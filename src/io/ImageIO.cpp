@@ -39,9 +39,9 @@ void requireImageFile(const std::string& path) {
     if (!std::filesystem::exists(path, ec)) throw IoError(path, "no such file");
 }
 
-// Into `bytes`, whose capacity is kept: read frame after frame, it stops allocating.
+// Into `bytes`, whose capacity is kept: read frame after frame, it stops allocating. The caller has
+// checked that `path` is a file (requireImageFile), so that a missing file says so first.
 void readWholeFile(const std::string& path, std::vector<unsigned char>& bytes) {
-    requireImageFile(path);
     std::ifstream in(path, std::ios::binary | std::ios::ate);
     if (!in) throw IoError(path, "cannot open for reading");
     const std::streamoff size = in.tellg();
@@ -208,9 +208,8 @@ image_header::Header requirePlausibleImage(const std::string& path) {
     return h;
 }
 
-void readWithOpenCV(const std::string& path, cv::Mat& m) {
-    requireImageFile(path);
-    requirePlausibleImage(path);
+// Decodes a file that passed requireImageFile and requirePlausibleImage.
+void decodeWithOpenCV(const std::string& path, cv::Mat& m) {
     std::vector<unsigned char>& bytes = decodeScratch().bytes;
     readWholeFile(path, bytes);
     try {
@@ -219,6 +218,12 @@ void readWithOpenCV(const std::string& path, cv::Mat& m) {
         throw IoError(path, "cannot decode image: " + e.msg);
     }
     if (m.empty()) throw IoError(path, "cannot decode image (corrupt file or unsupported format)");
+}
+
+void readWithOpenCV(const std::string& path, cv::Mat& m) {
+    requireImageFile(path);
+    requirePlausibleImage(path);
+    decodeWithOpenCV(path, m);
 }
 
 cv::Mat readWithOpenCV(const std::string& path) {
@@ -260,6 +265,7 @@ bool hasExtension(const std::string& path, const char* extension) {
 }  // namespace
 
 void readPPM(const std::string& path, Image<Vec4u8>& image) {
+    requireImageFile(path);
     std::vector<unsigned char>& bytes = decodeScratch().bytes;
     readWholeFile(path, bytes);
     const NetpbmHeader h = NetpbmHeaderParser(path, bytes).parse('6', "binary PPM colour image");
@@ -286,6 +292,7 @@ Image<Vec4u8> readPPM(const std::string& path) {
 }
 
 void readPGM16(const std::string& path, Image<std::uint16_t>& image) {
+    requireImageFile(path);
     std::vector<unsigned char>& bytes = decodeScratch().bytes;
     readWholeFile(path, bytes);
     const NetpbmHeader h = NetpbmHeaderParser(path, bytes).parse('5', "binary PGM depth image");
@@ -363,7 +370,7 @@ void readColorImage(const std::string& path, Image<Vec4u8>& rgba) {
     requireImageFile(path);
     if (requirePlausibleImage(path).format == image_header::Format::Jpeg && readJpeg(path, rgba)) return;
     DecodeScratch& scratch = decodeScratch();
-    readWithOpenCV(path, scratch.decoded);
+    decodeWithOpenCV(path, scratch.decoded);
     const cv::Mat* m = &scratch.decoded;
     if (m->depth() == CV_16U) {
         m->convertTo(scratch.converted, CV_8U, 1.0 / 257.0);  // 65535 -> 255
@@ -424,6 +431,7 @@ namespace {
 // grey PNGs of 1, 2 or 4 bits (libpng expands them to 0..255: a 1-bit 1 becomes 255).
 cv::Mat readRawClassIds(const std::string& path) {
     if (hasExtension(path, ".pgm")) {
+        requireImageFile(path);
         const auto bytes = readWholeFile(path);
         const NetpbmHeader h = NetpbmHeaderParser(path, bytes).parse('5', "binary PGM label image");
         if (h.maxval < 1 || h.maxval > 65535) throw IoError(path, "maxval " + std::to_string(h.maxval) + " out of range (1..65535)");
