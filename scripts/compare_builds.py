@@ -58,14 +58,20 @@ def resolve(what):
     return build_revision(what)
 
 
-def run_bench(build, bench_args):
+def run_bench(build, bench_args, env=None, timings=False):
+    """One voxfuse_bench run: its JSON report, and with `timings` also its per-frame timings (a pair)."""
     with tempfile.TemporaryDirectory() as tmp:
-        report = os.path.join(tmp, "bench.json")
-        done = subprocess.run([bench_of(build), *bench_args, "--json", report], capture_output=True, text=True)
+        report, per_frame = os.path.join(tmp, "bench.json"), os.path.join(tmp, "timings.json")
+        extra = ["--timings", per_frame] if timings else []
+        done = subprocess.run([bench_of(build), *bench_args, "--json", report, *extra], capture_output=True, text=True, env=env)
         if done.returncode != 0:
-            sys.exit(f"compare_builds: {bench_of(build)} failed ({done.returncode}):\n{done.stdout}{done.stderr}")
+            sys.exit(f"{os.path.basename(sys.argv[0])}: {bench_of(build)} failed ({done.returncode}):\n{done.stdout}{done.stderr}")
         with open(report) as f:
-            return json.load(f)
+            result = json.load(f)
+        if not timings:
+            return result
+        with open(per_frame) as f:
+            return result, json.load(f)
 
 
 def main():

@@ -8,40 +8,27 @@ both alike), each run writing its per-frame stage times (--timings), and prints:
     third that sees least and of the third that sees most, and a least-squares line of the whole
     frame's ms against the visible blocks, per thread count.
 
-    scripts/scaling_report.py [--bin build] [--rounds 2] [--json FILE] [-- BENCH ARGUMENTS...]
+    scripts/scaling_report.py [--bin BUILD_OR_REVISION] [--rounds 2] [--json FILE] [-- BENCH ARGUMENTS...]
 
-The bench arguments default to teddy at the default settings (as scripts/compare_builds.py).
+--bin and the bench arguments are as scripts/compare_builds.py takes them (default: build/, and teddy
+at the default settings).
 """
 
 import argparse
 import json
 import os
 import statistics
-import subprocess
 import sys
-import tempfile
 
-REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-DEFAULT_BENCH_ARGS = [os.path.join(REPO, "..", "shared", "data", "tum_fr3_teddy_200"), "--voxel", "s_rgb"]
+from compare_builds import DEFAULT_BENCH_ARGS, REPO, resolve, run_bench
+
 WARMUP = 3  # frames left out, as voxfuse_bench's default --warmup
 
 
-def bench_of(build):
-    for p in (os.path.join(build, "apps", "voxfuse_bench"), os.path.join(build, "voxfuse_bench")):
-        if os.path.isfile(p):
-            return p
-    sys.exit(f"scaling_report: no voxfuse_bench in {build}")
-
-
-def run(bench, bench_args, threads, folder):
-    timings = os.path.join(folder, f"timings_{threads}.json")
+def run(build, bench_args, threads):
+    """The per-frame timings of one run with `threads` OpenMP threads."""
     env = dict(os.environ, OMP_NUM_THREADS=str(threads))
-    done = subprocess.run([bench, *bench_args, "--warmup", str(WARMUP), "--json", os.path.join(folder, "bench.json"), "--timings", timings],
-                          capture_output=True, text=True, env=env)
-    if done.returncode != 0:
-        sys.exit(f"scaling_report: voxfuse_bench failed ({done.returncode}):\n{done.stdout}{done.stderr}")
-    with open(timings) as f:
-        return json.load(f)
+    return run_bench(build, [*bench_args, "--warmup", str(WARMUP)], env=env, timings=True)[1]
 
 
 def fit_line(xs, ys):
@@ -54,27 +41,26 @@ def fit_line(xs, ys):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--bin", default=os.path.join(REPO, "build"), help="build folder holding apps/voxfuse_bench")
+    parser.add_argument("--bin", default=os.path.join(REPO, "build"), help="build folder holding apps/voxfuse_bench, or a git revision")
     parser.add_argument("--rounds", type=int, default=2, help="runs per thread count (ABBA)")
     parser.add_argument("--json", help="also write the report here")
     parser.add_argument("bench_args", nargs="*", help="arguments for voxfuse_bench (after --)")
     args = parser.parse_args()
     if args.rounds < 1:
         sys.exit("scaling_report: --rounds must be at least 1")
-    bench = bench_of(args.bin)
+    build = resolve(args.bin)
     bench_args = args.bench_args or DEFAULT_BENCH_ARGS
 
     # frames[threads][frame index] = list over rounds of that frame's record
     frames = {1: {}, 2: {}}
     stages = []
-    with tempfile.TemporaryDirectory(prefix="voxfuse_scaling_") as folder:
-        for r in range(args.rounds):
-            for threads in ((1, 2) if r % 2 == 0 else (2, 1)):
-                t = run(bench, bench_args, threads, folder)
-                stages = stages or [s for s in t["median_ms"] if s != "total"] + ["total"]
-                for f in t["frames"][WARMUP:]:
-                    frames[threads].setdefault(f["index"], []).append(f)
-                print(f"round {r + 1}: {threads} thread(s) done", file=sys.stderr)
+    for r in range(args.rounds):
+        for threads in ((1, 2) if r % 2 == 0 else (2, 1)):
+            t = run(build, bench_args, threads)
+            stages = stages or [s for s in t["median_ms"] if s != "total"] + ["total"]
+            for f in t["frames"][WARMUP:]:
+                frames[threads].setdefault(f["index"], []).append(f)
+            print(f"round {r + 1}: {threads} thread(s) done", file=sys.stderr)
 
     def per_frame(threads, key):
         """The frame's median over rounds of `key`, by frame index."""
