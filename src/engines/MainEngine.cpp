@@ -567,8 +567,7 @@ std::size_t voxelBytes(VoxelType type) {
 double indexBytes(const MainEngineSettings& s) {
     if (s.index_type == IndexType::Dense)
         return double(s.dense_size.x) * double(s.dense_size.y) * double(s.dense_size.z) * double(voxelBytes(s.voxel_type));
-    const double entries = double(s.hash.bucket_count) * s.hash.entries_per_bucket + s.hash.excess_entry_count;
-    return entries * double(sizeof(HashEntry) + sizeof(int) + 1) + double(s.hash.excess_entry_count + 2.0 * s.hash.max_block_count) * sizeof(int);
+    return double(VoxelBlockHash::tableBytesFor(s.hash));
 }
 
 std::string indexDescription(const MainEngineSettings& s) {

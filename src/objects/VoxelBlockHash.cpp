@@ -37,6 +37,12 @@ void allocateOn(MemoryBlock<T>& block, std::size_t count, Device where) {
 
 VoxelBlockHash::VoxelBlockHash(const Settings& settings, Device location) : VoxelBlockHash(settings, location, true) {}
 
+std::size_t VoxelBlockHash::tableBytesFor(const Settings& s) {
+    const std::size_t entries = std::size_t(s.bucket_count) * std::size_t(s.entries_per_bucket) + std::size_t(s.excess_entry_count);
+    return entries * (sizeof(HashEntry) + sizeof(std::uint8_t) + sizeof(int)) +
+           (std::size_t(s.excess_entry_count) + 2 * std::size_t(s.max_block_count)) * sizeof(int);
+}
+
 VoxelBlockHash::VoxelBlockHash(const Settings& settings, Device location, bool allocate_tables)
     : settings_(settings), location_(location) {
     validate(settings_);

@@ -268,6 +268,18 @@ TEST(VoxelBlockHashTest, TheVisibleListCoversItsCameraAndItsDownsampledCamerasOn
     EXPECT_FALSE(hash.visibleListCovers(T_world_camera, shifted)) << "another principal point";
 }
 
+// What create() checks against the machine's memory before allocating is what the index allocates.
+TEST(VoxelBlockHashTest, TableBytesFromTheSettingsAreWhatTheIndexAllocates) {
+    for (const auto& [buckets, per_bucket, excess, max_blocks] : {std::tuple{1, 1, 16, 32}, std::tuple{1 << 12, 2, 1 << 10, 1 << 14}}) {
+        VoxelBlockHashSettings s;
+        s.bucket_count = buckets;
+        s.entries_per_bucket = per_bucket;
+        s.excess_entry_count = excess;
+        s.max_block_count = max_blocks;
+        EXPECT_EQ(VoxelBlockHash::tableBytesFor(s), VoxelBlockHash(s).tableBytes());
+    }
+}
+
 TEST(VoxelBlockHashTest, RejectsSizesOutOfRange) {
     VoxelBlockHashSettings s;
     s.entries_per_bucket = 3;

@@ -60,6 +60,8 @@ public:
     // Voxels the scene must store: blockCapacity() blocks of 512.
     std::size_t voxelCount() const { return std::size_t(block_capacity_) * kBlockVoxelCount; }
     // Memory of the index itself (entry table, free stacks, visibility, visible list); fixed by the settings.
+    // The same, from the settings alone: what constructing the index will allocate.
+    static std::size_t tableBytesFor(const Settings& settings);
     std::size_t tableBytes() const {
         return entries_.bytes() + free_blocks_.bytes() + free_excess_.bytes() + entry_visibility_.bytes() + stored_slot_.bytes() +
                visible_entries_.bytes();
