@@ -351,8 +351,30 @@ int SyntheticScene::add(const Primitive& primitive) {
     // bit-identical to the one that was written.
     if (std::abs(prim.rotation.squaredNorm() - 1.0f) > 1e-6f) prim.rotation.normalize();
     primitives_.push_back(prim);
-    placements_.push_back({prim.rotation.toRotationMatrix(), prim.translation});
+    const Eigen::Vector3f& s = prim.size;
+    float bound = kInf;
+    switch (prim.kind) {
+        case PrimitiveKind::Rectangle: bound = std::hypot(s.x(), s.y()); break;
+        case PrimitiveKind::Box: bound = s.norm(); break;
+        case PrimitiveKind::Sphere: bound = s.x(); break;
+        case PrimitiveKind::Cylinder: bound = std::hypot(s.x(), s.y()); break;
+    }
+    // A margin for rounding: a sphere a little too large only costs a test.
+    placements_.push_back({prim.rotation.toRotationMatrix(), prim.translation, std::isfinite(bound) ? bound * 1.001f + 1e-4f : kInf});
     return static_cast<int>(primitives_.size()) - 1;
+}
+
+bool SyntheticScene::mayHit(const Placement& pl, const Eigen::Vector3f& o, const Eigen::Vector3f& d, float tMin, float tMax) {
+    if (!std::isfinite(pl.bound_radius)) return true;
+    const Eigen::Vector3f oc = pl.t_world_local - o;
+    const float dd = d.squaredNorm();
+    if (!(dd > 0.0f)) return true;
+    const float tClosest = oc.dot(d) / dd;
+    const float miss2 = (oc - tClosest * d).squaredNorm();
+    const float r2 = pl.bound_radius * pl.bound_radius;
+    if (miss2 > r2) return false;
+    const float halfChord = std::sqrt((r2 - miss2) / dd);  // in units of t
+    return tClosest + halfChord >= tMin && tClosest - halfChord <= tMax;
 }
 
 int SyntheticScene::addPlane(const Eigen::Vector3f& point, const Eigen::Vector3f& normal,
@@ -433,6 +455,7 @@ bool SyntheticScene::intersect(const Eigen::Vector3f& origin, const Eigen::Vecto
     Eigen::Vector3f bestNormalLocal = Eigen::Vector3f::Zero();
     for (std::size_t i = 0; i < primitives_.size(); ++i) {
         const Placement& pl = placements_[i];
+        if (!mayHit(pl, origin, dir, tMin, bestT)) continue;
         const Eigen::Vector3f o = pl.R_world_local.transpose() * (origin - pl.t_world_local);
         const Eigen::Vector3f d = pl.R_world_local.transpose() * dir;
         float t;
@@ -461,6 +484,7 @@ bool SyntheticScene::occluded(const Eigen::Vector3f& origin, const Eigen::Vector
                               float tMin, float tMax) const {
     for (std::size_t i = 0; i < primitives_.size(); ++i) {
         const Placement& pl = placements_[i];
+        if (!mayHit(pl, origin, dir, tMin, tMax)) continue;
         const Eigen::Vector3f o = pl.R_world_local.transpose() * (origin - pl.t_world_local);
         const Eigen::Vector3f d = pl.R_world_local.transpose() * dir;
         float t;
@@ -521,7 +545,9 @@ RenderedFrame SyntheticScene::render(const PinholeCamera& camera,
                 frame.label[idx] = primitives_[hit.primitive].classId;
             }
             Eigen::Vector3f colour = Eigen::Vector3f::Zero();
-            for (int sy = 0; sy < n; ++sy) {
+            // One colour sample is the depth ray itself (du = dv = 0): its hit is the one above.
+            if (n == 1 && frame.depth[idx] > 0.0f) colour = shade(origin + hit.t * dir, hit);
+            for (int sy = 0; sy < n && n > 1; ++sy) {
                 for (int sx = 0; sx < n; ++sx) {
                     const float du = (sx + 0.5f) / n - 0.5f, dv = (sy + 0.5f) / n - 0.5f;
                     const Eigen::Vector3f sampleDir = R * camera.ray(u + du, v + dv);
