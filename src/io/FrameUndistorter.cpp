@@ -3,6 +3,7 @@
 #include "voxfuse/io/FrameUndistorter.h"
 
 #include <string>
+#include <utility>
 
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
@@ -69,6 +70,11 @@ FrameUndistorter& FrameUndistorter::operator=(FrameUndistorter&& other) noexcept
 }
 
 void FrameUndistorter::apply(RGBDFrame& frame) const {
+    FrameImageBuffers scratch;
+    apply(frame, scratch);
+}
+
+void FrameUndistorter::apply(RGBDFrame& frame, FrameImageBuffers& scratch) const {
     auto check = [&](Vec2i actual, const Maps& maps, const char* what) {
         if (actual != maps.size)
             throw IoError(frame.depth_path,
@@ -78,19 +84,19 @@ void FrameUndistorter::apply(RGBDFrame& frame) const {
     };
     if (depth_maps_ && !frame.depth_raw.empty()) {
         check(frame.depth_raw.size(), *depth_maps_, "depth");
-        Image<std::uint16_t> out(frame.depth_raw.size());
-        cv::Mat dst = wrap(out, CV_16UC1);
+        scratch.depth_raw.resize(frame.depth_raw.size());
+        cv::Mat dst = wrap(scratch.depth_raw, CV_16UC1);
         cv::remap(wrap(frame.depth_raw, CV_16UC1), dst, depth_maps_->map1, depth_maps_->map2, cv::INTER_NEAREST,
                   cv::BORDER_CONSTANT, cv::Scalar(0));
-        frame.depth_raw = std::move(out);
+        std::swap(frame.depth_raw, scratch.depth_raw);
     }
     if (rgb_maps_ && !frame.rgb.empty()) {
         check(frame.rgb.size(), *rgb_maps_, "rgb");
-        Image<Vec4u8> out(frame.rgb.size());
-        cv::Mat dst = wrap(out, CV_8UC4);
+        scratch.rgb.resize(frame.rgb.size());
+        cv::Mat dst = wrap(scratch.rgb, CV_8UC4);
         cv::remap(wrap(frame.rgb, CV_8UC4), dst, rgb_maps_->map1, rgb_maps_->map2, cv::INTER_LINEAR,
                   cv::BORDER_CONSTANT, cv::Scalar(0, 0, 0, 0));
-        frame.rgb = std::move(out);
+        std::swap(frame.rgb, scratch.rgb);
     }
     if (label_distortion_.any() && !frame.labels.empty()) {
         // The labels' camera at the label image's resolution: same distortion coefficients (they act

@@ -19,7 +19,7 @@ UndistortedImageSource::UndistortedImageSource(std::unique_ptr<ImageSource> sour
 
 bool UndistortedImageSource::next(RGBDFrame& frame) {
     if (!source_->next(frame)) return false;
-    undistorter_.apply(frame);
+    undistorter_.apply(frame, scratch_);
     return true;
 }
 

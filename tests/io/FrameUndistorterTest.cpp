@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <type_traits>
 #include <vector>
 
 #include "IoTestUtil.h"
@@ -135,6 +137,43 @@ TEST(FrameUndistorter, DepthIsResampledNearestNeighbourSoNoValueIsInvented) {
         ASSERT_TRUE(v == 0 || v == 1000 || v == 2000 || v == 3000) << "pixel " << i << " = " << v;
     }
     EXPECT_EQ(frame.depth_raw.at(70, 60), 2000);  // the patch moved to where the pinhole camera sees it
+}
+
+// A sequence undistorted through one scratch alternates between two sets of image memory (the
+// frame's and the scratch's) and gives what the scratch-free call gives.
+TEST(FrameUndistorter, UndistortingThroughAScratchAllocatesNoImagesAfterTheFirstFrame) {
+    const FrameUndistorter undistorter(calibWithLens());
+    Image<std::uint16_t> raw_depth(kCamera.size());
+    for (std::size_t i = 0; i < raw_depth.pixelCount(); ++i) raw_depth.host()[i] = std::uint16_t(1000 + i % 2000);
+    const Image<Vec4u8> raw_rgb = rawImageOfSpots({{40.f, 30.f}, {250.f, 50.f}});
+    auto copyOf = [](const auto& image) {
+        std::remove_cv_t<std::remove_reference_t<decltype(image)>> copy(image.size());
+        std::copy(image.host(), image.host() + image.pixelCount(), copy.host());
+        return copy;
+    };
+    RGBDFrame expected = frameWith(copyOf(raw_rgb), copyOf(raw_depth));
+    undistorter.apply(expected);
+
+    RGBDFrame frame = frameWith(Image<Vec4u8>(kCamera.size()), Image<std::uint16_t>(kCamera.size()));
+    FrameImageBuffers scratch;
+    std::vector<const void*> memory;
+    for (int i = 0; i < 4; ++i) {
+        // A source decodes the next frame into the frame's images (as FrameImageBuffers::handOver leaves them).
+        std::copy(raw_depth.host(), raw_depth.host() + raw_depth.pixelCount(), frame.depth_raw.host());
+        std::copy(raw_rgb.host(), raw_rgb.host() + raw_rgb.pixelCount(), frame.rgb.host());
+        undistorter.apply(frame, scratch);
+        ASSERT_TRUE(std::equal(frame.depth_raw.host(), frame.depth_raw.host() + frame.depth_raw.pixelCount(), expected.depth_raw.host()));
+        ASSERT_EQ(std::memcmp(frame.rgb.host(), expected.rgb.host(), frame.rgb.pixelCount() * sizeof(Vec4u8)), 0);
+        memory.push_back(frame.depth_raw.host());
+        memory.push_back(frame.rgb.host());
+    }
+    // Frames 0 and 2, 1 and 3 use the same memory; 0 and 1 do not.
+    EXPECT_EQ(memory[0], memory[4]);
+    EXPECT_EQ(memory[1], memory[5]);
+    EXPECT_EQ(memory[2], memory[6]);
+    EXPECT_EQ(memory[3], memory[7]);
+    EXPECT_NE(memory[0], memory[2]);
+    EXPECT_NE(memory[1], memory[3]);
 }
 
 // Labels follow the colour camera at their own resolution (here half), nearest-neighbour: only ids

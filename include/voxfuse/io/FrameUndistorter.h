@@ -32,6 +32,10 @@ public:
     // size throws IoError naming frame.depth_path and frame.index. Safe to call from several threads
     // at once.
     void apply(RGBDFrame& frame) const;
+    // The same, remapping depth and colour into `scratch`'s images and swapping them with the frame's:
+    // the frame's old images become the scratch of the next call, so a sequence at one size allocates
+    // no image memory per frame. One scratch per thread.
+    void apply(RGBDFrame& frame, FrameImageBuffers& scratch) const;
 
 private:
     struct Maps;

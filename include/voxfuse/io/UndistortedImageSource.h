@@ -30,6 +30,7 @@ public:
 private:
     std::unique_ptr<ImageSource> source_;
     FrameUndistorter undistorter_;
+    FrameImageBuffers scratch_;  // what frames are undistorted into (see FrameUndistorter::apply)
 };
 
 // `source` itself when its calibration has no lens distortion, else wrapped in an UndistortedImageSource.
