@@ -699,10 +699,10 @@ SyntheticScene SyntheticScene::corridor(float length_m) {
                          makeTexture(TextureKind::Checker, V(0.90f, 0.20f + 0.1f * float(k % 4), 0.15f), V(0.95f, 0.95f, 0.90f), 0.06f),
                          rc::kBox);
     }
-    // Pilasters on both walls, between the posters: a wall, a floor and a ceiling leave the motion
-    // along the corridor to depth alone to the objects, and a view turned towards one wall may hold
-    // none of them (depth-only tracking then slides along the corridor, as it does in real ones).
-    // With a pilaster every 1.5 m on each side, every view holds shape across the corridor's axis.
+    // Pilasters on both walls, between the posters. Walls, floor and ceiling are parallel to the
+    // corridor's axis, so depth constrains motion along it only through the objects, and a view turned
+    // towards one wall may see none of them: depth tracking then slides along the corridor (as it does
+    // in real ones). With a pilaster every 1.5 m on each side, every view has surfaces facing the axis.
     const Texture plaster = makeTexture(TextureKind::Noise, V(0.82f, 0.80f, 0.76f), V(0.66f, 0.64f, 0.60f), 0.2f, 65);
     for (float x = 1.55f; x < length_m - 0.3f; x += 1.5f)
         for (const float side : {-1.f, 1.f})
