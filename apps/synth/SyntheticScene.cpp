@@ -539,21 +539,25 @@ RenderedFrame SyntheticScene::render(const PinholeCamera& camera,
             // Camera ray with z = 1, so the hit parameter is the depth itself.
             const Eigen::Vector3f dir = R * camera.ray(static_cast<float>(u), static_cast<float>(v));
             Hit hit;
-            if (intersect(origin, dir, hit)) {
+            const bool found = intersect(origin, dir, hit);
+            if (found) {
                 frame.depth[idx] = hit.t;
                 frame.cosIncidence[idx] = std::abs(hit.normal.dot(dir)) / dir.norm();
                 frame.label[idx] = primitives_[hit.primitive].classId;
             }
             Eigen::Vector3f colour = Eigen::Vector3f::Zero();
-            // One colour sample is the depth ray itself (du = dv = 0): its hit is the one above.
-            if (n == 1 && frame.depth[idx] > 0.0f) colour = shade(origin + hit.t * dir, hit);
-            for (int sy = 0; sy < n && n > 1; ++sy) {
-                for (int sx = 0; sx < n; ++sx) {
-                    const float du = (sx + 0.5f) / n - 0.5f, dv = (sy + 0.5f) / n - 0.5f;
-                    const Eigen::Vector3f sampleDir = R * camera.ray(u + du, v + dv);
-                    Hit sample;
-                    if (intersect(origin, sampleDir, sample))
-                        colour += shade(origin + sample.t * sampleDir, sample);
+            if (n == 1) {
+                // The one colour sample is the depth ray itself (du = dv = 0): its hit is the one above.
+                if (found) colour = shade(origin + hit.t * dir, hit);
+            } else {
+                for (int sy = 0; sy < n; ++sy) {
+                    for (int sx = 0; sx < n; ++sx) {
+                        const float du = (sx + 0.5f) / n - 0.5f, dv = (sy + 0.5f) / n - 0.5f;
+                        const Eigen::Vector3f sampleDir = R * camera.ray(u + du, v + dv);
+                        Hit sample;
+                        if (intersect(origin, sampleDir, sample))
+                            colour += shade(origin + sample.t * sampleDir, sample);
+                    }
                 }
             }
             frame.rgb[idx] = gammaEncode(colour / static_cast<float>(n * n));
