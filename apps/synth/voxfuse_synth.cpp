@@ -1,6 +1,7 @@
-// voxfuse_synth: renders the synthetic room as an RGB-D sequence with exact
-// ground truth, in the TUM RGB-D layout or as InfiniTAM-style PPM/PGM files;
-// in the TUM layout also with exact per-pixel semantic class images.
+// voxfuse_synth: renders the synthetic room (or the long corridor walk of the
+// swapping benchmark) as an RGB-D sequence with exact ground truth, in the TUM
+// RGB-D layout or as InfiniTAM-style PPM/PGM files; in the TUM layout also with
+// exact per-pixel semantic class images.
 #include "CameraPath.h"
 #include "KinectDepthModel.h"
 #include "SyntheticScene.h"
@@ -28,6 +29,8 @@ namespace {
 
 struct Options {
     std::string outDir;
+    std::string scene = "room";
+    float corridorLength = 20.0f;
     int frames = 100;
     int width = 640;
     int height = 480;
@@ -128,15 +131,16 @@ void writePgm16(const fs::path& path, int width, int height, const std::vector<s
     if (!out) throw std::runtime_error("cannot write " + path.string());
 }
 
-void writeTumHeader(std::ofstream& out, const std::string& what, const std::string& columns) {
-    out << "# " << what << "\n# file: 'voxfuse synthetic_room (voxfuse_synth)'\n# " << columns << "\n";
+// `source` names the rendered sequence in every header ("synthetic_room", "synthetic_corridor").
+void writeTumHeader(std::ofstream& out, const std::string& source, const std::string& what, const std::string& columns) {
+    out << "# " << what << "\n# file: 'voxfuse " << source << " (voxfuse_synth)'\n# " << columns << "\n";
 }
 
 // classes.txt: "id name" per semantic class of the scene, as the label images use them.
-void writeClasses(const fs::path& path, const SyntheticScene& scene) {
+void writeClasses(const fs::path& path, const std::string& source, const SyntheticScene& scene) {
     std::ofstream out = openText(path);
     out << "# semantic classes of the label images (labels/*.png, one class id per pixel)\n"
-           "# file: 'voxfuse synthetic_room (voxfuse_synth)'\n"
+           "# file: 'voxfuse " << source << " (voxfuse_synth)'\n"
            "# id name   (0 = unlabelled: no surface)\n";
     for (const SemanticClass& c : scene.classes()) out << c.id << " " << c.name << "\n";
 }
@@ -162,15 +166,18 @@ int run(const Options& opt) {
 
     // Render from the scene as read back from scene.txt, so the file is the
     // complete and exact description of what was rendered.
-    SyntheticScene::defaultRoom().write((out / "scene.txt").string());
+    const bool corridor = opt.scene == "corridor";
+    const std::string source = corridor ? "synthetic_corridor" : "synthetic_room";
+    (corridor ? SyntheticScene::corridor(opt.corridorLength) : SyntheticScene::defaultRoom()).write((out / "scene.txt").string());
     const SyntheticScene scene = SyntheticScene::read((out / "scene.txt").string());
     if (labels) {
         checkClassesFitLabelImages(scene);
-        writeClasses(out / "classes.txt", scene);
+        writeClasses(out / "classes.txt", source, scene);
     }
 
     const PinholeCamera camera = PinholeCamera::kinectV1(opt.width, opt.height);
-    const CameraPath path;
+    const CameraPath room_path;
+    const CorridorWalk corridor_walk(opt.corridorLength, opt.frames);
     KinectDepthModel::Params depthParams;
     depthParams.fx = camera.fx;
     std::seed_seq depthSeed{opt.seed, 1u}, colourSeed{opt.seed, 2u};
@@ -183,19 +190,19 @@ int run(const Options& opt) {
     writeCalib(out / "calib.txt", camera, disparityLine.str());
 
     std::ofstream groundTruth = openText(out / "groundtruth.txt");
-    writeTumHeader(groundTruth, "ground truth trajectory (camera-to-world, exact)",
+    writeTumHeader(groundTruth, source, "ground truth trajectory (camera-to-world, exact)",
                    "timestamp tx ty tz qx qy qz qw");
     std::ofstream rgbList, depthList, associations, labelList;
     if (tum) {
         rgbList = openText(out / "rgb.txt");
         depthList = openText(out / "depth.txt");
         associations = openText(out / "associations.txt");
-        writeTumHeader(rgbList, "color images", "timestamp filename");
-        writeTumHeader(depthList, "depth maps", "timestamp filename");
+        writeTumHeader(rgbList, source, "color images", "timestamp filename");
+        writeTumHeader(depthList, source, "depth maps", "timestamp filename");
     }
     if (labels) {
         labelList = openText(out / "labels.txt");
-        writeTumHeader(labelList, "semantic labels (class ids, see classes.txt)", "timestamp filename");
+        writeTumHeader(labelList, source, "semantic labels (class ids, see classes.txt)", "timestamp filename");
     }
 
     const std::string rgbExt = opt.rgbFormat == "png" ? ".png" : ".jpg";
@@ -206,7 +213,7 @@ int run(const Options& opt) {
 
     for (int i = 0; i < opt.frames; ++i) {
         const double timestamp = kFirstTimestamp + i / CameraPath::kFps;
-        const PoseRecord pose = makePoseRecord(timestamp, path.pose(i));
+        const PoseRecord pose = makePoseRecord(timestamp, corridor ? corridor_walk.pose(i) : room_path.pose(i));
         groundTruth << pose.line << "\n";
 
         const RenderedFrame frame = scene.render(camera, pose.pose, opt.colourSamples);
@@ -259,10 +266,15 @@ int run(const Options& opt) {
 }  // namespace
 
 int main(int argc, char** argv) {
-    CLI::App app{"Render the VoxFuse synthetic room as an RGB-D sequence with exact ground truth"};
+    CLI::App app{"Render the VoxFuse synthetic room, or a walk down a corridor and back, as an RGB-D sequence with exact ground truth"};
     app.option_defaults()->always_capture_default();  // show defaults in --help
     Options opt;
     app.add_option("--out", opt.outDir, "Output directory")->required();
+    app.add_option("--scene", opt.scene,
+                   "room: the orbit of the bundled room; corridor: a walk down a corridor and back in --frames "
+                   "frames, a map several times a bounded active memory (swapping benchmark: --frames 1200)")
+        ->check(CLI::IsMember({"room", "corridor"}));
+    app.add_option("--corridor-length", opt.corridorLength, "Length of the corridor (m)")->check(CLI::Range(2.0f, 1000.0f));
     app.add_option("--frames", opt.frames, "Number of frames (30 fps)")->check(CLI::PositiveNumber);
     app.add_option("--width", opt.width, "Image width (intrinsics scale with it)")->check(CLI::PositiveNumber);
     app.add_option("--height", opt.height, "Image height")->check(CLI::PositiveNumber);
