@@ -5,8 +5,9 @@
 // Integration gives a voxel a signed distance below +1 when it projects into a pixel with depth d and
 // its own depth z lies in [d - mu, d + mu). Those voxels lie in the pixel's footprint between the
 // depths d - mu and d + mu: within half a pixel (sideways) of the segment of the pixel's centre ray
-// between those depths. Stage 1 samples that segment and visits every block holding a voxel centre
-// within (half a pixel + half a sample spacing) of a sample, so no block such a voxel lies in is missed.
+// between those depths. Stage 1 visits every block whose box of voxel centres, grown by that half
+// pixel and one voxel (the voxels' neighbours) on every axis, the segment passes through: no block
+// such a voxel or its neighbour lies in is missed.
 
 #include <cstdint>
 
@@ -29,14 +30,24 @@ struct DepthSegmentFrame {
     float min_depth_m, max_depth_m;  // depth samples outside are ignored (as integration does)
     float near_m;              // segments start no closer than this
     float margin_voxels_per_m; // half a pixel's diagonal footprint per metre of depth, in voxels
-    float step_voxels;         // spacing of the samples along the segment
 };
 
 // Segments beyond this many voxels from the origin need blocks no entry can store (int16 coordinates).
 constexpr float kAddressableVoxelRange = float((kMaxBlockCoordinate + 1) * kBlockSide);
 
-// Calls visit(Vec3i block) for every block pixel (x, y) needs (see above); a block may be visited more
-// than once. A segment beyond the addressable range visits one non-addressable block instead.
+// Beyond the footprint, blocks get one voxel more on every side: the marching-cubes cells and the
+// trilinear reads around a voxel the band updates reach its neighbours, which lie in front of their
+// own pixel's depth at silhouettes (and would otherwise stay unallocated, leaving holes where the
+// dense index closes the surface). Plus float rounding of the transforms: far above float's error at
+// the coordinates an int16 block can have.
+constexpr float kSegmentMarginSlackVoxels = 1.01f;
+
+// Calls visit(Vec3i block) once for every block pixel (x, y) needs (see above). A segment beyond the
+// addressable range visits one non-addressable block instead.
+//
+// The segment a -> b (grid units) is 2 mu long, a block or two: its bounding box, grown by the margin,
+// holds a handful of candidate blocks, and each is kept when the segment meets its grown box (slab
+// test). Neighbouring pixels mostly need the same blocks; the caller remembers the ones it has seen.
 template <class Visit>
 VF_HOST_DEVICE inline void forEachBlockOnDepthSegment(const DepthSegmentFrame& f, int x, int y, Visit& visit) {
     const Intrinsics& in = f.intrinsics;
@@ -52,31 +63,40 @@ VF_HOST_DEVICE inline void forEachBlockOnDepthSegment(const DepthSegmentFrame& f
             visit(outside);
             return;
         }
+    // Half a pixel at the far end is the widest the footprint gets along the segment.
+    const float margin = f.margin_voxels_per_m * z1 + kSegmentMarginSlackVoxels;
     const Vec3f ab = b - a;
-    const int steps = 1 + int(length(ab) / f.step_voxels);
-    const float margin = f.margin_voxels_per_m * z1 + 0.5f * length(ab) / float(steps) + 1e-3f;
-
-    // Consecutive samples mostly cover the same blocks: skip those visited for the last few samples.
-    Vec3i recent[8];
-    int recent_count = 0, recent_next = 0;
-    for (int i = 0; i <= steps; ++i) {
-        const Vec3f p = a + ab * (float(i) / float(steps));
-        // Blocks of the voxel centres (integer grid points) within `margin` of p along every axis.
-        const Vec3i lo{int(ceilf(p.x - margin)) >> 3, int(ceilf(p.y - margin)) >> 3, int(ceilf(p.z - margin)) >> 3};
-        const Vec3i hi{int(floorf(p.x + margin)) >> 3, int(floorf(p.y + margin)) >> 3, int(floorf(p.z + margin)) >> 3};
-        for (int bz = lo.z; bz <= hi.z; ++bz)
-            for (int by = lo.y; by <= hi.y; ++by)
-                for (int bx = lo.x; bx <= hi.x; ++bx) {
-                    const Vec3i block{bx, by, bz};
-                    bool seen = false;
-                    for (int r = 0; r < recent_count; ++r) seen = seen || recent[r] == block;
-                    if (seen) continue;
-                    recent[recent_next] = block;
-                    recent_next = (recent_next + 1) & 7;
-                    recent_count = recent_count < 8 ? recent_count + 1 : 8;
-                    visit(block);
-                }
+    Vec3i first, last;
+    for (int k = 0; k < 3; ++k) {
+        const float lo = (a[k] < b[k] ? a[k] : b[k]) - margin, hi = (a[k] < b[k] ? b[k] : a[k]) + margin;
+        // Block c covers voxel centres [8c, 8c + 7].
+        first[k] = int(ceilf((lo - float(kBlockSide - 1)) / float(kBlockSide)));
+        last[k] = int(floorf(hi / float(kBlockSide)));
     }
+    for (int bz = first.z; bz <= last.z; ++bz)
+        for (int by = first.y; by <= last.y; ++by)
+            for (int bx = first.x; bx <= last.x; ++bx) {
+                const Vec3i block{bx, by, bz};
+                // The part of the segment (t in [0, 1]) inside the block's grown box, axis by axis.
+                float t_in = 0.f, t_out = 1.f;
+                for (int k = 0; k < 3; ++k) {
+                    const float lo = float(block[k] * kBlockSide) - margin, hi = float(block[k] * kBlockSide + kBlockSide - 1) + margin;
+                    if (ab[k] == 0.f) {
+                        if (a[k] < lo || a[k] > hi) t_out = -1.f;
+                        continue;
+                    }
+                    float t_lo = (lo - a[k]) / ab[k], t_hi = (hi - a[k]) / ab[k];
+                    if (t_lo > t_hi) {
+                        const float s = t_lo;
+                        t_lo = t_hi;
+                        t_hi = s;
+                    }
+                    // Comparisons, not fminf/fmaxf (library calls on the host); no value is NaN.
+                    t_in = t_lo > t_in ? t_lo : t_in;
+                    t_out = t_hi < t_out ? t_hi : t_out;
+                }
+                if (t_in <= t_out) visit(block);
+            }
 }
 
 // Blocks visited recently by one loop element (direct-mapped, `Slots` a power of two): neighbouring
