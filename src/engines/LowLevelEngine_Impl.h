@@ -3,7 +3,9 @@
 // instantiated by src/cpu/LowLevelEngine_CPU.cpp and cuda/LowLevelEngine_CUDA.cu. One pixel of the
 // output per element (shared/LowLevel.h).
 
+#include <cmath>
 #include <memory>
+#include <string>
 
 #include "core/DeviceScratch.h"
 #include "engines/DeviceImages.h"
@@ -17,6 +19,19 @@ template <class T>
 T* outputOn(Device where, Image<T>& image, Vec2i size) {
     image.resize(size, where == Device::CPU || image.memory().onHost(), where == Device::CUDA);
     return image.memory().data(where);
+}
+
+// The per-pass constants of the bilateral filter; ConfigError for a window it cannot hold.
+inline BilateralWeights bilateralWeightsFor(const BilateralFilterParams& p) {
+    if (p.radius_px < 0 || p.radius_px > kMaxBilateralRadius || !(p.sigma_space_px > 0.f) || !(p.sigma_depth_m > 0.f))
+        throw ConfigError("bilateral filter: the radius must be 0.." + std::to_string(kMaxBilateralRadius) +
+                          " pixels and both sigmas positive (got radius " + std::to_string(p.radius_px) + ", sigmas " +
+                          std::to_string(p.sigma_space_px) + " px and " + std::to_string(p.sigma_depth_m) + " m)");
+    BilateralWeights w{};
+    w.radius_px = p.radius_px;
+    for (int k = 0; k <= kMaxBilateralRadius; ++k) w.spatial[k] = std::exp(-float(k * k) / (2.f * p.sigma_space_px * p.sigma_space_px));
+    w.inv_2_sigma_depth_sq = 1.f / (2.f * p.sigma_depth_m * p.sigma_depth_m);
+    return w;
 }
 
 template <class TDevice>
@@ -34,7 +49,12 @@ public:
     void bilateralFilterDepth(const Image<float>& in, Image<float>& out, const BilateralFilterParams& p) override {
         const float* src = imageOn(kDevice, in, float_staging_);
         float* dst = outputOn(kDevice, out, in.size());
-        TDevice::parallelFor(int(in.pixelCount()), BilateralFilterPixels{src, in.size(), p.radius_px, p.sigma_space_px, p.sigma_depth_m, dst});
+        if constexpr (TDevice::kOneThreadPerItem) {
+            TDevice::parallelFor(int(in.pixelCount()), BilateralFilterPixels{src, in.size(), bilateralWeightsFor(p), dst});
+        } else {
+            const BilateralFilterSpans spans{src, in.size(), bilateralWeightsFor(p), dst};
+            TDevice::parallelFor(spans.elementCount(), spans);
+        }
     }
 
     void downsampleDepth(const Image<float>& in, Image<float>& out, float max_diff_m) override {

@@ -17,6 +17,7 @@
 #include "core/CpuDevice.h"
 #include "engines/AllocationEngine_Impl.h"
 #include "engines/IntegrationEngine_Impl.h"
+#include "engines/LowLevelEngine_Impl.h"
 #include "engines/MeshingEngine_Impl.h"
 #include "engines/RaycastEngine_Impl.h"
 #include "voxfuse/objects/Voxel.h"
@@ -165,6 +166,26 @@ TYPED_TEST(GpuShapesOnCpuTest, DenseIntegrationVoxelByVoxelEqualsTheClippedRows)
     voxel_raycast->raycast(voxels, test::kinectIntrinsics(160, 120), poses().back(), rb);
     expectSameRaycast(ra, rb);
     expectSameSurfaceFromBothTeamShapes(rows);
+}
+
+// The bilateral filter by spans of a row, taps outer (CPU), and pixel by pixel (GPU): the same bits, on
+// a rendered frame with holes, an image width that is no multiple of the span, and every window size.
+TEST(GpuShapesOnCpuLowLevelTest, BilateralFilterBySpansEqualsPixelByPixel) {
+    static const synth::SyntheticScene world = synth::SyntheticScene::boxAndSphere();
+    const Intrinsics intrinsics = test::kinectIntrinsics(330, 250);
+    View view = test::renderView(world, intrinsics, poses()[0], false);
+    for (int i = 0; i < int(view.depth.pixelCount()); i += 13) view.depth.host()[i] = 0.f;  // dropouts
+    LowLevelEngineOn<CpuDevice> spans;
+    LowLevelEngineOn<CpuDeviceWithGpuShapes> pixels;
+    for (int radius = 0; radius <= kMaxBilateralRadius; ++radius) {
+        BilateralFilterParams p;
+        p.radius_px = radius;
+        Image<float> a, b;
+        spans.bilateralFilterDepth(view.depth, a, p);
+        pixels.bilateralFilterDepth(view.depth, b, p);
+        ASSERT_EQ(a.size(), b.size());
+        EXPECT_EQ(0, std::memcmp(a.host(), b.host(), a.pixelCount() * sizeof(float))) << "radius " << radius;
+    }
 }
 
 }  // namespace

@@ -2,8 +2,12 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+
 #include "SyntheticViews.h"
 #include "voxfuse/engines/LowLevelEngine.h"
+#include "voxfuse/shared/LowLevel.h"
 
 namespace voxfuse {
 namespace {
@@ -42,6 +46,44 @@ TEST(LowLevelEngineTest, BilateralFilterKeepsPlanesAndEdges) {
     EXPECT_NEAR(filtered.at(9, 5), 1.0f, 1e-4f) << "the edge is not smeared";
     EXPECT_NEAR(filtered.at(10, 5), 2.0f, 1e-4f);
     EXPECT_NEAR(filtered.at(5, 5), 1.0f, 1e-6f);
+}
+
+// KinectFusion's filter written plainly, with the library's exp: the reference for the engine's
+// separable spatial weights and inline exponential.
+float referenceBilateral(const Image<float>& depth, int x, int y, const BilateralFilterParams& p) {
+    const float centre = depth.at(x, y);
+    if (!(centre > 0.f)) return 0.f;
+    double sum = 0.0, weights = 0.0;
+    for (int dy = -p.radius_px; dy <= p.radius_px; ++dy)
+        for (int dx = -p.radius_px; dx <= p.radius_px; ++dx) {
+            const int xx = x + dx, yy = y + dy;
+            if (xx < 0 || yy < 0 || xx >= depth.width() || yy >= depth.height() || !(depth.at(xx, yy) > 0.f)) continue;
+            const double diff = depth.at(xx, yy) - centre;
+            const double w = std::exp(-double(dx * dx + dy * dy) / (2.0 * p.sigma_space_px * p.sigma_space_px) -
+                                      diff * diff / (2.0 * p.sigma_depth_m * p.sigma_depth_m));
+            sum += w * depth.at(xx, yy);
+            weights += w;
+        }
+    return float(sum / weights);
+}
+
+TEST(LowLevelEngineTest, BilateralFilterMatchesTheFilterWrittenPlainly) {
+    auto engine = makeLowLevelEngine(Device::CPU);
+    Image<float> depth({64, 48}), filtered;
+    // A slanted surface with ripples of a few centimetres (within the range sigma), a step, and holes.
+    for (int y = 0; y < depth.height(); ++y)
+        for (int x = 0; x < depth.width(); ++x)
+            depth.at(x, y) = (x % 7 == 3 && y % 5 == 1) ? 0.f : 1.f + 0.01f * x + 0.03f * std::sin(0.9f * x + 1.7f * y) + (y > 30 ? 0.4f : 0.f);
+    for (const BilateralFilterParams p : {BilateralFilterParams{}, BilateralFilterParams{5, 3.f, 0.02f}, BilateralFilterParams{0, 1.f, 0.01f}}) {
+        engine->bilateralFilterDepth(depth, filtered, p);
+        double worst = 0.0;
+        for (int y = 0; y < depth.height(); ++y)
+            for (int x = 0; x < depth.width(); ++x) worst = std::max(worst, double(std::fabs(filtered.at(x, y) - referenceBilateral(depth, x, y, p))));
+        EXPECT_LT(worst, 2e-6) << "radius " << p.radius_px;
+    }
+    BilateralFilterParams too_wide;
+    too_wide.radius_px = kMaxBilateralRadius + 1;
+    EXPECT_THROW(engine->bilateralFilterDepth(depth, filtered, too_wide), ConfigError);
 }
 
 TEST(LowLevelEngineTest, DownsampleAveragesValidSamplesOnOneSurface) {

@@ -10,27 +10,36 @@
 
 namespace voxfuse {
 
+// The bilateral filter's window reaches at most this many pixels from its centre.
+constexpr int kMaxBilateralRadius = 7;
+
+// What every pixel of one bilateral filter pass shares: the spatial weight is separable, so one
+// factor per pixel offset, e^(-k^2 / 2 sigma_space^2), made once per pass.
+struct BilateralWeights {
+    int radius_px;                               // <= kMaxBilateralRadius
+    float spatial[kMaxBilateralRadius + 1];      // by |dx| and |dy|
+    float inv_2_sigma_depth_sq;                  // 1 / (2 sigma_depth^2), 1/m^2
+};
+
 // Edge-preserving smoothing of one depth pixel (KinectFusion's bilateral filter). Invalid (0) pixels
 // stay invalid and never contribute.
-VF_HOST_DEVICE inline float bilateralFilterDepthPixel(const float* depth, Vec2i size, int x, int y, int radius,
-                                                      float sigma_space_px, float sigma_depth_m) {
+VF_HOST_DEVICE inline float bilateralFilterDepthPixel(const float* depth, Vec2i size, int x, int y, const BilateralWeights& w) {
     const float centre = depth[x + y * size.x];
     if (!(centre > 0.f)) return 0.f;
-    const float inv_2ss = 1.f / (2.f * sigma_space_px * sigma_space_px);
-    const float inv_2sd = 1.f / (2.f * sigma_depth_m * sigma_depth_m);
+    const int r = w.radius_px;
+    const int y0 = y - r > 0 ? y - r : 0, y1 = y + r < size.y - 1 ? y + r : size.y - 1;
+    const int x0 = x - r > 0 ? x - r : 0, x1 = x + r < size.x - 1 ? x + r : size.x - 1;
     float sum = 0.f, weight_sum = 0.f;
-    for (int dy = -radius; dy <= radius; ++dy) {
-        const int yy = y + dy;
-        if (yy < 0 || yy >= size.y) continue;
-        for (int dx = -radius; dx <= radius; ++dx) {
-            const int xx = x + dx;
-            if (xx < 0 || xx >= size.x) continue;
-            const float d = depth[xx + yy * size.x];
+    for (int yy = y0; yy <= y1; ++yy) {
+        const float wy = w.spatial[yy > y ? yy - y : y - yy];
+        const float* row = depth + yy * size.x;
+        for (int xx = x0; xx <= x1; ++xx) {
+            const float d = row[xx];
             if (!(d > 0.f)) continue;
             const float diff = d - centre;
-            const float w = expf(-float(dx * dx + dy * dy) * inv_2ss - diff * diff * inv_2sd);
-            sum += w * d;
-            weight_sum += w;
+            const float weight = wy * w.spatial[xx > x ? xx - x : x - xx] * expOfNegative(diff * diff * w.inv_2_sigma_depth_sq);
+            sum += weight * d;
+            weight_sum += weight;
         }
     }
     return sum / weight_sum;  // weight_sum >= 1 (the centre itself)
@@ -122,11 +131,51 @@ struct ConvertDepthPixels {
 struct BilateralFilterPixels {
     const float* in;
     Vec2i size;
-    int radius_px;
-    float sigma_space_px, sigma_depth_m;
+    BilateralWeights weights;
     float* out;
-    VF_HOST_DEVICE void operator()(int i) const {
-        out[i] = bilateralFilterDepthPixel(in, size, i % size.x, i / size.x, radius_px, sigma_space_px, sigma_depth_m);
+    VF_HOST_DEVICE void operator()(int i) const { out[i] = bilateralFilterDepthPixel(in, size, i % size.x, i / size.x, weights); }
+};
+
+// The CPU's launch shape of the same filter: element e is a span of up to kBilateralSpan pixels of one
+// row, taken tap by tap across the span (a loop the compiler vectorises). Every pixel gets the same
+// terms, added in the same order, as in bilateralFilterDepthPixel (a skipped tap adds +0): the images
+// are bit-identical.
+constexpr int kBilateralSpan = 128;
+struct BilateralFilterSpans {
+    const float* in;
+    Vec2i size;
+    BilateralWeights weights;
+    float* out;
+
+    VF_HOST_DEVICE int spansPerRow() const { return (size.x + kBilateralSpan - 1) / kBilateralSpan; }
+    VF_HOST_DEVICE int elementCount() const { return spansPerRow() * size.y; }
+    VF_HOST_DEVICE void operator()(int e) const {
+        const int y = e / spansPerRow(), x0 = (e % spansPerRow()) * kBilateralSpan;
+        const int n = size.x - x0 < kBilateralSpan ? size.x - x0 : kBilateralSpan;
+        const float* centre = in + y * size.x + x0;
+        float sum[kBilateralSpan], weight_sum[kBilateralSpan];
+        for (int i = 0; i < n; ++i) sum[i] = weight_sum[i] = 0.f;
+        const int r = weights.radius_px;
+        const int y0 = y - r > 0 ? y - r : 0, y1 = y + r < size.y - 1 ? y + r : size.y - 1;
+        for (int yy = y0; yy <= y1; ++yy) {
+            const float wy = weights.spatial[yy > y ? yy - y : y - yy];
+            for (int dx = -r; dx <= r; ++dx) {
+                const float w_tap = wy * weights.spatial[dx > 0 ? dx : -dx];
+                const float* tap = in + yy * size.x + x0 + dx;
+                // The span's pixels whose tap lies inside the row.
+                const int i0 = x0 + dx < 0 ? -(x0 + dx) : 0;
+                const int i1 = size.x - (x0 + dx) < n ? size.x - (x0 + dx) : n;
+                for (int i = i0; i < i1; ++i) {
+                    const float d = tap[i], diff = d - centre[i];
+                    const float w = w_tap * expOfNegative(diff * diff * weights.inv_2_sigma_depth_sq);
+                    const bool valid = d > 0.f;
+                    sum[i] += valid ? w * d : 0.f;
+                    weight_sum[i] += valid ? w : 0.f;
+                }
+            }
+        }
+        float* out_span = out + y * size.x + x0;
+        for (int i = 0; i < n; ++i) out_span[i] = centre[i] > 0.f ? sum[i] / weight_sum[i] : 0.f;
     }
 };
 
