@@ -32,6 +32,11 @@ IntegrationFrame makeIntegrationFrame(const SceneParams& params, const View& vie
     f.max_depth_m = params.view_frustum_max_m;
     f.near_m = kIntegrationNearM;
     f.stop_at_max_weight = params.stop_integrating_at_max_weight;
+    const Mat4f& T = f.T_depth_world;
+    const float s = params.voxel_size_m;
+    f.voxel_step_x = Vec3f{T.m[0], T.m[4], T.m[8]} * s;
+    f.voxel_step_y = Vec3f{T.m[1], T.m[5], T.m[9]} * s;
+    f.voxel_step_z = Vec3f{T.m[2], T.m[6], T.m[10]} * s;
     return f;
 }
 

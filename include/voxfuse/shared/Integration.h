@@ -30,7 +30,24 @@ struct IntegrationFrame {
     float min_depth_m, max_depth_m;  // depth samples outside are ignored
     float near_m;                    // voxels closer to the camera are not updated
     bool stop_at_max_weight;
+    Vec3f voxel_step_x, voxel_step_y, voxel_step_z;  // one voxel along world x, y, z in depth camera coordinates (m)
 };
+
+// ---- A hash block's voxels in depth camera coordinates ----
+// The block corner's position plus the voxel's offset in the block, in this one form on both devices:
+// the CPU, which takes a block row by row, shares the corner's and the row's terms among the voxels of
+// a row and still computes the bits the GPU computes voxel by voxel.
+
+VF_HOST_DEVICE inline Vec3f blockCornerInDepthCamera(const IntegrationFrame& f, Vec3i corner) {
+    return transformPoint(f.T_depth_world, toFloat(corner) * f.voxel_size_m);
+}
+// The offset of the row (y, z) of a block.
+VF_HOST_DEVICE inline Vec3f blockRowOffset(const IntegrationFrame& f, int y, int z) {
+    return f.voxel_step_y * float(y) + f.voxel_step_z * float(z);
+}
+VF_HOST_DEVICE inline Vec3f blockVoxelInDepthCamera(const IntegrationFrame& f, Vec3f corner_cam, Vec3f row_offset, int x) {
+    return corner_cam + (f.voxel_step_x * float(x) + row_offset);
+}
 
 // Bilinear colour lookup; false when the point falls outside the image.
 VF_HOST_DEVICE inline bool sampleColorBilinear(const Vec4u8* rgb, Vec2i size, Vec2f px, Vec3f& out) {
@@ -71,14 +88,12 @@ VF_HOST_DEVICE inline bool frustumRowRange(const IntegrationFrame& f, Vec3f row_
     return x_begin < x_end;
 }
 
-// Updates `voxel` (grid position `pos`, centre at pos * voxel size) with the frame. Returns eta, the
-// measured depth minus the voxel's depth along the optical axis, or a large negative number when the
-// voxel gets no update.
+// Updates `voxel` (grid position `pos`, centre at pos * voxel size, at p_cam in depth camera
+// coordinates) with the frame. Returns eta, the measured depth minus the voxel's depth along the
+// optical axis, or a large negative number when the voxel gets no update.
 template <class TVoxel>
-VF_HOST_DEVICE inline float integrateVoxel(TVoxel& voxel, Vec3i pos, const IntegrationFrame& f) {
+VF_HOST_DEVICE inline float integrateVoxelAt(TVoxel& voxel, Vec3i pos, Vec3f p_cam, const IntegrationFrame& f) {
     const float kNoUpdate = -1e30f;
-    const Vec3f p_world = toFloat(pos) * f.voxel_size_m;
-    const Vec3f p_cam = transformPoint(f.T_depth_world, p_world);
     if (p_cam.z < f.near_m) return kNoUpdate;
     const int depth_pixel = f.depth_intrinsics.nearestPixelIndex(f.depth_intrinsics.project(p_cam));
     if (depth_pixel < 0) return kNoUpdate;
@@ -99,6 +114,7 @@ VF_HOST_DEVICE inline float integrateVoxel(TVoxel& voxel, Vec3i pos, const Integ
 
     // Colour and class belong to the surface: only voxels close to the zero crossing take them.
     [[maybe_unused]] const bool near_surface = eta < 0.5f * f.mu_m && eta > -0.5f * f.mu_m;
+    [[maybe_unused]] const Vec3f p_world = toFloat(pos) * f.voxel_size_m;
     if constexpr (TVoxel::hasColor) {
         if (f.rgb != nullptr && near_surface) {
             const Vec3f p_rgb = transformPoint(f.T_rgb_world, p_world);
@@ -127,6 +143,15 @@ VF_HOST_DEVICE inline float integrateVoxel(TVoxel& voxel, Vec3i pos, const Integ
     return eta;
 }
 
+// integrateVoxelAt() for a voxel given by its grid position alone (the dense array): placed through the
+// block it would lie in under the hash, so that both indexes fuse the same bits.
+template <class TVoxel>
+VF_HOST_DEVICE inline float integrateVoxel(TVoxel& voxel, Vec3i pos, const IntegrationFrame& f) {
+    const Vec3i in_block{pos.x & (kBlockSide - 1), pos.y & (kBlockSide - 1), pos.z & (kBlockSide - 1)};
+    const Vec3f corner_cam = blockCornerInDepthCamera(f, pos - in_block);
+    return integrateVoxelAt(voxel, pos, blockVoxelInDepthCamera(f, corner_cam, blockRowOffset(f, in_block.y, in_block.z), in_block.x), f);
+}
+
 // ---- Loop bodies of the device layers ----
 
 // For the launchers' maxOf: the depth of pixel i when the integration uses it, else 0.
@@ -153,9 +178,25 @@ struct IntegrateHashVoxels {
         const HashEntry& e = entries[visible_entries[i / kElementsPerBlock]];
         TVoxel* block = voxels + (long long)e.ptr * kBlockVoxelCount;
         const Vec3i corner{e.pos.x * kBlockSide, e.pos.y * kBlockSide, e.pos.z * kBlockSide};
-        const int first = (i % kElementsPerBlock) * VoxelsPerElement;
-        for (int v = first; v < first + VoxelsPerElement; ++v)
-            integrateVoxel(block[v], corner + Vec3i{v & 7, (v >> 3) & 7, v >> 6}, frame);
+        // A copy the voxel stores cannot alias: byte stores may alias any member of *this, which would
+        // reload every frame constant after each voxel.
+        const IntegrationFrame f = frame;
+        const Vec3f corner_cam = blockCornerInDepthCamera(f, corner);
+        if constexpr (VoxelsPerElement == kBlockVoxelCount) {
+            for (int z = 0; z < kBlockSide; ++z)
+                for (int y = 0; y < kBlockSide; ++y) {
+                    const Vec3f row = blockRowOffset(f, y, z);
+                    TVoxel* line = block + (y + z * kBlockSide) * kBlockSide;
+                    for (int x = 0; x < kBlockSide; ++x)
+                        integrateVoxelAt(line[x], corner + Vec3i{x, y, z}, blockVoxelInDepthCamera(f, corner_cam, row, x), f);
+                }
+        } else {
+            const int first = (i % kElementsPerBlock) * VoxelsPerElement;
+            for (int v = first; v < first + VoxelsPerElement; ++v) {
+                const int x = v & 7, y = (v >> 3) & 7, z = v >> 6;
+                integrateVoxelAt(block[v], corner + Vec3i{x, y, z}, blockVoxelInDepthCamera(f, corner_cam, blockRowOffset(f, y, z), x), f);
+            }
+        }
     }
 };
 
