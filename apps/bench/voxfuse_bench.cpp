@@ -79,6 +79,7 @@ std::unique_ptr<ImageSource> openSource(const std::string& path) {
 int main(int argc, char** argv) {
     CLI::App cli{"Per-stage timings of the VoxFuse pipeline on a sequence."};
     std::string source_path, json_path = "voxfuse_bench.json", timings_path, index = "hash", poses = "track", device = "cpu";
+    TrackerOverrides tracker;  // --tracker, --tracker-config
 #if VOXFUSE_WITH_IO
     app::LabelInputOptions labels;  // and --voxel
 #else
@@ -125,6 +126,9 @@ int main(int argc, char** argv) {
     cli.add_option("--swap-blocks-per-frame", s.swap.blocks_per_frame, "swapping: blocks moved each way per frame at most")
         ->capture_default_str()->check(app::intIn(1, 1 << 20));
     cli.add_option("--json", json_path, "where to write the JSON report")->capture_default_str();
+    cli.add_option("--tracker", tracker.kind, "icp | color | ren | rgbd (default: ren)")->check(CLI::IsMember({"icp", "color", "ren", "rgbd"}));
+    cli.add_option("--tracker-config", tracker.settings_file, "tracker settings file ('key = value' lines, as voxfuse reads them)")
+        ->check(CLI::ExistingFile);
     cli.add_option("--timings", timings_path, "also write every frame's stage times and visible blocks to this JSON file (as voxfuse's timings.json)");
     CLI11_PARSE(cli, argc, argv);
 
@@ -134,6 +138,10 @@ int main(int argc, char** argv) {
             throw ConfigError("--swap-blocks-per-frame needs swapping (--swap, --active-blocks or --swap-file)");
         if (cli.count("--occupancy-pixel-step") > 0 && !(occupancy_settings.resolution_m > 0.f))
             throw ConfigError("--occupancy-pixel-step needs --occupancy");
+        if ((!tracker.kind.empty() || !tracker.settings_file.empty()) && poses != "track")
+            throw ConfigError("--tracker and --tracker-config set the tracker, which --poses groundtruth does not use");
+        tracker.origin = "the --tracker options";
+        s.tracker = trackerSettingsWith(tracker);
         if (max_frames > 0 && max_frames <= warmup)
             throw ConfigError("--frames " + std::to_string(max_frames) + " leaves no frame after the " + std::to_string(warmup) +
                               " warm-up frames (--warmup)");
