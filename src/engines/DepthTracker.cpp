@@ -95,7 +95,8 @@ private:
             low_level_->computeVertexMap(level.depth, level.intrinsics, level.vertices);
             low_level_->computeNormalMap(level.vertices, level.normals, settings_.max_normal_edge_m * float(1 << i));
         }
-        valid_pixels_ = low_level_->countValidDepth(pyramid_[0].depth);
+        // Counted on the pixels the finest level takes terms from, as its inliers are.
+        valid_pixels_ = low_level_->countValidDepth(pyramid_[0].depth, settings_.levels.back().pixel_step);
         return valid_pixels_ > 0;
     }
 
@@ -143,7 +144,8 @@ private:
         for (int it = 0; it < ls.max_iterations; ++it) {
             const Mat4f T_f = pose::toMat4f(T);
             const DepthTermParams params{T_f, T_model_world, model.intrinsics, ls.max_distance_m, min_normal_cos_};
-            depth_eq = kernels_->accumulate(level, model, params, robust ? final_kernel : RobustKernel::None, settings_.robust_scale_m);
+            depth_eq = kernels_->accumulate(level, model, params, robust ? final_kernel : RobustKernel::None, settings_.robust_scale_m,
+                                            ls.pixel_step);
             stats.iterations = it + 1;
             NormalEquations<double> system = depth_eq;
             if (with_color) {

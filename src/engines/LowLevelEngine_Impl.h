@@ -82,8 +82,9 @@ public:
         TDevice::parallelFor(int(in.pixelCount()), CopyPixels<float>{src, dst});
     }
 
-    int countValidDepth(const Image<float>& depth) override {
-        return TDevice::countIf(int(depth.pixelCount()), DepthIsValid{imageOn(kDevice, depth, float_staging_)}, scratch_);
+    int countValidDepth(const Image<float>& depth, int pixel_step) override {
+        const PixelGrid grid = pixelGridOf(depth.size(), pixel_step);
+        return TDevice::countIf(gridSize(depth.size(), pixel_step), DepthIsValid{imageOn(kDevice, depth, float_staging_), grid}, scratch_);
     }
     int countValidPoints(const Image<Vec4f>& points) override {
         return TDevice::countIf(int(points.pixelCount()), PointIsValid{imageOn(kDevice, points, point_staging_)}, scratch_);

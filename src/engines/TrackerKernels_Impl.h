@@ -21,11 +21,11 @@ class DepthTrackerKernelsOn final : public DepthTrackerKernels {
 
 public:
     NormalEquations<double> accumulate(const DepthFrameLevel& level, const RenderState& model, const DepthTermParams& params,
-                                       RobustKernel kernel, float kernel_scale_m) override {
+                                       RobustKernel kernel, float kernel_scale_m, int pixel_step) override {
         const PointToPlaneTerms terms{imageOn(kDevice, level.vertices, vertices_), imageOn(kDevice, level.normals, normals_),
                                       imageOn(kDevice, model.points_world, model_points_), imageOn(kDevice, model.normals_world, model_normals_),
-                                      params};
-        return TDevice::sumNormalEquations(int(level.vertices.pixelCount()), terms, kernel, kernel_scale_m, scratch_);
+                                      params, pixelGridOf(level.vertices.size(), pixel_step)};
+        return TDevice::sumNormalEquations(gridSize(level.vertices.size(), pixel_step), terms, kernel, kernel_scale_m, scratch_);
     }
 
 private:

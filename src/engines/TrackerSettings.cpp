@@ -39,6 +39,7 @@ bool findInvalidSetting(const TrackerSettings& s, std::vector<std::string>& keys
             return fail({"levels"}, "level types are r, t or b");
         if (l.max_iterations < 1 || l.max_iterations > 1000) return fail({"iterations"}, "iterations must be in 1..1000");
         if (!(l.max_distance_m > 0.f && std::isfinite(l.max_distance_m))) return fail({"max_distance_m"}, "distance thresholds must be > 0");
+        if (l.pixel_step < 1 || l.pixel_step > 8) return fail({"pixel_step"}, "pixel steps must be in 1..8");
     }
     if (!(s.max_normal_angle_deg > 0.f && s.max_normal_angle_deg <= 180.f)) return fail({"max_normal_angle_deg"}, "must be in (0, 180]");
     if (!(s.min_rotation_step_rad >= 0.f)) return fail({"min_rotation_step_rad"}, "must be >= 0");
@@ -116,7 +117,7 @@ TrackerSettings parseTrackerSettings(const std::string& text, const std::string&
     TrackerSettings s;
     std::map<std::string, int> line_of;  // key -> line where it was set
     // Per-level lists are applied once the number of levels is known (after the last line).
-    std::vector<double> iterations, distances;
+    std::vector<double> iterations, distances, pixel_steps;
 
     auto number = [](const std::string& v, double& out) { return text::parseDouble(v, out) && std::isfinite(out); };
     auto setFloat = [&](float& field) {
@@ -179,6 +180,7 @@ TrackerSettings parseTrackerSettings(const std::string& text, const std::string&
          }},
         {"iterations", setList(iterations)},
         {"max_distance_m", setList(distances)},
+        {"pixel_step", setList(pixel_steps)},
         {"max_normal_angle_deg", setFloat(s.max_normal_angle_deg)},
         {"min_rotation_step_rad", setFloat(s.min_rotation_step_rad)},
         {"min_translation_step_m", setFloat(s.min_translation_step_m)},
@@ -236,6 +238,11 @@ TrackerSettings parseTrackerSettings(const std::string& text, const std::string&
         l.max_iterations = int(v);
     });
     applyList("max_distance_m", distances, [](TrackerLevel& l, double v) { l.max_distance_m = float(v); });
+    applyList("pixel_step", pixel_steps, [&](TrackerLevel& l, double v) {
+        if (v != std::floor(v) || v < 1 || v > 8)
+            throw ParseError(name, line_of["pixel_step"], "pixel_step: expected integers in 1..8, got " + formatNumber(v));
+        l.pixel_step = int(v);
+    });
 
     std::vector<std::string> keys;
     std::string reason;

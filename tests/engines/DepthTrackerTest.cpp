@@ -93,6 +93,24 @@ TEST_P(DepthTrackerTest, NoiseFrameFailsAndKeepsThePose) {
     for (int k = 0; k < 16; ++k) EXPECT_EQ(state.T_world_camera.m[k], startPose().m[k]) << "pose restored exactly";
 }
 
+// The finest level with every pixel and with every second row and column: the same motion found, and
+// an inlier ratio that means the same (it counts the valid pixels of the grid the terms come from).
+TEST_P(DepthTrackerTest, ASubsampledFinestLevelFindsTheSameMotion) {
+    const Mat4f moved = test::moveInCamera(startPose(), {0.3f, 1.f, -0.2f}, 3.f, {0.03f, 0.02f, -0.02f});
+    TrackingState states[2];
+    for (int step = 1; step <= 2; ++step) {
+        TrackerSettings s = settings();
+        s.levels.back().pixel_step = step;
+        auto tracker = makeTracker(s, device());
+        states[step - 1] = track(*tracker, moved);
+        EXPECT_EQ(states[step - 1].quality, TrackingQuality::Good) << "pixel step " << step;
+        EXPECT_LT(test::translationErrorM(states[step - 1].T_world_camera, moved), 0.001f) << "pixel step " << step;
+        EXPECT_LT(test::rotationErrorDeg(states[step - 1].T_world_camera, moved), 0.05f) << "pixel step " << step;
+    }
+    EXPECT_NEAR(states[1].inlier_ratio, states[0].inlier_ratio, 0.02f);
+    EXPECT_GT(states[1].inlier_ratio, 0.8f);
+}
+
 INSTANTIATE_TEST_SUITE_P(KindsAndDevices, DepthTrackerTest,
                          ::testing::Combine(::testing::Values(TrackerKind::Icp, TrackerKind::Ren, TrackerKind::Rgbd), test::kAllDevices),
                          [](const ::testing::TestParamInfo<std::tuple<TrackerKind, Device>>& info) {

@@ -86,6 +86,17 @@ TEST(LowLevelEngineTest, BilateralFilterMatchesTheFilterWrittenPlainly) {
     EXPECT_THROW(engine->bilateralFilterDepth(depth, filtered, too_wide), ConfigError);
 }
 
+TEST(LowLevelEngineTest, ValidDepthIsCountedOnEveryPixelOrOnAGrid) {
+    auto engine = makeLowLevelEngine(Device::CPU);
+    Image<float> depth({5, 3});
+    for (int y = 0; y < 3; ++y)
+        for (int x = 0; x < 5; ++x) depth.at(x, y) = (x + y) % 3 == 0 ? 0.f : 1.f;  // zeros at (0,0) (3,0) (2,1) (1,2) (4,2)
+    EXPECT_EQ(engine->countValidDepth(depth), 10);
+    // Columns 0, 2, 4 of rows 0 and 2: (0,0) and (4,2) are empty.
+    EXPECT_EQ(engine->countValidDepth(depth, 2), 4);
+    EXPECT_EQ(engine->countValidDepth(depth, 8), 0) << "only (0, 0)";
+}
+
 TEST(LowLevelEngineTest, DownsampleAveragesValidSamplesOnOneSurface) {
     auto engine = makeLowLevelEngine(Device::CPU);
     Image<float> depth({4, 2}), half;

@@ -27,6 +27,7 @@ TEST(TrackerSettingsTest, ParsesEveryKindOfValue) {
         "levels = rrtb\n"
         "iterations = 20 10 5 3\n"
         "max_distance_m = 0.2\n"
+        "pixel_step = 1 1 2 4\n"
         "bilateral_filter = off\n"
         "robust_kernel = huber\n"
         "color_weight = 0.5\n"
@@ -40,6 +41,9 @@ TEST(TrackerSettingsTest, ParsesEveryKindOfValue) {
     EXPECT_EQ(s.levels[0].max_iterations, 20);
     EXPECT_EQ(s.levels[3].max_iterations, 3);
     for (const TrackerLevel& l : s.levels) EXPECT_FLOAT_EQ(l.max_distance_m, 0.2f);
+    EXPECT_EQ(s.levels[0].pixel_step, 1);
+    EXPECT_EQ(s.levels[2].pixel_step, 2);
+    EXPECT_EQ(s.levels[3].pixel_step, 4);
     EXPECT_FALSE(s.bilateral_filter);
     EXPECT_EQ(s.robust_kernel, RobustKernel::Huber);
     EXPECT_FLOAT_EQ(s.color_weight, 0.5f);
@@ -51,6 +55,7 @@ TEST(TrackerSettingsTest, ANewLevelStringKeepsTheFineLevelDefaults) {
     const TrackerSettings s = parseTrackerSettings("levels = rbbb\n", "x");
     ASSERT_EQ(s.levels.size(), 4u);
     EXPECT_FLOAT_EQ(s.levels[3].max_distance_m, defaults.levels[2].max_distance_m);
+    EXPECT_EQ(s.levels[3].pixel_step, defaults.levels[2].pixel_step);
     EXPECT_FLOAT_EQ(s.levels[0].max_distance_m, defaults.levels[0].max_distance_m);
 }
 
@@ -72,6 +77,8 @@ TEST(TrackerSettingsTest, BadLinesNameFileLineAndReason) {
     expectParseError("levels = bb\niterations = 1 2 3\n", 2, "expected 1 or 2 values");
     expectParseError("iterations = 10 2.5 3\n", 1, "integers");
     expectParseError("max_distance_m = 0.1 -0.05 0.02\n", 1, "distance thresholds must be > 0");
+    expectParseError("pixel_step = 1 0 1\n", 1, "pixel_step: expected integers in 1..8");
+    expectParseError("pixel_step = 1.5\n", 1, "pixel_step: expected integers in 1..8");
     expectParseError("max_normal_angle_deg = abc\n", 1, "not a number");
     expectParseError("bilateral_filter = maybe\n", 1, "true or false");
     expectParseError("just some words\n", 1, "key = value");

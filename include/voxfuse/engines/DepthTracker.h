@@ -29,10 +29,11 @@ struct DepthFrameLevel {
 class DepthTrackerKernels {
 public:
     virtual ~DepthTrackerKernels() = default;
-    // The point-to-plane normal equations of every vertex of `level` against `model`, each term
-    // weighted by robustWeight(kernel, residual, kernel_scale_m); terms of weight 0 are left out.
+    // The point-to-plane normal equations of the vertices of `level` on every pixel_step-th row and
+    // column against `model`, each term weighted by robustWeight(kernel, residual, kernel_scale_m);
+    // terms of weight 0 are left out.
     virtual NormalEquations<double> accumulate(const DepthFrameLevel& level, const RenderState& model, const DepthTermParams& params,
-                                               RobustKernel kernel, float kernel_scale_m) = 0;
+                                               RobustKernel kernel, float kernel_scale_m, int pixel_step) = 0;
 };
 
 namespace cpu {

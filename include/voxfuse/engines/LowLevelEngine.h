@@ -33,8 +33,9 @@ public:
     virtual void computeVertexMap(const Image<float>& depth, const Intrinsics& intrinsics, Image<Vec4f>& vertices) = 0;
     virtual void computeNormalMap(const Image<Vec4f>& vertices, Image<Vec4f>& normals, float max_edge_m) = 0;
     virtual void copyDepth(const Image<float>& in, Image<float>& out) = 0;
-    // Pixels with depth (> 0), points with w > 0.
-    virtual int countValidDepth(const Image<float>& depth) = 0;
+    // Pixels with depth (> 0), points with w > 0. With `pixel_step` > 1, only the pixels of every
+    // pixel_step-th row and column are counted (the pixels a subsampled tracker level uses).
+    virtual int countValidDepth(const Image<float>& depth, int pixel_step = 1) = 0;
     virtual int countValidPoints(const Image<Vec4f>& points) = 0;
     virtual Device device() const = 0;
 };

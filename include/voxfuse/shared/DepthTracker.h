@@ -6,6 +6,7 @@
 
 #include "voxfuse/core/Math.h"
 #include "voxfuse/objects/Intrinsics.h"
+#include "voxfuse/shared/LowLevel.h"
 
 namespace voxfuse {
 
@@ -62,15 +63,17 @@ VF_HOST_DEVICE inline bool pointToPlaneTerm(Vec4f vertex, Vec4f normal, const Ve
     return true;
 }
 
-// The terms of one level for the launchers' sumNormalEquations: element i is pixel i of the level.
+// The terms of one level for the launchers' sumNormalEquations: element i is pixel grid.index(i).
 struct PointToPlaneTerms {
     const Vec4f* vertices;
     const Vec4f* normals;
     const Vec4f* model_points;
     const Vec4f* model_normals;
     DepthTermParams params;
+    PixelGrid grid;
     VF_HOST_DEVICE bool operator()(int i, float J[6], float& residual) const {
-        return pointToPlaneTerm(vertices[i], normals[i], model_points, model_normals, params, J, residual);
+        const int pixel = grid.index(i);
+        return pointToPlaneTerm(vertices[pixel], normals[pixel], model_points, model_normals, params, J, residual);
     }
 };
 

@@ -115,6 +115,18 @@ VF_HOST_DEVICE inline Vec4f normalFromVertexPixel(const Vec4f* vertices, Vec2i s
     return {n.x, n.y, n.z, 1.f};
 }
 
+// Every `step`-th pixel of an image of width `width` along both axes, starting at pixel (0, 0):
+// element i of the grid is pixel index(i) of the image.
+struct PixelGrid {
+    int width;       // of the image
+    int step;        // 1: every pixel
+    int grid_width;  // (width + step - 1) / step
+    VF_HOST_DEVICE int index(int i) const { return (i % grid_width) * step + (i / grid_width) * step * width; }
+};
+inline PixelGrid pixelGridOf(Vec2i image_size, int step) { return {image_size.x, step, (image_size.x + step - 1) / step}; }
+// The number of elements of that grid.
+inline int gridSize(Vec2i image_size, int step) { return ((image_size.x + step - 1) / step) * ((image_size.y + step - 1) / step); }
+
 // ---- Loop bodies of the device layers: element i is pixel i of the output image ----
 
 struct ConvertDepthPixels {
@@ -213,7 +225,8 @@ struct CopyPixels {
 // Selections for the launchers' countIf.
 struct DepthIsValid {
     const float* depth;
-    VF_HOST_DEVICE bool operator()(int i) const { return depth[i] > 0.f; }
+    PixelGrid grid;
+    VF_HOST_DEVICE bool operator()(int i) const { return depth[grid.index(i)] > 0.f; }
 };
 struct PointIsValid {
     const Vec4f* points;
