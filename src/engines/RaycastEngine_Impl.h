@@ -44,8 +44,8 @@ public:
         const bool sdf_normals = normals_from == RaycastNormals::SdfGradient;
         if constexpr (kHash) {
             computeDepthRanges(scene, intr, T_world_camera, ranges);
-            TDevice::parallelFor(pixels, RaycastHashPixel<TVoxel>{scene.voxelData(), scene.index().data(), camera, ranges, points, normals,
-                                                                  sdf_normals, hint});
+            const RaycastHashPixel<TVoxel> rays{scene.voxelData(), scene.index().data(), camera, ranges, points, normals, sdf_normals, hint};
+            TDevice::parallelFor(rays.elementCount(), rays);
         } else {
             TDevice::parallelFor(pixels, RaycastDensePixel<TVoxel>{scene.voxelData(), scene.index().data(), camera, points, normals, ranges,
                                                                    sdf_normals, hint});

@@ -277,8 +277,26 @@ struct RaycastDensePixel {
     }
 };
 
-// The voxel block hash, one pixel per element: castRayHash() within the pixel's expected depth range,
-// through a CachedHashView of its own (consecutive steps of a ray mostly stay in one block).
+// Pixels in tiles of kRayTile x kRayTile, tile after tile, rows within a tile: consecutive elements
+// cast neighbouring rays, which read the same voxel blocks, while they are in a core's cache (the
+// CPU takes consecutive elements on one thread) or within one warp (the GPU). A row-major order
+// left a row's blocks for the next row to read again, a few hundred kilobytes later.
+constexpr int kRayTile = 8;
+struct TiledPixels {
+    int width, height;
+    VF_HOST_DEVICE int tilesX() const { return (width + kRayTile - 1) / kRayTile; }
+    VF_HOST_DEVICE int elementCount() const { return tilesX() * ((height + kRayTile - 1) / kRayTile) * kRayTile * kRayTile; }
+    // Element e's pixel index, or -1 for the elements of edge tiles beyond the image.
+    VF_HOST_DEVICE int pixelOf(int e) const {
+        const int tile = e / (kRayTile * kRayTile), within = e % (kRayTile * kRayTile);
+        const int x = (tile % tilesX()) * kRayTile + within % kRayTile, y = (tile / tilesX()) * kRayTile + within / kRayTile;
+        return x < width && y < height ? x + y * width : -1;
+    }
+};
+
+// The voxel block hash, one pixel per element (in TiledPixels order): castRayHash() within the
+// pixel's expected depth range, through a CachedHashView of its own (consecutive steps of a ray mostly
+// stay in one block).
 template <class TVoxel>
 struct RaycastHashPixel {
     const TVoxel* voxels;
@@ -290,7 +308,11 @@ struct RaycastHashPixel {
     bool sdf_normals;  // normals from the SDF gradient here, or later from the points (NormalsFromRaycastPoints)
     RaycastDepthHint hint;
 
-    VF_HOST_DEVICE void operator()(int i) const {
+    VF_HOST_DEVICE TiledPixels order() const { return {camera.intrinsics.width, camera.intrinsics.height}; }
+    VF_HOST_DEVICE int elementCount() const { return order().elementCount(); }
+    VF_HOST_DEVICE void operator()(int e) const {
+        const int i = order().pixelOf(e);
+        if (i < 0) return;
         const int x = i % camera.intrinsics.width, y = i / camera.intrinsics.width;
         points_world[i] = normals_world[i] = Vec4f{0.f, 0.f, 0.f, 0.f};
         const float z_min = fmaxf(fmaxf(depth_range[i].x, camera.min_depth_m), hint.searchStart(x, y));

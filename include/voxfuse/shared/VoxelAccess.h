@@ -34,6 +34,32 @@ VF_HOST_DEVICE inline float readSdfNearest(const TVoxel* voxels, const TIndexDat
     return TVoxel::sdfToFloat(v.sdf);
 }
 
+// The eight voxels of the cell whose lowest corner is `base`: corner k at base + (k & 1, (k >> 1) & 1,
+// k >> 2), found[k] false where no voxel is stored.
+template <class TVoxel, class TIndexData>
+VF_HOST_DEVICE inline void readCellVoxels(const TVoxel* voxels, const TIndexData& index, Vec3i base, TVoxel v[8], bool found[8]) {
+    for (int k = 0; k < 8; ++k) v[k] = readVoxel(voxels, index, base + Vec3i{k & 1, (k >> 1) & 1, (k >> 2) & 1}, found[k]);
+}
+
+// The same through a cached hash view: each block the cell touches is looked up once (a cell mostly
+// lies in one block; one lookup per corner would alternate the view's cache between two blocks
+// where it straddles them). The cell's own block is looked up last, so the cache keeps it for the
+// next read along a ray.
+template <class TVoxel>
+VF_HOST_DEVICE inline void readCellVoxels(const TVoxel* voxels, const CachedHashView& view, Vec3i base, TVoxel v[8], bool found[8]) {
+    const Vec3i block = blockOfVoxel(base);
+    // Bit a set: the cell's upper corners along axis a lie in the next block.
+    const int crossing = ((base.x & 7) == 7 ? 1 : 0) | ((base.y & 7) == 7 ? 2 : 0) | ((base.z & 7) == 7 ? 4 : 0);
+    int ptr[8];
+    for (int b = 7; b >= 0; --b)
+        if ((b & ~crossing) == 0) ptr[b] = view.voxelBlock(block + Vec3i{b & 1, (b >> 1) & 1, (b >> 2) & 1});
+    for (int k = 0; k < 8; ++k) {
+        const int p = ptr[k & crossing];
+        found[k] = p >= 0;
+        v[k] = found[k] ? voxels[p * kBlockVoxelCount + voxelIndexInBlock(base + Vec3i{k & 1, (k >> 1) & 1, (k >> 2) & 1})] : TVoxel::initial();
+    }
+}
+
 // Observed corners must carry at least this share of the trilinear weight for an interpolated SDF to
 // count (below it, `p` is as good as unobserved). 0.25 bridges the single unobserved voxels that depth
 // holes leave; 0.5 does not (kinfu_sample_50 then fails 49 of 50 frames again). Larger shares keep
@@ -49,16 +75,17 @@ template <class TVoxel, class TIndexData>
 VF_HOST_DEVICE inline float readSdfInterpolated(const TVoxel* voxels, const TIndexData& index, Vec3f p, bool& observed) {
     const Vec3i base = floorToInt(p);
     const Vec3f c = p - toFloat(base);
+    TVoxel v[8];
+    bool found[8];
+    readCellVoxels(voxels, index, base, v, found);
     float result = 0.f, weight = 0.f;
     observed = false;
     for (int k = 0; k < 8; ++k) {
         const Vec3i o{k & 1, (k >> 1) & 1, (k >> 2) & 1};
-        bool found;
-        const TVoxel v = readVoxel(voxels, index, base + o, found);
         const float w = (o.x ? c.x : 1.f - c.x) * (o.y ? c.y : 1.f - c.y) * (o.z ? c.z : 1.f - c.z);
-        const bool has_data = found && v.w_depth > 0;
+        const bool has_data = found[k] && v[k].w_depth > 0;
         if (!has_data) continue;
-        result += w * TVoxel::sdfToFloat(v.sdf);
+        result += w * TVoxel::sdfToFloat(v[k].sdf);
         weight += w;
     }
     observed = weight >= kMinObservedWeight;
