@@ -161,7 +161,9 @@ private:
             if (system.count < 6 || !pose::solveUpdate(system, ls.motion, 0.0, x)) break;
             T = pose::applyUpdate(T, x);
             // Least squares only has to reach the kernel's basin: it hands over at ten times the final step.
-            const double step_scale = robust ? 1.0 : 10.0;
+            // A level's pixels are 2^pi times the finest's: it stops at steps that much larger (the finer
+            // levels refine what it leaves).
+            const double step_scale = (robust ? 1.0 : 10.0) * double(1 << pi);
             if (x.head<3>().norm() < step_scale * settings_.min_rotation_step_rad && x.tail<3>().norm() < step_scale * settings_.min_translation_step_m) {
                 if (!robust) {
                     robust = true;

@@ -53,7 +53,10 @@ struct TrackerSettings {
     };
     // Frame and model normals further apart than this reject the pair; 180 switches the test off.
     float max_normal_angle_deg = 30.f;
-    // A level stops iterating when an update rotates less than this AND translates less than this.
+    // A level stops iterating when an update rotates less than this AND translates less than this;
+    // a level downsampled by 2^k stops at 2^k times these (its pixels are that much larger, and the
+    // finer levels refine what it leaves: teddy's coarse levels took 7.1 and 4.1 iterations instead of
+    // 9.8 and 6.2, with the same ATE there, on the bundled room, the kinfu sample and the corridor).
     float min_rotation_step_rad = 1e-4f;
     float min_translation_step_m = 1e-4f;
     // Start from the pose the last two frames' motion predicts (constant velocity, scaled to the time
