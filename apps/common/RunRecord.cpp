@@ -76,6 +76,7 @@ void writeTimingsJson(const std::string& path, const RunRecord& run) {
             frame["keyframes"] = f.result.keyframes;
             frame["inlier_ratio"] = double(f.result.tracking.inlier_ratio);
             frame["residual"] = double(f.result.tracking.residual_m);
+            frame["condition"] = double(f.result.tracking.condition);
         }
         for (const auto& s : f.result.stages) frame[s.stage] = s.ms;
         frame["total"] = f.result.total_ms;
