@@ -43,12 +43,20 @@ struct CpuDevice {
 
     // Dynamic scheduling in chunks of about 1/32 of a thread's share: loop bodies of uneven cost (rays,
     // pixels with and without depth) balance, and cheap ones pay one scheduling step per chunk.
+    //
+    // Each thread runs a copy of the body: the body's stores through its output pointers could alias
+    // the caller's body object, and the compiler would then reload every member after every store;
+    // they cannot alias a copy of the thread's own.
     template <class Body>
     static void parallelFor(int n, const Body& body) {
         if (n <= 0) return;
         const int chunk = std::max(1, n / (32 * omp_get_max_threads()));
-#pragma omp parallel for schedule(dynamic, chunk)
-        for (int i = 0; i < n; ++i) body(i);
+#pragma omp parallel
+        {
+            const Body local = body;
+#pragma omp for schedule(dynamic, chunk)
+            for (int i = 0; i < n; ++i) local(i);
+        }
     }
 
     // A team is one thread; its shared memory is allocated once per thread and reused for every item.
@@ -82,17 +90,21 @@ struct CpuDevice {
         const int shares = std::max(1, std::min(omp_get_max_threads() * 4, n / 4096));
         std::vector<int> counts(static_cast<std::size_t>(shares) + 1, 0);
         auto share_begin = [&](int s) { return int((long long)n * s / shares); };
+        // Each share's bounds in locals: the stores through `o` may alias anything the lambda reads
+        // by reference, which made the loop recompute its bound (a 64-bit division) per element.
 #pragma omp parallel for schedule(static)
         for (int s = 0; s < shares; ++s) {
+            const int begin = share_begin(s), end = share_begin(s + 1);
             int c = 0;
-            for (int i = share_begin(s); i < share_begin(s + 1); ++i) c += pred(i) ? 1 : 0;
+            for (int i = begin; i < end; ++i) c += pred(i) ? 1 : 0;
             counts[std::size_t(s) + 1] = c;
         }
         for (int s = 0; s < shares; ++s) counts[std::size_t(s) + 1] += counts[std::size_t(s)];
 #pragma omp parallel for schedule(static)
         for (int s = 0; s < shares; ++s) {
+            const int begin = share_begin(s), end = share_begin(s + 1);
             int* o = out + counts[std::size_t(s)];
-            for (int i = share_begin(s); i < share_begin(s + 1); ++i)
+            for (int i = begin; i < end; ++i)
                 if (pred(i)) *o++ = i;
         }
         return counts.back();
