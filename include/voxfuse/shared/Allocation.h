@@ -73,30 +73,40 @@ VF_HOST_DEVICE inline void forEachBlockOnDepthSegment(const DepthSegmentFrame& f
         first[k] = int(ceilf((lo - float(kBlockSide - 1)) / float(kBlockSide)));
         last[k] = int(floorf(hi / float(kBlockSide)));
     }
-    for (int bz = first.z; bz <= last.z; ++bz)
-        for (int by = first.y; by <= last.y; ++by)
+    // The part of the segment (t in [0, 1]) inside the grown box of block c along axis k narrows
+    // [t_in, t_out]; each axis's part is taken where its loop moves to the next block. (Minimum and
+    // maximum are exact, so the order in which the axes narrow the range changes no result.)
+    auto narrow = [&](int k, int c, float& t_in, float& t_out) {
+        const float lo = float(c * kBlockSide) - margin, hi = float(c * kBlockSide + kBlockSide - 1) + margin;
+        if (ab[k] == 0.f) {
+            if (a[k] < lo || a[k] > hi) t_out = -1.f;
+            return;
+        }
+        float t_lo = (lo - a[k]) / ab[k], t_hi = (hi - a[k]) / ab[k];
+        if (t_lo > t_hi) {
+            const float s = t_lo;
+            t_lo = t_hi;
+            t_hi = s;
+        }
+        // Comparisons, not fminf/fmaxf (library calls on the host); no value is NaN.
+        t_in = t_lo > t_in ? t_lo : t_in;
+        t_out = t_hi < t_out ? t_hi : t_out;
+    };
+    for (int bz = first.z; bz <= last.z; ++bz) {
+        float z_in = 0.f, z_out = 1.f;
+        narrow(2, bz, z_in, z_out);
+        if (!(z_in <= z_out)) continue;
+        for (int by = first.y; by <= last.y; ++by) {
+            float y_in = z_in, y_out = z_out;
+            narrow(1, by, y_in, y_out);
+            if (!(y_in <= y_out)) continue;
             for (int bx = first.x; bx <= last.x; ++bx) {
-                const Vec3i block{bx, by, bz};
-                // The part of the segment (t in [0, 1]) inside the block's grown box, axis by axis.
-                float t_in = 0.f, t_out = 1.f;
-                for (int k = 0; k < 3; ++k) {
-                    const float lo = float(block[k] * kBlockSide) - margin, hi = float(block[k] * kBlockSide + kBlockSide - 1) + margin;
-                    if (ab[k] == 0.f) {
-                        if (a[k] < lo || a[k] > hi) t_out = -1.f;
-                        continue;
-                    }
-                    float t_lo = (lo - a[k]) / ab[k], t_hi = (hi - a[k]) / ab[k];
-                    if (t_lo > t_hi) {
-                        const float s = t_lo;
-                        t_lo = t_hi;
-                        t_hi = s;
-                    }
-                    // Comparisons, not fminf/fmaxf (library calls on the host); no value is NaN.
-                    t_in = t_lo > t_in ? t_lo : t_in;
-                    t_out = t_hi < t_out ? t_hi : t_out;
-                }
-                if (t_in <= t_out) visit(block);
+                float t_in = y_in, t_out = y_out;
+                narrow(0, bx, t_in, t_out);
+                if (t_in <= t_out) visit(Vec3i{bx, by, bz});
             }
+        }
+    }
 }
 
 // Blocks visited recently by one loop element (direct-mapped, `Slots` a power of two): neighbouring

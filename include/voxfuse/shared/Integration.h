@@ -178,11 +178,11 @@ struct IntegrateHashVoxels {
         const HashEntry& e = entries[visible_entries[i / kElementsPerBlock]];
         TVoxel* block = voxels + (long long)e.ptr * kBlockVoxelCount;
         const Vec3i corner{e.pos.x * kBlockSide, e.pos.y * kBlockSide, e.pos.z * kBlockSide};
-        // A copy the voxel stores cannot alias: byte stores may alias any member of *this, which would
-        // reload every frame constant after each voxel.
-        const IntegrationFrame f = frame;
-        const Vec3f corner_cam = blockCornerInDepthCamera(f, corner);
+        const Vec3f corner_cam = blockCornerInDepthCamera(frame, corner);
         if constexpr (VoxelsPerElement == kBlockVoxelCount) {
+            // A copy the voxel stores cannot alias: byte stores may alias any member of *this, which
+            // would reload every frame constant after each voxel of the block.
+            const IntegrationFrame f = frame;
             for (int z = 0; z < kBlockSide; ++z)
                 for (int y = 0; y < kBlockSide; ++y) {
                     const Vec3f row = blockRowOffset(f, y, z);
@@ -191,6 +191,7 @@ struct IntegrateHashVoxels {
                         integrateVoxelAt(line[x], corner + Vec3i{x, y, z}, blockVoxelInDepthCamera(f, corner_cam, row, x), f);
                 }
         } else {
+            const IntegrationFrame& f = frame;
             const int first = (i % kElementsPerBlock) * VoxelsPerElement;
             for (int v = first; v < first + VoxelsPerElement; ++v) {
                 const int x = v & 7, y = (v >> 3) & 7, z = v >> 6;
