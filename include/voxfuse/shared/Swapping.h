@@ -65,11 +65,12 @@ struct EntryNeedsActivation {
     VF_HOST_DEVICE bool operator()(int i) const { return entry_visibility[i] == kEntrySeenThisFrame && entries[i].ptr == kEntrySwappedOut; }
 };
 
-// Blocks back in the voxel array whose stored copy waits to be merged in.
+// Blocks back in the voxel array whose stored copy waits to be merged in. The slot (4 bytes an entry)
+// is tested first: a pass over every entry then reads a 16-byte entry only for stored blocks.
 struct EntryMergePending {
     const HashEntry* entries;
     const int* stored_slot;
-    VF_HOST_DEVICE bool operator()(int i) const { return entries[i].ptr >= 0 && stored_slot[i] != kNoStoredCopy; }
+    VF_HOST_DEVICE bool operator()(int i) const { return stored_slot[i] != kNoStoredCopy && entries[i].ptr >= 0; }
 };
 
 // Active blocks out of the view (not in the visible list) with nothing waiting to be merged. Empty
