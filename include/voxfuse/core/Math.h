@@ -141,7 +141,7 @@ VF_HOST_DEVICE inline float floatFromBits(std::uint32_t bits) {
 #endif
 }
 
-// e^-x for x >= 0, within 1e-7 relative of the exact value (0 from x = 87 on, and for NaN). Inline
+// e^-x for x >= 0, relative error below 3e-7 max(1, x); 0 from x = 87 on and for NaN. Inline
 // arithmetic where expf() is a library call on the host: the weights of per-pixel filters need many of
 // them, and both devices get the same bits from it.
 VF_HOST_DEVICE inline float expOfNegative(float x) {
@@ -149,8 +149,8 @@ VF_HOST_DEVICE inline float expOfNegative(float x) {
     const bool in_range = x < 87.f;  // false for NaN
     float y = x > 0.f ? x : 0.f;
     y = in_range ? y * 1.44269504f : 0.f;  // e^-x = 2^-y
-    const int n = int(y);                                   // y >= 0: truncation is the floor
-    const float f = y - float(n);                           // 2^-y = 2^-n 2^-f, f in [0, 1)
+    const int n = int(y);                  // y >= 0: truncation is the floor
+    const float f = y - float(n);          // 2^-y = 2^-n 2^-f, f in [0, 1)
     // 2^-f, a degree-5 least-squares fit on [0, 1] (relative error 8e-8).
     const float p = 0.99999994f + f * (-0.69314218f + f * (0.24017160f + f * (-0.055278152f + f * (0.0091868825f + f * -0.00093811715f))));
     const float e = p * floatFromBits(std::uint32_t(127 - n) << 23);  // n <= 125: 2^-n is a normal float

@@ -16,8 +16,8 @@ namespace voxfuse {
 enum class VoxelType { S, F, SRgb, FRgb, SLabel, SRgbLabel };
 
 // The stored value of a normalised SDF f in [-1, 1]: f * 32767 to the nearest integer (halves to
-// even, as rintf). lrintf is one instruction on x86-64, rintf a branch and four dependent ones
-// without SSE4.1: a sixth of the CPU's integration time.
+// even, as rintf). lrintf is one instruction on x86-64; rintf is a branch and four dependent ones
+// without SSE4.1, where perf put a sixth of the CPU integration's samples.
 VF_HOST_DEVICE inline std::int16_t quantiseSdf(float f) { return std::int16_t(lrintf(f * 32767.f)); }
 
 struct VoxelS {

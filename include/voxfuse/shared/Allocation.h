@@ -40,7 +40,7 @@ constexpr float kAddressableVoxelRange = float((kMaxBlockCoordinate + 1) * kBloc
 // own pixel's depth at silhouettes (and would otherwise stay unallocated, leaving holes where the
 // dense index closes the surface). Plus float rounding of the transforms: far above float's error at
 // the coordinates an int16 block can have.
-constexpr float kSegmentMarginSlackVoxels = 1.01f;
+constexpr float kSegmentMarginExtraVoxels = 1.01f;
 
 // Calls visit(Vec3i block) once for every block pixel (x, y) needs (see above). A segment beyond the
 // addressable range visits one non-addressable block instead.
@@ -64,7 +64,7 @@ VF_HOST_DEVICE inline void forEachBlockOnDepthSegment(const DepthSegmentFrame& f
             return;
         }
     // Half a pixel at the far end is the widest the footprint gets along the segment.
-    const float margin = f.margin_voxels_per_m * z1 + kSegmentMarginSlackVoxels;
+    const float margin = f.margin_voxels_per_m * z1 + kSegmentMarginExtraVoxels;
     const Vec3f ab = b - a;
     Vec3i first, last;
     for (int k = 0; k < 3; ++k) {
