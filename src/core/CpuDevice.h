@@ -83,11 +83,14 @@ struct CpuDevice {
         return sum;
     }
 
-    // Two passes over equal shares: count per share, then write at the share's offset.
+    // Two passes over equal shares of at least 4096 elements: count per share, then write each share
+    // that has any at its offset. Many small shares make sparse selections (the visible or stored few
+    // of a million hash entries) skip most of the second pass.
     template <class Pred>
     static int selectIndices(int n, const Pred& pred, int* out, DeviceScratch&) {
         if (n <= 0) return 0;
-        const int shares = std::max(1, std::min(omp_get_max_threads() * 4, n / 4096));
+        constexpr int kMaxShares = 1024;
+        const int shares = std::max(1, std::min(kMaxShares, n / 4096));
         std::vector<int> counts(static_cast<std::size_t>(shares) + 1, 0);
         auto share_begin = [&](int s) { return int((long long)n * s / shares); };
         // Each share's bounds in locals: the stores through `o` may alias anything the lambda reads
@@ -100,8 +103,9 @@ struct CpuDevice {
             counts[std::size_t(s) + 1] = c;
         }
         for (int s = 0; s < shares; ++s) counts[std::size_t(s) + 1] += counts[std::size_t(s)];
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(dynamic, 4)
         for (int s = 0; s < shares; ++s) {
+            if (counts[std::size_t(s) + 1] == counts[std::size_t(s)]) continue;
             const int begin = share_begin(s), end = share_begin(s + 1);
             int* o = out + counts[std::size_t(s)];
             for (int i = begin; i < end; ++i)

@@ -134,6 +134,15 @@ void checkSelectIndices() {
         const std::vector<int> o = valuesOf(where, out, std::size_t(count));
         for (int k = 0; k < count; ++k) ASSERT_EQ(o[std::size_t(k)], 3 * k) << "ascending and complete";
     }
+    // Sparse, as the visible or stored entries of a hash: most stretches of the range hold none. The
+    // larger n is beyond the CPU's most shares (1024 of 4096 elements).
+    for (int n : {1200000, 1024 * 4096 + 4097}) {
+        MemoryBlock<int> out(std::size_t(n), where == Device::CPU, where == Device::CUDA);
+        const int count = TDevice::selectIndices(n, IsMultipleOf{99991}, out.data(where), scratch);
+        ASSERT_EQ(count, (n + 99990) / 99991);
+        const std::vector<int> o = valuesOf(where, out, std::size_t(count));
+        for (int k = 0; k < count; ++k) ASSERT_EQ(o[std::size_t(k)], 99991 * k) << "n " << n;
+    }
 }
 
 template <class TDevice>
