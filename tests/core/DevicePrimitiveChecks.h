@@ -134,6 +134,14 @@ void checkSelectIndices() {
         const std::vector<int> o = valuesOf(where, out, std::size_t(count));
         for (int k = 0; k < count; ++k) ASSERT_EQ(o[std::size_t(k)], 3 * k) << "ascending and complete";
     }
+    // Everything: the selection is the whole of `out`.
+    {
+        const int n = 1200000;
+        MemoryBlock<int> out(std::size_t(n), where == Device::CPU, where == Device::CUDA);
+        ASSERT_EQ(TDevice::selectIndices(n, IsMultipleOf{1}, out.data(where), scratch), n);
+        const std::vector<int> o = valuesOf(where, out, std::size_t(n));
+        for (int k = 0; k < n; ++k) ASSERT_EQ(o[std::size_t(k)], k);
+    }
     // Sparse, as the visible or stored entries of a hash: most stretches of the range hold none. The
     // larger n is beyond the CPU's most shares (1024 of 4096 elements).
     for (int n : {1200000, 1024 * 4096 + 4097}) {
