@@ -44,7 +44,8 @@ public:
         const bool sdf_normals = normals_from == RaycastNormals::SdfGradient;
         if constexpr (kHash) {
             computeDepthRanges(scene, intr, T_world_camera, ranges);
-            const RaycastHashPixel<TVoxel> rays{scene.voxelData(), scene.index().data(), camera, ranges, points, normals, sdf_normals, hint};
+            // The CPU takes four rays in turns (see RaycastHashPixel), the GPU one per thread.
+            const RaycastHashPixel<TVoxel, TDevice::kOneThreadPerItem ? 1 : 8> rays{scene.voxelData(), scene.index().data(), camera, ranges, points, normals, sdf_normals, hint};
             TDevice::parallelFor(rays.elementCount(), rays);
         } else {
             TDevice::parallelFor(pixels, RaycastDensePixel<TVoxel>{scene.voxelData(), scene.index().data(), camera, points, normals, ranges,

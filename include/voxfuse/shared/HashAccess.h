@@ -81,6 +81,8 @@ struct CachedHashView {
 
     VF_HOST_DEVICE explicit CachedHashView(const HashTableView& h)
         : hash(h), last_block{-0x7fffffff, 0, 0}, last_ptr(-1) {}  // no voxel lies in block x = -2^31 + 1
+    // A view of no table, for arrays of views assigned before use.
+    VF_HOST_DEVICE CachedHashView() : CachedHashView(HashTableView{nullptr, 0, 0, 0, 0}) {}
 
     VF_HOST_DEVICE int voxelBlock(Vec3i block) const {
         if (block != last_block) {

@@ -110,14 +110,26 @@ VF_HOST_DEVICE inline float rayBlockExit(Vec3f origin, Vec3f dir, Vec3i block) {
 // Coarse steps are whole multiples of step_scale, the step castRay() takes through unobserved space,
 // and the march starts on the lattice t_anchor + k * step_scale: where the search range starts and how
 // the blocks are laid out never moves the samples, so the surface found depends on the SDF alone.
-template <class TVoxel, class TIndexData>
-VF_HOST_DEVICE inline bool castRayHash(Vec3f& hit_grid, const TVoxel* voxels, const TIndexData& index, Vec3f origin, Vec3f dir,
-                                       float t_anchor, float t_min, float t_max, float step_scale) {
-    RayState state = RayState::SearchBlockCoarse;
-    float t = t_anchor + ceilf((t_min - t_anchor) / step_scale) * step_scale;
+//
+// The march is a state advanced one step at a time, so that the CPU can take a few rays in turns:
+// a step waits on its voxel load, and the steps of other rays run meanwhile (RaycastHashPixel).
+struct HashRayMarch {
+    Vec3f origin, dir;  // grid units, dir unit length
+    float t, t_max, step_scale;
     float sdf = 1.f;
+    RayState state = RayState::SearchBlockCoarse;
     bool last_observed = false;
-    while (t < t_max) {
+
+    VF_HOST_DEVICE HashRayMarch() : origin{0.f, 0.f, 0.f}, dir{0.f, 0.f, 0.f}, t(0.f), t_max(0.f), step_scale(1.f) {}  // no ray: not marching
+    VF_HOST_DEVICE HashRayMarch(Vec3f origin_grid, Vec3f dir_unit, float t_anchor, float t_min, float t_max_, float step_scale_)
+        : origin(origin_grid), dir(dir_unit), t(t_anchor + ceilf((t_min - t_anchor) / step_scale_) * step_scale_), t_max(t_max_),
+          step_scale(step_scale_) {}
+
+    VF_HOST_DEVICE bool marching() const { return state != RayState::BehindSurface && t < t_max; }
+
+    // One step of the march (call while marching()).
+    template <class TVoxel, class TIndexData>
+    VF_HOST_DEVICE void step(const TVoxel* voxels, const TIndexData& index) {
         const Vec3f p = origin + dir * t;
         const Vec3i voxel{int(floorf(p.x + 0.5f)), int(floorf(p.y + 0.5f)), int(floorf(p.z + 0.5f))};
         bool allocated;
@@ -127,7 +139,7 @@ VF_HOST_DEVICE inline bool castRayHash(Vec3f& hit_grid, const TVoxel* voxels, co
             state = RayState::SearchBlockCoarse;
             const float steps = ceilf((rayBlockExit(origin, dir, blockOfVoxel(voxel)) - t) / step_scale);
             t += (steps > 1.f ? steps : 1.f) * step_scale;
-            continue;
+            return;
         }
         if (state == RayState::SearchBlockCoarse) state = RayState::SearchBlockFine;
         if (v.w_depth == 0) {
@@ -139,7 +151,7 @@ VF_HOST_DEVICE inline bool castRayHash(Vec3f& hit_grid, const TVoxel* voxels, co
             last_observed = observed;
             if (!observed) {
                 t += step_scale;  // unobserved voxels of an allocated block: a truncation band at a time
-                continue;
+                return;
             }
             sdf = s;
         } else {
@@ -153,24 +165,36 @@ VF_HOST_DEVICE inline bool castRayHash(Vec3f& hit_grid, const TVoxel* voxels, co
         if (sdf <= 0.f) {
             if (state == RayState::SearchSurface) {
                 state = RayState::BehindSurface;
-                break;
+                return;
             }
             state = RayState::WrongSide;
             t += step_scale * (-sdf > 0.25f ? -sdf : 0.25f);
-            continue;
+            return;
         }
         state = RayState::SearchSurface;
         t += sdf * step_scale > 1.f ? sdf * step_scale : 1.f;
     }
-    if (state != RayState::BehindSurface) return false;
 
-    // Two SDF-sized corrections around the crossing, as castRay() does.
-    bool observed;
-    t += sdf * step_scale;
-    sdf = readSdfInterpolated(voxels, index, origin + dir * t, observed);
-    t += sdf * step_scale;
-    hit_grid = origin + dir * t;
-    return true;
+    // Once the march has stopped: false when it found no surface, else the surface point after two
+    // SDF-sized corrections around the crossing, as castRay() makes.
+    template <class TVoxel, class TIndexData>
+    VF_HOST_DEVICE bool finish(const TVoxel* voxels, const TIndexData& index, Vec3f& hit_grid) {
+        if (state != RayState::BehindSurface) return false;
+        bool observed;
+        t += sdf * step_scale;
+        sdf = readSdfInterpolated(voxels, index, origin + dir * t, observed);
+        t += sdf * step_scale;
+        hit_grid = origin + dir * t;
+        return true;
+    }
+};
+
+template <class TVoxel, class TIndexData>
+VF_HOST_DEVICE inline bool castRayHash(Vec3f& hit_grid, const TVoxel* voxels, const TIndexData& index, Vec3f origin, Vec3f dir,
+                                       float t_anchor, float t_min, float t_max, float step_scale) {
+    HashRayMarch march(origin, dir, t_anchor, t_min, t_max, step_scale);
+    while (march.marching()) march.step(voxels, index);
+    return march.finish(voxels, index, hit_grid);
 }
 
 // A surface hit (grid units) as the raycast's per-pixel outputs: world point (w = 1) and, with
@@ -294,11 +318,15 @@ struct TiledPixels {
     }
 };
 
-// The voxel block hash, one pixel per element (in TiledPixels order): castRayHash() within the
-// pixel's expected depth range, through a CachedHashView of its own (consecutive steps of a ray mostly
-// stay in one block).
-template <class TVoxel>
+// The voxel block hash, `RaysPerElement` consecutive pixels (in TiledPixels order; a divisor of a
+// tile's 64) per element: castRayHash() within each pixel's expected depth range, through a
+// CachedHashView of its own (consecutive steps of a ray mostly stay in one block). The GPU casts a ray
+// per thread; the CPU takes a few rays in turns, a step of each, so that their voxel loads (cache
+// misses, most of a raycast's time) overlap instead of following one another. Every ray takes the
+// same steps either way.
+template <class TVoxel, int RaysPerElement>
 struct RaycastHashPixel {
+    static_assert(kRayTile * kRayTile % RaysPerElement == 0, "elements must not straddle tiles");
     const TVoxel* voxels;
     HashTableView table;
     RaycastCamera camera;
@@ -309,23 +337,58 @@ struct RaycastHashPixel {
     RaycastDepthHint hint;
 
     VF_HOST_DEVICE TiledPixels order() const { return {camera.intrinsics.width, camera.intrinsics.height}; }
-    VF_HOST_DEVICE int elementCount() const { return order().elementCount(); }
+    VF_HOST_DEVICE int elementCount() const { return order().elementCount() / RaysPerElement; }
+
     VF_HOST_DEVICE void operator()(int e) const {
-        const int i = order().pixelOf(e);
-        if (i < 0) return;
+        if constexpr (RaysPerElement == 1) {
+            const int i = order().pixelOf(e);
+            if (i < 0) return;
+            float t_per_depth, z_min, z_max;
+            const Vec3f dir = startRay(i, t_per_depth, z_min, z_max);
+            if (!(z_max > z_min)) return;  // no visible block projects here
+            const CachedHashView view(table);
+            Vec3f hit;
+            if (castRayHash(hit, voxels, view, camera.origin_grid, dir, camera.min_depth_m * t_per_depth, z_min * t_per_depth,
+                            z_max * t_per_depth, camera.step_scale))
+                raycastHitOutputs(voxels, view, hit, camera.voxel_size_m, sdf_normals, points_world[i], normals_world[i]);
+        } else {
+            int pixel[RaysPerElement];
+            HashRayMarch march[RaysPerElement];
+            CachedHashView view[RaysPerElement];
+            for (int k = 0; k < RaysPerElement; ++k) {
+                view[k] = CachedHashView(table);
+                pixel[k] = order().pixelOf(e * RaysPerElement + k);
+                if (pixel[k] < 0) continue;
+                float t_per_depth, z_min, z_max;
+                const Vec3f dir = startRay(pixel[k], t_per_depth, z_min, z_max);
+                if (!(z_max > z_min)) continue;
+                march[k] = HashRayMarch(camera.origin_grid, dir, camera.min_depth_m * t_per_depth, z_min * t_per_depth, z_max * t_per_depth,
+                                        camera.step_scale);
+            }
+            for (bool any = true; any;) {
+                any = false;
+                for (int k = 0; k < RaysPerElement; ++k)
+                    if (march[k].marching()) {
+                        march[k].step(voxels, view[k]);
+                        any = true;
+                    }
+            }
+            for (int k = 0; k < RaysPerElement; ++k) {
+                Vec3f hit;
+                if (pixel[k] >= 0 && march[k].finish(voxels, view[k], hit))
+                    raycastHitOutputs(voxels, view[k], hit, camera.voxel_size_m, sdf_normals, points_world[pixel[k]], normals_world[pixel[k]]);
+            }
+        }
+    }
+
+private:
+    // Clears pixel i's outputs; its ray direction, parameter per metre of depth and depth range.
+    VF_HOST_DEVICE Vec3f startRay(int i, float& t_per_depth, float& z_min, float& z_max) const {
         const int x = i % camera.intrinsics.width, y = i / camera.intrinsics.width;
         points_world[i] = normals_world[i] = Vec4f{0.f, 0.f, 0.f, 0.f};
-        const float z_min = fmaxf(fmaxf(depth_range[i].x, camera.min_depth_m), hint.searchStart(x, y));
-        const float z_max = fminf(depth_range[i].y, camera.max_depth_m);
-        if (!(z_max > z_min)) return;  // no visible block projects here
-        float t_per_depth;
-        const Vec3f dir = camera.rayThroughPixel(x, y, t_per_depth);
-        const CachedHashView view(table);
-        Vec3f hit;
-        if (!castRayHash(hit, voxels, view, camera.origin_grid, dir, camera.min_depth_m * t_per_depth, z_min * t_per_depth,
-                         z_max * t_per_depth, camera.step_scale))
-            return;
-        raycastHitOutputs(voxels, view, hit, camera.voxel_size_m, sdf_normals, points_world[i], normals_world[i]);
+        z_min = fmaxf(fmaxf(depth_range[i].x, camera.min_depth_m), hint.searchStart(x, y));
+        z_max = fminf(depth_range[i].y, camera.max_depth_m);
+        return camera.rayThroughPixel(x, y, t_per_depth);
     }
 };
 
