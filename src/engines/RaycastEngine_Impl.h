@@ -44,7 +44,7 @@ public:
         const bool sdf_normals = normals_from == RaycastNormals::SdfGradient;
         if constexpr (kHash) {
             computeDepthRanges(scene, intr, T_world_camera, ranges);
-            // The CPU takes four rays in turns (see RaycastHashPixel), the GPU one per thread.
+            // The CPU takes a row of a ray tile, eight rays, in turns (see RaycastHashPixel); the GPU one ray per thread.
             const RaycastHashPixel<TVoxel, TDevice::kOneThreadPerItem ? 1 : 8> rays{scene.voxelData(), scene.index().data(), camera, ranges, points, normals, sdf_normals, hint};
             TDevice::parallelFor(rays.elementCount(), rays);
         } else {
