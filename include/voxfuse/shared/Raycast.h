@@ -28,6 +28,18 @@ VF_HOST_DEVICE inline bool clipRayToBox(Vec3f origin, Vec3f dir, Vec3f lo, Vec3f
     return t_min <= t_max;
 }
 
+// The surface point near a crossing found at t (sdf <= 0 there): two SDF-sized corrections, the first
+// of which goes back. Both indexes' marches end with it.
+template <class TVoxel, class TIndexData>
+VF_HOST_DEVICE inline Vec3f refineSurfaceCrossing(const TVoxel* voxels, const TIndexData& index, Vec3f origin, Vec3f dir, float t, float sdf,
+                                                  float step_scale) {
+    bool observed;
+    t += sdf * step_scale;
+    sdf = readSdfInterpolated(voxels, index, origin + dir * t, observed);
+    t += sdf * step_scale;
+    return origin + dir * t;
+}
+
 // Marches from origin + t_min * dir to origin + t_max * dir, all in grid units (dir unit length).
 // `step_scale` is mu in voxels: an SDF value s (normalised to [-1, 1]) lets us step s * step_scale.
 // On success writes the surface point (grid units) and returns true.
@@ -44,13 +56,13 @@ VF_HOST_DEVICE inline bool castRay(Vec3f& hit_grid, const TVoxel* voxels, const 
         const Vec3f p = origin + dir * t;
         sdf = readSdfNearest(voxels, index, p, observed);
         // An unobserved voxel met right after an observed sample (one that fell on a depth hole) takes
-        // the interpolation of its observed neighbours, as in castRayHash. Only then: deep in unobserved
+        // the interpolation of its observed neighbours, as in HashRayMarch. Only then: deep in unobserved
         // space (most of a dense box) the ray keeps its cheap steps.
         if (!observed && last_observed) sdf = readSdfInterpolated(voxels, index, p, observed);
         last_observed = observed;
         if (!observed) {
             // Nothing known here: a truncation band at a time. The front seen before the gap still counts,
-            // as inside an allocated hash block (castRayHash), so that both indexes find the same surfaces;
+            // as inside an allocated hash block (HashRayMarch), so that both indexes find the same surfaces;
             // a back face met after a long unobserved gap is the price (dense cannot tell "never
             // allocated" from "not yet observed").
             t += step_scale;
@@ -70,13 +82,7 @@ VF_HOST_DEVICE inline bool castRay(Vec3f& hit_grid, const TVoxel* voxels, const 
         t += sdf * step_scale > 1.f ? sdf * step_scale : 1.f;
     }
     if (!crossed) return false;
-
-    // Two SDF-sized corrections around the crossing (sdf <= 0 here, so the first step goes back).
-    bool observed;
-    t += sdf * step_scale;
-    sdf = readSdfInterpolated(voxels, index, origin + dir * t, observed);
-    t += sdf * step_scale;
-    hit_grid = origin + dir * t;
+    hit_grid = refineSurfaceCrossing(voxels, index, origin, dir, t, sdf, step_scale);
     return true;
 }
 
@@ -103,7 +109,7 @@ VF_HOST_DEVICE inline float rayBlockExit(Vec3f origin, Vec3f dir, Vec3i block) {
     return t_exit;
 }
 
-// castRay() for the voxel block hash (TIndexData: VoxelBlockHash::Data or CachedHashView): the same
+// The march of castRay() for the voxel block hash (TIndexData: VoxelBlockHash::Data or CachedHashView): the same
 // steps, thresholds and refinement inside allocated blocks, but unallocated blocks are crossed in one
 // go, and a surface counts only when the ray saw its positive side after the last unallocated gap (the
 // report's WRONG_SIDE: the boundary between unallocated space and negative values is no surface).
@@ -175,27 +181,14 @@ struct HashRayMarch {
         t += sdf * step_scale > 1.f ? sdf * step_scale : 1.f;
     }
 
-    // Once the march has stopped: false when it found no surface, else the surface point after two
-    // SDF-sized corrections around the crossing, as castRay() makes.
+    // Once the march has stopped: false when it found no surface, else the refined surface point.
     template <class TVoxel, class TIndexData>
-    VF_HOST_DEVICE bool finish(const TVoxel* voxels, const TIndexData& index, Vec3f& hit_grid) {
+    VF_HOST_DEVICE bool finish(const TVoxel* voxels, const TIndexData& index, Vec3f& hit_grid) const {
         if (state != RayState::BehindSurface) return false;
-        bool observed;
-        t += sdf * step_scale;
-        sdf = readSdfInterpolated(voxels, index, origin + dir * t, observed);
-        t += sdf * step_scale;
-        hit_grid = origin + dir * t;
+        hit_grid = refineSurfaceCrossing(voxels, index, origin, dir, t, sdf, step_scale);
         return true;
     }
 };
-
-template <class TVoxel, class TIndexData>
-VF_HOST_DEVICE inline bool castRayHash(Vec3f& hit_grid, const TVoxel* voxels, const TIndexData& index, Vec3f origin, Vec3f dir,
-                                       float t_anchor, float t_min, float t_max, float step_scale) {
-    HashRayMarch march(origin, dir, t_anchor, t_min, t_max, step_scale);
-    while (march.marching()) march.step(voxels, index);
-    return march.finish(voxels, index, hit_grid);
-}
 
 // A surface hit (grid units) as the raycast's per-pixel outputs: world point (w = 1) and, with
 // `sdf_normal`, the SDF gradient normal (w = 1, or all zero where the gradient vanishes); without it
@@ -319,9 +312,9 @@ struct TiledPixels {
 };
 
 // The voxel block hash, `RaysPerElement` consecutive pixels (in TiledPixels order; a divisor of a
-// tile's 64) per element: castRayHash() within each pixel's expected depth range, through a
-// CachedHashView of its own (consecutive steps of a ray mostly stay in one block). The GPU casts a ray
-// per thread; the CPU takes a few rays in turns, a step of each, so that their voxel loads (cache
+// tile's 64) per element: a HashRayMarch within each pixel's expected depth range, through a
+// CachedHashView of its own (consecutive steps of a ray mostly stay in one block). The GPU casts one
+// ray per thread; the CPU takes a few rays in turns, a step of each, so that their voxel loads (cache
 // misses, most of a raycast's time) overlap instead of following one another. Every ray takes the
 // same steps either way.
 template <class TVoxel, int RaysPerElement>
@@ -340,55 +333,43 @@ struct RaycastHashPixel {
     VF_HOST_DEVICE int elementCount() const { return order().elementCount() / RaysPerElement; }
 
     VF_HOST_DEVICE void operator()(int e) const {
-        if constexpr (RaysPerElement == 1) {
-            const int i = order().pixelOf(e);
-            if (i < 0) return;
-            float t_per_depth, z_min, z_max;
-            const Vec3f dir = startRay(i, t_per_depth, z_min, z_max);
-            if (!(z_max > z_min)) return;  // no visible block projects here
-            const CachedHashView view(table);
+        int pixel[RaysPerElement];
+        HashRayMarch march[RaysPerElement];  // not marching: no pixel, or no visible block projects there
+        CachedHashView view[RaysPerElement];
+        for (int k = 0; k < RaysPerElement; ++k) {
+            pixel[k] = order().pixelOf(e * RaysPerElement + k);
+            if (pixel[k] < 0) continue;
+            view[k] = CachedHashView(table);
+            march[k] = startRay(pixel[k]);
+        }
+        for (bool any = true; any;) {
+            any = false;
+            for (int k = 0; k < RaysPerElement; ++k)
+                if (march[k].marching()) {
+                    march[k].step(voxels, view[k]);
+                    any = true;
+                }
+        }
+        for (int k = 0; k < RaysPerElement; ++k) {
             Vec3f hit;
-            if (castRayHash(hit, voxels, view, camera.origin_grid, dir, camera.min_depth_m * t_per_depth, z_min * t_per_depth,
-                            z_max * t_per_depth, camera.step_scale))
-                raycastHitOutputs(voxels, view, hit, camera.voxel_size_m, sdf_normals, points_world[i], normals_world[i]);
-        } else {
-            int pixel[RaysPerElement];
-            HashRayMarch march[RaysPerElement];
-            CachedHashView view[RaysPerElement];
-            for (int k = 0; k < RaysPerElement; ++k) {
-                view[k] = CachedHashView(table);
-                pixel[k] = order().pixelOf(e * RaysPerElement + k);
-                if (pixel[k] < 0) continue;
-                float t_per_depth, z_min, z_max;
-                const Vec3f dir = startRay(pixel[k], t_per_depth, z_min, z_max);
-                if (!(z_max > z_min)) continue;
-                march[k] = HashRayMarch(camera.origin_grid, dir, camera.min_depth_m * t_per_depth, z_min * t_per_depth, z_max * t_per_depth,
-                                        camera.step_scale);
-            }
-            for (bool any = true; any;) {
-                any = false;
-                for (int k = 0; k < RaysPerElement; ++k)
-                    if (march[k].marching()) {
-                        march[k].step(voxels, view[k]);
-                        any = true;
-                    }
-            }
-            for (int k = 0; k < RaysPerElement; ++k) {
-                Vec3f hit;
-                if (pixel[k] >= 0 && march[k].finish(voxels, view[k], hit))
-                    raycastHitOutputs(voxels, view[k], hit, camera.voxel_size_m, sdf_normals, points_world[pixel[k]], normals_world[pixel[k]]);
-            }
+            if (march[k].finish(voxels, view[k], hit))
+                raycastHitOutputs(voxels, view[k], hit, camera.voxel_size_m, sdf_normals, points_world[pixel[k]], normals_world[pixel[k]]);
         }
     }
 
 private:
-    // Clears pixel i's outputs; its ray direction, parameter per metre of depth and depth range.
-    VF_HOST_DEVICE Vec3f startRay(int i, float& t_per_depth, float& z_min, float& z_max) const {
+    // Clears pixel i's outputs and starts its march (one that is not marching where no visible block
+    // projects).
+    VF_HOST_DEVICE HashRayMarch startRay(int i) const {
         const int x = i % camera.intrinsics.width, y = i / camera.intrinsics.width;
         points_world[i] = normals_world[i] = Vec4f{0.f, 0.f, 0.f, 0.f};
-        z_min = fmaxf(fmaxf(depth_range[i].x, camera.min_depth_m), hint.searchStart(x, y));
-        z_max = fminf(depth_range[i].y, camera.max_depth_m);
-        return camera.rayThroughPixel(x, y, t_per_depth);
+        const float z_min = fmaxf(fmaxf(depth_range[i].x, camera.min_depth_m), hint.searchStart(x, y));
+        const float z_max = fminf(depth_range[i].y, camera.max_depth_m);
+        if (!(z_max > z_min)) return HashRayMarch();
+        float t_per_depth;
+        const Vec3f dir = camera.rayThroughPixel(x, y, t_per_depth);
+        return HashRayMarch(camera.origin_grid, dir, camera.min_depth_m * t_per_depth, z_min * t_per_depth, z_max * t_per_depth,
+                            camera.step_scale);
     }
 };
 
