@@ -135,23 +135,27 @@ struct CpuDevice {
         return best;
     }
 
-    // Per-thread partial sums over equal static shares, added in thread order: the result does not
-    // depend on which thread finished first (an omp reduction clause would not promise that).
+    // Partial sums over fixed shares of the terms, taken by whichever thread is free and added in share
+    // order: the result depends on n alone (not on the thread count or on which thread finished first,
+    // which an omp reduction clause would not promise), and threads do not wait on the one whose static
+    // half held more of the image's valid pixels.
     template <class Terms>
     static NormalEquations<double> sumNormalEquations(int n, const Terms& terms, RobustKernel kernel, float kernel_scale, DeviceScratch&) {
-        const int threads = omp_get_max_threads();
-        std::vector<NormalEquations<double>> partials(static_cast<std::size_t>(threads), NormalEquations<double>::zero());
-#pragma omp parallel num_threads(threads)
-        {
+        constexpr int kMaxShares = 64;
+        constexpr int kMinShareTerms = 1024;
+        const int shares = std::max(1, std::min(kMaxShares, n / kMinShareTerms));
+        std::vector<NormalEquations<double>> partials(static_cast<std::size_t>(shares));
+#pragma omp parallel for schedule(dynamic, 1)
+        for (int s = 0; s < shares; ++s) {
+            const int begin = int((long long)n * s / shares), end = int((long long)n * (s + 1) / shares);
             NormalEquations<double> local = NormalEquations<double>::zero();
-#pragma omp for schedule(static) nowait
-            for (int i = 0; i < n; ++i) {
+            for (int i = begin; i < end; ++i) {
                 float J[6], r;
                 if (!terms(i, J, r)) continue;
                 const float w = robustWeight(kernel, r, kernel_scale);
                 if (w > 0.f) local.addTerm(J, r, w);
             }
-            partials[std::size_t(omp_get_thread_num())] = local;
+            partials[std::size_t(s)] = local;
         }
         NormalEquations<double> total = NormalEquations<double>::zero();
         for (const NormalEquations<double>& p : partials) total.add(p);

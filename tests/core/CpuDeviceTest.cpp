@@ -2,6 +2,10 @@
 // the same checks in tests/cuda/CudaDeviceTest.cu.
 
 #include <gtest/gtest.h>
+#include <omp.h>
+
+#include <random>
+#include <vector>
 
 #include "DevicePrimitiveChecks.h"
 #include "core/CpuDevice.h"
@@ -15,6 +19,27 @@ TEST(CpuDeviceTest, ExclusiveScan) { test::checkExclusiveScan<CpuDevice>(); }
 TEST(CpuDeviceTest, SelectIndicesKeepsOrder) { test::checkSelectIndices<CpuDevice>(); }
 TEST(CpuDeviceTest, SortUnique) { test::checkSortUnique<CpuDevice>(); }
 TEST(CpuDeviceTest, CountMaxAndNormalEquations) { test::checkCountMaxAndNormalEquations<CpuDevice>(); }
+// The tracker's poses must not depend on how many cores ran it: the same bits with 1, 2 and 3 threads.
+TEST(CpuDeviceTest, NormalEquationsDoNotDependOnTheThreadCount) {
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> u(0.f, 1.f);
+    std::vector<float> values(307200);
+    for (float& v : values) v = u(rng);
+    DeviceScratch scratch(Device::CPU);
+    const int threads_before = omp_get_max_threads();
+    std::vector<NormalEquations<double>> sums;
+    for (int threads : {1, 2, 3}) {
+        omp_set_num_threads(threads);
+        sums.push_back(CpuDevice::sumNormalEquations(int(values.size()), test::PolynomialTerms{values.data()}, RobustKernel::Huber, 0.2f, scratch));
+    }
+    omp_set_num_threads(threads_before);
+    for (std::size_t t = 1; t < sums.size(); ++t) {
+        EXPECT_EQ(sums[t].count, sums[0].count);
+        for (int k = 0; k < 21; ++k) EXPECT_EQ(sums[t].hessian[k], sums[0].hessian[k]) << "entry " << k << ", run " << t;
+        for (int k = 0; k < 6; ++k) EXPECT_EQ(sums[t].gradient[k], sums[0].gradient[k]) << "entry " << k << ", run " << t;
+        EXPECT_EQ(sums[t].weighted_cost, sums[0].weighted_cost);
+    }
+}
 TEST(CpuDeviceTest, ReadAndWriteOneElement) { test::checkReadAndWrite<CpuDevice>(); }
 
 }  // namespace
