@@ -95,9 +95,10 @@ public:
         using Body = IntegrateHashVoxels<TVoxel, TDevice::kOneThreadPerItem ? 1 : kBlockVoxelCount>;
         // At most 2^30 elements per launch (element indices are ints).
         const int blocks_per_launch = (1 << 30) / Body::kElementsPerBlock;
-        for (int first = 0; first < blocks; first += blocks_per_launch)
-            TDevice::parallelFor(Body::elementCount(std::min(blocks_per_launch, blocks - first)),
-                                 Body{scene.voxelData(), hash.data().entries, kept_entries_.data(kDevice) + first, frame});
+        for (int first = 0; first < blocks; first += blocks_per_launch) {
+            const int count = std::min(blocks_per_launch, blocks - first);
+            TDevice::parallelFor(Body::elementCount(count), Body{scene.voxelData(), hash.data().entries, kept_entries_.data(kDevice) + first, count, frame});
+        }
     }
 
     // Frees every block and returns the voxel storage to its initial (empty) size.

@@ -213,7 +213,7 @@ TEST(IntegrationBlockSkipTest, SkippedBlocksAreOnesNoVoxelOfWhichChanges) {
         const IntegrationFrame frame =
             makeIntegrationFrame(params, view, pose, view.depth.host(), view.rgb.host(), nullptr, all.takeIntegrationNumber());
         CpuDevice::parallelFor(visible, IntegrateHashVoxels<VoxelSRgb, kBlockVoxelCount>{all.voxelData(), all.index().data().entries,
-                                                                                          visible_entries.data(), frame});
+                                                                                          visible_entries.data(), visible, frame});
         // Which blocks the engine skips.
         const int tiles_x = (intr.width + kDepthTile - 1) / kDepthTile, tiles_y = (intr.height + kDepthTile - 1) / kDepthTile;
         std::vector<float> tile_max(std::size_t(tiles_x * tiles_y));

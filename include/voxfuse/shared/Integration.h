@@ -164,6 +164,10 @@ struct UsableDepth {
 // The voxel block hash: element i updates `VoxelsPerElement` consecutive voxels (a divisor of 512) of
 // the visible blocks, taken in visible-list order: the CPU layer runs whole blocks (the block's entry
 // is read once), the CUDA layer a voxel per thread.
+//
+// A CPU thread takes neighbouring blocks one after the other, and each block's 4 KiB (s_rgb) lie
+// wherever the allocator put them: while it fuses a block it prefetches the next one's voxels, row by
+// row, and the entry of the one after, so that the loads of a block do not wait on memory.
 template <class TVoxel, int VoxelsPerElement>
 struct IntegrateHashVoxels {
     static_assert(kBlockVoxelCount % VoxelsPerElement == 0, "elements must not straddle blocks");
@@ -171,6 +175,7 @@ struct IntegrateHashVoxels {
     TVoxel* voxels;
     const HashEntry* entries;
     const int* visible_entries;
+    int block_count;  // of visible_entries
     IntegrationFrame frame;
 
     static int elementCount(int visible_blocks) { return visible_blocks * kElementsPerBlock; }
@@ -183,8 +188,18 @@ struct IntegrateHashVoxels {
             // A copy the voxel stores cannot alias: byte stores may alias any member of *this, which
             // would reload every frame constant after each voxel of the block.
             const IntegrationFrame f = frame;
+            if (i + 2 < block_count) VF_PREFETCH_FOR_READ(&entries[visible_entries[i + 2]]);
+            const char* next_block = i + 1 < block_count
+                                         ? reinterpret_cast<const char*>(voxels + (long long)entries[visible_entries[i + 1]].ptr * kBlockVoxelCount)
+                                         : nullptr;
+            constexpr int kRowBytes = kBlockSide * int(sizeof(TVoxel));
             for (int z = 0; z < kBlockSide; ++z)
                 for (int y = 0; y < kBlockSide; ++y) {
+                    if (next_block != nullptr) {
+                        const char* next_row = next_block + (y + z * kBlockSide) * kRowBytes;
+                        VF_PREFETCH_FOR_WRITE(next_row);
+                        VF_PREFETCH_FOR_WRITE(next_row + kRowBytes - 1);
+                    }
                     const Vec3f row = blockRowOffset(f, y, z);
                     TVoxel* line = block + (y + z * kBlockSide) * kBlockSide;
                     for (int x = 0; x < kBlockSide; ++x)
