@@ -125,10 +125,10 @@ private:
             std::uint8_t* visibility = hash.state().entry_visibility;
             if constexpr (!TDevice::kOneThreadPerItem) {
                 const MarkBlocksForPixels<256> mark{frame, table, visibility, on(missing_), on(missing_count_), int(missing_.size()),
-                                                    frame.intrinsics.width};
+                                                    Vec2i{32, 32}};
                 TDevice::parallelFor(mark.elementCount(), mark);
             } else {
-                const MarkBlocksForPixels<1> mark{frame, table, visibility, on(missing_), on(missing_count_), int(missing_.size()), 1};
+                const MarkBlocksForPixels<1> mark{frame, table, visibility, on(missing_), on(missing_count_), int(missing_.size()), Vec2i{1, 1}};
                 TDevice::parallelFor(mark.elementCount(), mark);
             }
             const int appended = TDevice::read(on(missing_count_), scratch_);

@@ -403,7 +403,7 @@ TEST(AllocationStage1Test, TheCountOfMissingBlocksSaturatesAndTheListIsNeverOver
     std::vector<std::uint64_t> list(kCapacity + 8, 0xfeedull);  // 8 guard slots past the capacity
     int count = 0;
     MarkBlocksForPixels<256> mark{makeDepthSegmentFrame(params, view, poseA()), hash.data(), hash.state().entry_visibility,
-                                  list.data(), &count, kCapacity, kIntr.width};
+                                  list.data(), &count, kCapacity, Vec2i{kIntr.width, 1}};
     mark.max_counted_appends = kCountStop;
     CpuDevice::parallelFor(mark.elementCount(), mark);
     EXPECT_GE(count, kCountStop);

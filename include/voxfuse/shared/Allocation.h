@@ -66,6 +66,11 @@ VF_HOST_DEVICE inline void forEachBlockOnDepthSegment(const DepthSegmentFrame& f
     // Half a pixel at the far end is the widest the footprint gets along the segment.
     const float margin = f.margin_voxels_per_m * z1 + kSegmentMarginExtraVoxels;
     const Vec3f ab = b - a;
+    // Reciprocals once per pixel: the slab tests below would otherwise divide twice per candidate block
+    // per axis. Their one-ulp difference to a quotient is far inside the hundredth of a voxel that
+    // kSegmentMarginExtraVoxels adds. 0 marks an axis the segment does not move along (to 1e-30 voxels).
+    auto reciprocal = [](float v) { return fabsf(v) >= 1e-30f ? 1.f / v : 0.f; };
+    const Vec3f inv_ab{reciprocal(ab.x), reciprocal(ab.y), reciprocal(ab.z)};
     Vec3i first, last;
     for (int k = 0; k < 3; ++k) {
         const float lo = (a[k] < b[k] ? a[k] : b[k]) - margin, hi = (a[k] < b[k] ? b[k] : a[k]) + margin;
@@ -78,11 +83,11 @@ VF_HOST_DEVICE inline void forEachBlockOnDepthSegment(const DepthSegmentFrame& f
     // maximum are exact, so the order in which the axes narrow the range changes no result.)
     auto narrow = [&](int k, int c, float& t_in, float& t_out) {
         const float lo = float(c * kBlockSide) - margin, hi = float(c * kBlockSide + kBlockSide - 1) + margin;
-        if (ab[k] == 0.f) {
+        if (inv_ab[k] == 0.f) {
             if (a[k] < lo || a[k] > hi) t_out = -1.f;
             return;
         }
-        float t_lo = (lo - a[k]) / ab[k], t_hi = (hi - a[k]) / ab[k];
+        float t_lo = (lo - a[k]) * inv_ab[k], t_hi = (hi - a[k]) * inv_ab[k];
         if (t_lo > t_hi) {
             const float s = t_lo;
             t_lo = t_hi;
@@ -131,12 +136,13 @@ struct RecentBlocks {
 // billions). Concurrent appends may pass it by one per thread in flight, far below the 2^20 margin.
 constexpr int kMaxCountedAppends = 0x7fffffff - (1 << 20);
 
-// Allocation stage 1 for a run of `span` pixels of one row (element e: row e / spans_per_row): each block
+// Allocation stage 1 for a tile of `tile.x` x `tile.y` pixels (element e: tile e, row-major): each block
 // the pixels need is marked seen when the hash has it, or its key is appended to the missing list
 // (every block outside the storable coordinates as kOutOfRangeBlockKey). The list may get a block more
 // than once; appends beyond its capacity are counted but not stored (the caller repeats the pass).
-// `RecentSlots` sizes the cache of blocks already handled within the run: the CPU layer runs whole rows
-// with a large cache, the CUDA layer single pixels.
+// `RecentSlots` sizes the cache of blocks already handled within the tile: the CPU layer runs square
+// tiles with a large cache (a block covers some 20 x 20 pixels at 1 m, so a tile looks it up once
+// where a row of pixels looked it up once per row), the CUDA layer single pixels.
 template <int RecentSlots>
 struct MarkBlocksForPixels {
     DepthSegmentFrame frame;          // depth on the layer's device
@@ -145,16 +151,15 @@ struct MarkBlocksForPixels {
     std::uint64_t* missing;
     int* missing_count;               // appends attempted (may exceed the capacity; saturates at kMaxCountedAppends)
     int missing_capacity;
-    int span;                         // pixels per element
+    Vec2i tile;                       // pixels per element along x and y
     int max_counted_appends = kMaxCountedAppends;  // where the count stops (tests set less)
 
-    VF_HOST_DEVICE int elementCount() const {
-        return ((frame.intrinsics.width + span - 1) / span) * frame.intrinsics.height;
-    }
+    VF_HOST_DEVICE int tilesPerRow() const { return (frame.intrinsics.width + tile.x - 1) / tile.x; }
+    VF_HOST_DEVICE int elementCount() const { return tilesPerRow() * ((frame.intrinsics.height + tile.y - 1) / tile.y); }
     VF_HOST_DEVICE void operator()(int element) const {
-        const int spans_per_row = (frame.intrinsics.width + span - 1) / span;
-        const int y = element / spans_per_row, x0 = (element % spans_per_row) * span;
-        const int x1 = x0 + span < frame.intrinsics.width ? x0 + span : frame.intrinsics.width;
+        const int x0 = (element % tilesPerRow()) * tile.x, y0 = (element / tilesPerRow()) * tile.y;
+        const int x1 = x0 + tile.x < frame.intrinsics.width ? x0 + tile.x : frame.intrinsics.width;
+        const int y1 = y0 + tile.y < frame.intrinsics.height ? y0 + tile.y : frame.intrinsics.height;
         RecentBlocks<RecentSlots> recent;
         auto mark = [&](Vec3i block) {
             if (recent.checkAndRemember(block)) return;
@@ -167,7 +172,8 @@ struct MarkBlocksForPixels {
             const int slot = atomicAddInt(missing_count, 1);
             if (slot < missing_capacity) missing[slot] = blockKey(block);
         };
-        for (int x = x0; x < x1; ++x) forEachBlockOnDepthSegment(frame, x, y, mark);
+        for (int y = y0; y < y1; ++y)
+            for (int x = x0; x < x1; ++x) forEachBlockOnDepthSegment(frame, x, y, mark);
     }
 };
 
