@@ -93,7 +93,9 @@ private:
                 low_level_->copyDepth(view.depth, level.depth);
             }
             low_level_->computeVertexMap(level.depth, level.intrinsics, level.vertices);
-            low_level_->computeNormalMap(level.vertices, level.normals, settings_.max_normal_edge_m * float(1 << i));
+            // Only the normals the level's terms read (a level taking every second pixel reads a quarter).
+            low_level_->computeNormalMap(level.vertices, level.normals, settings_.max_normal_edge_m * float(1 << i),
+                                         settings_.levels[std::size_t(levelCount() - 1 - i)].pixel_step);
         }
         // Counted on the pixels the finest level takes terms from, as its inliers are.
         valid_pixels_ = low_level_->countValidDepth(pyramid_[0].depth, settings_.levels.back().pixel_step);

@@ -70,10 +70,12 @@ public:
         TDevice::parallelFor(int(depth.pixelCount()), VertexPixels{src, intr, dst});
     }
 
-    void computeNormalMap(const Image<Vec4f>& vertices, Image<Vec4f>& normals, float max_edge_m) override {
+    void computeNormalMap(const Image<Vec4f>& vertices, Image<Vec4f>& normals, float max_edge_m, int pixel_step) override {
+        if (pixel_step < 1) throw Error("computeNormalMap: the pixel step must be at least 1, got " + std::to_string(pixel_step));
         const Vec4f* src = imageOn(kDevice, vertices, point_staging_);
         Vec4f* dst = outputOn(kDevice, normals, vertices.size());
-        TDevice::parallelFor(int(vertices.pixelCount()), NormalPixels{src, vertices.size(), max_edge_m, dst});
+        TDevice::parallelFor(gridSize(vertices.size(), pixel_step),
+                             NormalPixels{src, vertices.size(), max_edge_m, pixelGridOf(vertices.size(), pixel_step), dst});
     }
 
     void copyDepth(const Image<float>& in, Image<float>& out) override {

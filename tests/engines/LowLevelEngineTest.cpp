@@ -129,6 +129,37 @@ TEST(LowLevelEngineTest, VertexAndNormalMapsOfATiltedPlane) {
     EXPECT_NEAR(dot(normals.at(0, 0).xyz(), expected), 1.f, 1e-4f);
 }
 
+// A subsampled tracker level reads every second (third) pixel's normal: those are computed as in the
+// full map, and no other pixel is written.
+TEST(LowLevelEngineTest, NormalsOnAPixelGridAreTheFullMapsThere) {
+    auto engine = makeLowLevelEngine(Device::CPU);
+    const Intrinsics intr = test::kinectIntrinsics(161, 121);
+    Image<float> depth(intr.size());
+    for (int y = 0; y < intr.height; ++y)
+        for (int x = 0; x < intr.width; ++x) depth.at(x, y) = (x + y) % 7 == 0 ? 0.f : 1.f + 0.002f * float((x * 7 + y * 13) % 11);
+    Image<Vec4f> vertices, full;
+    engine->computeVertexMap(depth, intr, vertices);
+    engine->computeNormalMap(vertices, full, 0.1f);
+    for (int step : {2, 3}) {
+        const Vec4f sentinel{7.f, 7.f, 7.f, 7.f};
+        Image<Vec4f> grid(intr.size());
+        for (int i = 0; i < int(grid.pixelCount()); ++i) grid.host()[i] = sentinel;
+        engine->computeNormalMap(vertices, grid, 0.1f, step);
+        int on_grid = 0;
+        for (int y = 0; y < intr.height; ++y)
+            for (int x = 0; x < intr.width; ++x) {
+                const Vec4f g = grid.at(x, y), f = full.at(x, y);
+                if (x % step == 0 && y % step == 0) {
+                    ++on_grid;
+                    EXPECT_TRUE(g.x == f.x && g.y == f.y && g.z == f.z && g.w == f.w) << "pixel " << x << "," << y << ", step " << step;
+                } else {
+                    EXPECT_TRUE(g.x == 7.f && g.w == 7.f) << "pixel " << x << "," << y << " off the grid was written, step " << step;
+                }
+            }
+        EXPECT_EQ(on_grid, ((intr.width + step - 1) / step) * ((intr.height + step - 1) / step));
+    }
+}
+
 // Depth registered to another camera has empty rows and columns (here every 4th of each); the valid
 // pixels beside them keep their normals (one-sided or across the gap), as on the full plane.
 TEST(LowLevelEngineTest, HoleLinesDoNotTakeTheNormalsOfTheirNeighbours) {

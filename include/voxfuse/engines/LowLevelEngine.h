@@ -31,7 +31,9 @@ public:
     // Half resolution; see downsampleDepthPixel for how holes and edges are handled.
     virtual void downsampleDepth(const Image<float>& in, Image<float>& out, float max_diff_m) = 0;
     virtual void computeVertexMap(const Image<float>& depth, const Intrinsics& intrinsics, Image<Vec4f>& vertices) = 0;
-    virtual void computeNormalMap(const Image<Vec4f>& vertices, Image<Vec4f>& normals, float max_edge_m) = 0;
+    // With `pixel_step` > 1 only the pixels of every pixel_step-th row and column (those a subsampled
+    // tracker level reads) get their normal; the others are not written.
+    virtual void computeNormalMap(const Image<Vec4f>& vertices, Image<Vec4f>& normals, float max_edge_m, int pixel_step = 1) = 0;
     virtual void copyDepth(const Image<float>& in, Image<float>& out) = 0;
     // Pixels with depth (> 0), points with w > 0. With `pixel_step` > 1, only the pixels of every
     // pixel_step-th row and column are counted (the pixels a subsampled tracker level uses).

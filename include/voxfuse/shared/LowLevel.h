@@ -207,12 +207,17 @@ struct VertexPixels {
     VF_HOST_DEVICE void operator()(int i) const { vertices[i] = vertexFromDepthPixel(depth, intrinsics, i % intrinsics.width, i / intrinsics.width); }
 };
 
+// Element i is pixel grid.index(i) (every pixel with a grid of step 1).
 struct NormalPixels {
     const Vec4f* vertices;
     Vec2i size;
     float max_edge_m;
+    PixelGrid grid;
     Vec4f* normals;
-    VF_HOST_DEVICE void operator()(int i) const { normals[i] = normalFromVertexPixel(vertices, size, i % size.x, i / size.x, max_edge_m); }
+    VF_HOST_DEVICE void operator()(int i) const {
+        const int p = grid.index(i);
+        normals[p] = normalFromVertexPixel(vertices, size, p % size.x, p / size.x, max_edge_m);
+    }
 };
 
 template <class T>
