@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <limits>
+#include <random>
 #include <vector>
 
 #include "DeviceTestSupport.h"
@@ -159,6 +161,31 @@ TEST_P(IntegrationColorTest, ColourOfAUniformWallIsFused) {
 INSTANTIATE_TEST_SUITE_P(Devices, IntegrationColorTest, test::kAllDevices, test::DeviceName());
 
 // The frustum clipping of rows must not drop any voxel the per-voxel update would change.
+// The branch-free pixel lookup the CPU vectorises picks the pixel Intrinsics::nearestPixelIndex picks,
+// and none for voxels closer than near_m, on the image's borders, beyond them and for NaN.
+TEST(IntegrationPixelTest, DepthPixelOfAVoxelIsTheNearestPixel) {
+    IntegrationFrame f{};
+    f.depth_intrinsics = test::kinectIntrinsics(160, 120);
+    f.near_m = 0.2f;
+    const Intrinsics& in = f.depth_intrinsics;
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> lateral(-1.5f, 1.5f), depth(-0.5f, 3.f);
+    int inside = 0;
+    for (int k = 0; k < 200000; ++k) {
+        Vec3f p{lateral(rng), lateral(rng), depth(rng)};
+        if (k % 1000 == 0) p.z = f.near_m;                         // exactly at the near plane: taken
+        if (k % 1000 == 1) p.x = std::numeric_limits<float>::quiet_NaN();
+        if (k % 1000 == 2) {                                      // on a pixel border half a pixel outside
+            p.z = 1.f;
+            p.x = (-0.5f - in.cx) / in.fx;
+        }
+        const int expected = p.z < f.near_m ? -1 : in.nearestPixelIndex(in.project(p));
+        ASSERT_EQ(depthPixelOfVoxel(p, f), expected) << p.x << " " << p.y << " " << p.z;
+        inside += expected >= 0;
+    }
+    EXPECT_GT(inside, 20000);  // the cases inside the image were many
+}
+
 TEST(IntegrationBoxTest, RowClippingLosesNoUpdate) {
     const SceneParams params = smallSceneParams();
     const synth::SyntheticScene world = synth::SyntheticScene::boxAndSphere();

@@ -88,14 +88,27 @@ VF_HOST_DEVICE inline bool frustumRowRange(const IntegrationFrame& f, Vec3f row_
     return x_begin < x_end;
 }
 
+// The depth pixel a voxel at p_cam (depth camera coordinates) reads, or -1: closer than near_m, or
+// outside the image. Intrinsics::nearestPixelIndex without branches (the same pixel), so that the
+// CPU computes a row of voxels' pixels in vector registers.
+VF_HOST_DEVICE inline int depthPixelOfVoxel(Vec3f p_cam, const IntegrationFrame& f) {
+    const Intrinsics& in = f.depth_intrinsics;
+    const Vec2f px = in.project(p_cam);
+    // & rather than &&: no branches (each comparison is false for NaN).
+    const bool inside = (p_cam.z >= f.near_m) & (px.x >= -0.5f) & (px.y >= -0.5f) & (px.x < float(in.width) - 0.5f) &
+                        (px.y < float(in.height) - 0.5f);
+    // Conversions of in-range values only: outside, they see 0.
+    const int u = int((inside ? px.x : 0.f) + 0.5f), v = int((inside ? px.y : 0.f) + 0.5f);
+    return inside & (u < in.width) & (v < in.height) ? u + v * in.width : -1;
+}
+
 // Updates `voxel` (grid position `pos`, centre at pos * voxel size, at p_cam in depth camera
-// coordinates) with the frame. Returns eta, the measured depth minus the voxel's depth along the
-// optical axis, or a large negative number when the voxel gets no update.
+// coordinates, reading depth pixel `depth_pixel` = depthPixelOfVoxel(p_cam, f)) with the frame.
+// Returns eta, the measured depth minus the voxel's depth along the optical axis, or a large negative
+// number when the voxel gets no update.
 template <class TVoxel>
-VF_HOST_DEVICE inline float integrateVoxelAt(TVoxel& voxel, Vec3i pos, Vec3f p_cam, const IntegrationFrame& f) {
+VF_HOST_DEVICE inline float integrateVoxelAtPixel(TVoxel& voxel, Vec3i pos, Vec3f p_cam, int depth_pixel, const IntegrationFrame& f) {
     const float kNoUpdate = -1e30f;
-    if (p_cam.z < f.near_m) return kNoUpdate;
-    const int depth_pixel = f.depth_intrinsics.nearestPixelIndex(f.depth_intrinsics.project(p_cam));
     if (depth_pixel < 0) return kNoUpdate;
 
     const float depth_m = f.depth[depth_pixel];
@@ -141,6 +154,11 @@ VF_HOST_DEVICE inline float integrateVoxelAt(TVoxel& voxel, Vec3i pos, Vec3f p_c
         }
     }
     return eta;
+}
+
+template <class TVoxel>
+VF_HOST_DEVICE inline float integrateVoxelAt(TVoxel& voxel, Vec3i pos, Vec3f p_cam, const IntegrationFrame& f) {
+    return integrateVoxelAtPixel(voxel, pos, p_cam, depthPixelOfVoxel(p_cam, f), f);
 }
 
 // integrateVoxelAt() for a voxel given by its grid position alone (the dense array): placed through the
@@ -202,8 +220,18 @@ struct IntegrateHashVoxels {
                     }
                     const Vec3f row = blockRowOffset(f, y, z);
                     TVoxel* line = block + (y + z * kBlockSide) * kBlockSide;
+                    // The row's voxel positions and depth pixels first, a loop the compiler vectorises.
+                    float px[kBlockSide], py[kBlockSide], pz[kBlockSide];
+                    int pixel[kBlockSide];
+                    for (int x = 0; x < kBlockSide; ++x) {
+                        const Vec3f p = blockVoxelInDepthCamera(f, corner_cam, row, x);
+                        px[x] = p.x;
+                        py[x] = p.y;
+                        pz[x] = p.z;
+                        pixel[x] = depthPixelOfVoxel(p, f);
+                    }
                     for (int x = 0; x < kBlockSide; ++x)
-                        integrateVoxelAt(line[x], corner + Vec3i{x, y, z}, blockVoxelInDepthCamera(f, corner_cam, row, x), f);
+                        integrateVoxelAtPixel(line[x], corner + Vec3i{x, y, z}, Vec3f{px[x], py[x], pz[x]}, pixel[x], f);
                 }
         } else {
             const IntegrationFrame& f = frame;
