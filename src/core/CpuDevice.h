@@ -34,6 +34,43 @@
 
 namespace voxfuse {
 
+// Element loops are compiled twice, for the x86-64 baseline and for AVX2, and the loader picks the one
+// the CPU runs (GCC function multiversioning); `flatten` inlines the loop body and all it calls into
+// each. AVX2 without FMA: a fused multiply-add rounds once where the baseline and the CUDA layer
+// (-fmad=false) round twice, so every result keeps its bits on every CPU. Measured on teddy against
+// the baseline alone: raycast 0.87, allocate 0.93, integrate 0.96.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define VF_CPU_CLONES __attribute__((target_clones("avx2", "default"), flatten))
+#else
+#define VF_CPU_CLONES
+#endif
+
+struct BilateralFilterSpans;
+
+namespace cpu_detail {
+
+// Loop bodies that run slower in the AVX2 clone: GCC 12 leaves the bilateral filter's span loop
+// scalar there, three times slower than its SSE2 vector loop.
+template <class Body>
+constexpr bool kCloneForAvx2 = true;
+template <>
+constexpr bool kCloneForAvx2<BilateralFilterSpans> = false;
+
+// body(i) for i in [begin, end), on a copy of the body: stores through the body's output pointers
+// could alias the caller's body object, and the compiler would then reload every member after every
+// store; they cannot alias a copy of the function's own.
+template <class Body>
+void runElements(const Body& body, int begin, int end) {
+    const Body local = body;
+    for (int i = begin; i < end; ++i) local(i);
+}
+template <class Body>
+VF_CPU_CLONES void runElementsCloned(const Body& body, int begin, int end) {
+    runElements(body, begin, end);
+}
+
+}  // namespace cpu_detail
+
 struct CpuDevice {
     static constexpr Device kind = Device::CPU;
     // Loop bodies come in two launch shapes: a wide element (a row of pixels, a whole block) with a
@@ -43,19 +80,17 @@ struct CpuDevice {
 
     // Dynamic scheduling in chunks of about 1/32 of a thread's share: loop bodies of uneven cost (rays,
     // pixels with and without depth) balance, and cheap ones pay one scheduling step per chunk.
-    //
-    // Each thread runs a copy of the body: the body's stores through its output pointers could alias
-    // the caller's body object, and the compiler would then reload every member after every store;
-    // they cannot alias a copy of the thread's own.
     template <class Body>
     static void parallelFor(int n, const Body& body) {
         if (n <= 0) return;
         const int chunk = std::max(1, n / (32 * omp_get_max_threads()));
-#pragma omp parallel
-        {
-            const Body local = body;
-#pragma omp for schedule(dynamic, chunk)
-            for (int i = 0; i < n; ++i) local(i);
+        const int chunks = (n + chunk - 1) / chunk;
+#pragma omp parallel for schedule(dynamic, 1)
+        for (int c = 0; c < chunks; ++c) {
+            if constexpr (cpu_detail::kCloneForAvx2<Body>)
+                cpu_detail::runElementsCloned(body, c * chunk, std::min(n, c * chunk + chunk));
+            else
+                cpu_detail::runElements(body, c * chunk, std::min(n, c * chunk + chunk));
         }
     }
 
