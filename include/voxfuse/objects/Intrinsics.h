@@ -16,11 +16,12 @@ struct Intrinsics {
         return {fx * p_camera.x / p_camera.z + cx, fy * p_camera.y / p_camera.z + cy};
     }
     // Index (x + y * width) of the pixel nearest to pixel coordinates `px`, or -1 outside the image
-    // (NaN included). The range check comes first so that the casts never see a negative or huge value.
+    // (NaN included). Branch-free (& rather than &&, selects rather than an early return), so that
+    // loops over voxels or pixels that look pixels up vectorise; the casts see in-range values only.
     VF_HOST_DEVICE int nearestPixelIndex(Vec2f px) const {
-        if (!(px.x >= -0.5f && px.y >= -0.5f && px.x < float(width) - 0.5f && px.y < float(height) - 0.5f)) return -1;
-        const int u = int(px.x + 0.5f), v = int(px.y + 0.5f);
-        return u < width && v < height ? u + v * width : -1;
+        const bool inside = (px.x >= -0.5f) & (px.y >= -0.5f) & (px.x < float(width) - 0.5f) & (px.y < float(height) - 0.5f);
+        const int u = int((inside ? px.x : 0.f) + 0.5f), v = int((inside ? px.y : 0.f) + 0.5f);
+        return inside & (u < width) & (v < height) ? u + v * width : -1;
     }
     // Pixel (u, v) at depth z (metres along the optical axis) to a camera-frame point.
     VF_HOST_DEVICE Vec3f unproject(float u, float v, float depth_m) const {

@@ -89,17 +89,11 @@ VF_HOST_DEVICE inline bool frustumRowRange(const IntegrationFrame& f, Vec3f row_
 }
 
 // The depth pixel a voxel at p_cam (depth camera coordinates) reads, or -1: closer than near_m, or
-// outside the image. Intrinsics::nearestPixelIndex without branches (the same pixel), so that the
-// CPU computes a row of voxels' pixels in vector registers.
+// outside the image. Without branches, so that the CPU computes a row of voxels' pixels in vector
+// registers (a voxel behind the camera projects to garbage, which the select drops).
 VF_HOST_DEVICE inline int depthPixelOfVoxel(Vec3f p_cam, const IntegrationFrame& f) {
-    const Intrinsics& in = f.depth_intrinsics;
-    const Vec2f px = in.project(p_cam);
-    // & rather than &&: no branches (each comparison is false for NaN).
-    const bool inside = (p_cam.z >= f.near_m) & (px.x >= -0.5f) & (px.y >= -0.5f) & (px.x < float(in.width) - 0.5f) &
-                        (px.y < float(in.height) - 0.5f);
-    // Conversions of in-range values only: outside, they see 0.
-    const int u = int((inside ? px.x : 0.f) + 0.5f), v = int((inside ? px.y : 0.f) + 0.5f);
-    return inside & (u < in.width) & (v < in.height) ? u + v * in.width : -1;
+    const int pixel = f.depth_intrinsics.nearestPixelIndex(f.depth_intrinsics.project(p_cam));
+    return p_cam.z >= f.near_m ? pixel : -1;
 }
 
 // Updates `voxel` (grid position `pos`, centre at pos * voxel size, at p_cam in depth camera
