@@ -56,6 +56,62 @@ VF_CPU_CLONES void runElements(const Body& body, int begin, int end) {
     for (int i = begin; i < end; ++i) local(i);
 }
 
+// The normal equations of terms [begin, end), in batches of kTermBatch: first each term and its
+// robust weight, one at a time (a term may look up a model pixel or be rejected; a rejected or
+// zero-weight term becomes zeros), then every product of the batch summed kTermLanes terms abreast
+// into a lane sum per entry, the lanes added in order at the end. The lanes are written out, so the
+// order of every addition is fixed by this code: the AVX2 clone and the baseline give the same bits.
+// One term at a time, the 29 sums of each term were a chain of scalar double additions.
+constexpr int kTermBatch = 64;
+constexpr int kTermLanes = 4;
+constexpr int kTermSums = 29;  // 21 Hessian entries, 6 gradient entries, the weighted cost, the squared sum
+
+// lanes[l] += a[k] * b[k] for k = l (mod kTermLanes) over one batch, in order of k.
+inline void addLaneProducts(double lanes[kTermLanes], const double* a, const double* b) {
+    for (int k = 0; k < kTermBatch; k += kTermLanes)
+        for (int l = 0; l < kTermLanes; ++l) lanes[l] += a[k + l] * b[k + l];
+}
+
+template <class Terms>
+VF_CPU_CLONES NormalEquations<double> sumTermShare(const Terms& terms, RobustKernel kernel, float kernel_scale, int begin, int end) {
+    static_assert(kTermBatch % kTermLanes == 0, "a batch is whole lane groups");
+    const Terms local = terms;  // see runElements
+    double lanes[kTermSums][kTermLanes] = {};
+    int count = 0;
+    alignas(64) double J[6][kTermBatch], r[kTermBatch], w[kTermBatch], wj[kTermBatch];
+    for (int batch = begin; batch < end; batch += kTermBatch) {
+        const int m = std::min(kTermBatch, end - batch);
+        for (int k = 0; k < kTermBatch; ++k) {
+            float Jk[6] = {0.f, 0.f, 0.f, 0.f, 0.f, 0.f}, rk = 0.f, wk = 0.f;
+            if (k < m && local(batch + k, Jk, rk)) wk = robustWeight(kernel, rk, kernel_scale);
+            const bool used = wk > 0.f;
+            count += used ? 1 : 0;
+            w[k] = used ? double(wk) : 0.0;
+            r[k] = used ? double(rk) : 0.0;
+            for (int a = 0; a < 6; ++a) J[a][k] = used ? double(Jk[a]) : 0.0;  // zeros, not 0 * NaN
+        }
+        // The products and their order are addTerm's: (w J_a) J_b, (w J_a) r, (w r) r, r r.
+        int entry = 0;
+        for (int a = 0; a < 6; ++a) {
+            for (int k = 0; k < kTermBatch; ++k) wj[k] = w[k] * J[a][k];
+            for (int b = a; b < 6; ++b) addLaneProducts(lanes[entry++], wj, J[b]);
+            addLaneProducts(lanes[21 + a], wj, r);
+        }
+        for (int k = 0; k < kTermBatch; ++k) wj[k] = w[k] * r[k];
+        addLaneProducts(lanes[27], wj, r);
+        addLaneProducts(lanes[28], r, r);
+    }
+    NormalEquations<double> sums = NormalEquations<double>::zero();
+    for (int l = 0; l < kTermLanes; ++l) {
+        for (int e = 0; e < 21; ++e) sums.hessian[e] += lanes[e][l];
+        for (int a = 0; a < 6; ++a) sums.gradient[a] += lanes[21 + a][l];
+        sums.weighted_cost += lanes[27][l];
+        sums.squared_sum += lanes[28][l];
+    }
+    sums.count = count;
+    return sums;
+}
+
 }  // namespace cpu_detail
 
 struct CpuDevice {
@@ -165,14 +221,7 @@ struct CpuDevice {
 #pragma omp parallel for schedule(dynamic, 1)
         for (int s = 0; s < shares; ++s) {
             const int begin = int((long long)n * s / shares), end = int((long long)n * (s + 1) / shares);
-            NormalEquations<double> local = NormalEquations<double>::zero();
-            for (int i = begin; i < end; ++i) {
-                float J[6], r;
-                if (!terms(i, J, r)) continue;
-                const float w = robustWeight(kernel, r, kernel_scale);
-                if (w > 0.f) local.addTerm(J, r, w);
-            }
-            partials[std::size_t(s)] = local;
+            partials[std::size_t(s)] = cpu_detail::sumTermShare(terms, kernel, kernel_scale, begin, end);
         }
         NormalEquations<double> total = NormalEquations<double>::zero();
         for (const NormalEquations<double>& p : partials) total.add(p);
