@@ -36,6 +36,47 @@ void smooth(const std::vector<float>& in, const std::vector<float>& weight, Vec2
         }
 }
 
+// The first of `frame` pixels along an axis whose cell (pixel * cells / frame) is `cell`.
+int firstPixelOfCell(int cell, int cells, int frame) { return int((static_cast<long long>(cell) * frame + cells - 1) / cells); }
+
+// Averages of value(pixel) over the valid(pixel) pixels of each cell, cell (cx, cy) holding the frame's
+// pixels [cx * W / w, (cx + 1) * W / w) x [cy * H / h, (cy + 1) * H / h), and how many there were (0:
+// mean 0). A cell row is one thread's: its columns are summed down its rows first (independent sums,
+// which vectorise), then across each cell; the result does not depend on the thread count.
+template <class Pixel, class Valid, class Value>
+void cellAverages(Vec2i frame, Vec2i small, const Pixel* pixels, Valid valid, Value value, std::vector<float>& mean,
+                  std::vector<float>& count) {
+    mean.assign(std::size_t(small.x) * std::size_t(small.y), 0.f);
+    count.assign(mean.size(), 0.f);
+#pragma omp parallel
+    {
+        std::vector<float> column_sum(std::size_t(frame.x)), column_count(std::size_t(frame.x));
+#pragma omp for schedule(static)
+        for (int cy = 0; cy < small.y; ++cy) {
+            std::fill(column_sum.begin(), column_sum.end(), 0.f);
+            std::fill(column_count.begin(), column_count.end(), 0.f);
+            for (int y = firstPixelOfCell(cy, small.y, frame.y); y < firstPixelOfCell(cy + 1, small.y, frame.y); ++y) {
+                const Pixel* row = pixels + std::size_t(y) * std::size_t(frame.x);
+                for (int x = 0; x < frame.x; ++x) {
+                    const bool ok = valid(row[x]);
+                    column_sum[std::size_t(x)] += ok ? value(row[x]) : 0.f;
+                    column_count[std::size_t(x)] += ok ? 1.f : 0.f;
+                }
+            }
+            for (int cx = 0; cx < small.x; ++cx) {
+                float sum = 0.f, n = 0.f;
+                for (int x = firstPixelOfCell(cx, small.x, frame.x); x < firstPixelOfCell(cx + 1, small.x, frame.x); ++x) {
+                    sum += column_sum[std::size_t(x)];
+                    n += column_count[std::size_t(x)];
+                }
+                const std::size_t c = std::size_t(cx) + std::size_t(cy) * std::size_t(small.x);
+                mean[c] = n > 0.f ? sum / n : 0.f;
+                count[c] = n;
+            }
+        }
+    }
+}
+
 }  // namespace
 
 float fernDissimilarity(const FernCode& a, const FernCode& b) {
@@ -71,43 +112,21 @@ void FernEncoder::shrink(const Image<float>& depth_m, const Image<Vec4u8>& rgb, 
                          std::vector<float>& intensity_small) const {
     if (depth_m.size() != frame_size_) throw ConfigError("ferns: the depth image is not of the size the encoder was made for");
     const std::size_t cells = std::size_t(small_size_.x) * std::size_t(small_size_.y);
-    std::vector<float> sum(cells, 0.f), count(cells, 0.f);
-    // Cell (cx, cy) averages the frame's pixels [cx * W / w, (cx + 1) * W / w) (and likewise in y).
-    for (int y = 0; y < frame_size_.y; ++y) {
-        const int cy = y * small_size_.y / frame_size_.y;
-        const float* row = depth_m.host() + std::size_t(y) * std::size_t(frame_size_.x);
-        for (int x = 0; x < frame_size_.x; ++x) {
-            const float d = row[x];
-            if (!(d > 0.f)) continue;
-            const std::size_t c = std::size_t(x * small_size_.x / frame_size_.x + cy * small_size_.x);
-            sum[c] += d;
-            count[c] += 1.f;
-        }
-    }
-    for (std::size_t c = 0; c < cells; ++c) sum[c] = count[c] > 0.f ? sum[c] / count[c] : 0.f;
-    smooth(sum, count, small_size_, depth_small);
+    std::vector<float> mean, count;
+    cellAverages(frame_size_, small_size_, depth_m.host(), [](float d) { return d > 0.f; }, [](float d) { return d; }, mean, count);
+    smooth(mean, count, small_size_, depth_small);
 
     intensity_small.assign(cells, 0.f);
     if (!with_intensity_ || rgb.empty()) return;
-    std::fill(sum.begin(), sum.end(), 0.f);
-    std::fill(count.begin(), count.end(), 0.f);
-    for (int y = 0; y < rgb.height(); ++y) {
-        const int cy = y * small_size_.y / rgb.height();
-        const Vec4u8* row = rgb.host() + std::size_t(y) * std::size_t(rgb.width());
-        for (int x = 0; x < rgb.width(); ++x) {
-            const std::size_t c = std::size_t(x * small_size_.x / rgb.width() + cy * small_size_.x);
-            sum[c] += float(row[x].x) + float(row[x].y) + float(row[x].z);
-            count[c] += 1.f;
-        }
-    }
-    for (std::size_t c = 0; c < cells; ++c) sum[c] = count[c] > 0.f ? sum[c] / count[c] : 0.f;
-    smooth(sum, count, small_size_, intensity_small);
-    double mean = 0.0, square = 0.0;
-    for (const float v : intensity_small) mean += v;
-    mean /= double(cells);
-    for (const float v : intensity_small) square += (v - mean) * (v - mean);
+    cellAverages(rgb.size(), small_size_, rgb.host(), [](Vec4u8) { return true; },
+                 [](Vec4u8 c) { return float(c.x) + float(c.y) + float(c.z); }, mean, count);
+    smooth(mean, count, small_size_, intensity_small);
+    double sum = 0.0, square = 0.0;
+    for (const float v : intensity_small) sum += v;
+    const double average = sum / double(cells);
+    for (const float v : intensity_small) square += (v - average) * (v - average);
     const double deviation = std::max(1.0, std::sqrt(square / double(cells)));  // a flat image stays flat
-    for (float& v : intensity_small) v = float((v - mean) / deviation);
+    for (float& v : intensity_small) v = float((v - average) / deviation);
 }
 
 FernCode FernEncoder::encode(const Image<float>& depth_m, const Image<Vec4u8>& rgb) const {

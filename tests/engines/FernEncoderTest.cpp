@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 
 #include "SyntheticViews.h"
 #include "voxfuse/core/Error.h"
@@ -88,6 +89,47 @@ TEST(FernEncoderTest, SmallImagesAverageValidDepthAndNormaliseIntensity) {
     EXPECT_NEAR(std::sqrt(square / double(intensity.size())), 1.0, 1e-3);
     EXPECT_LT(intensity[0], 0.f);
     EXPECT_GT(intensity[80 * 59], 0.f);
+}
+
+// A frame whose size is no multiple of the code image's (cells of 2 and 3 pixels), with holes, against
+// the definition written out pixel by pixel: each pixel adds to the cell (x * w / W, y * h / H), then
+// the 1-2-1 smoothing weighted by the cells' counts.
+TEST(FernEncoderTest, SmallDepthIsTheCellAverageOfValidPixelsSmoothed) {
+    const Vec2i frame{203, 151};
+    Image<float> depth(frame);
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> u(0.f, 1.f);
+    for (int y = 0; y < frame.y; ++y)
+        for (int x = 0; x < frame.x; ++x) depth.at(x, y) = u(rng) < 0.3f ? 0.f : 0.5f + 2.f * u(rng);
+    const FernEncoder encoder(FernSettings{}, frame, false);
+    const Vec2i small = encoder.codeImageSize();
+    ASSERT_EQ(small, (Vec2i{80, 60}));
+    std::vector<double> sum(std::size_t(small.x * small.y), 0.0), count(sum.size(), 0.0);
+    for (int y = 0; y < frame.y; ++y)
+        for (int x = 0; x < frame.x; ++x)
+            if (depth.at(x, y) > 0.f) {
+                const std::size_t c = std::size_t(x * small.x / frame.x + (y * small.y / frame.y) * small.x);
+                sum[c] += depth.at(x, y);
+                count[c] += 1.0;
+            }
+    std::vector<float> d, intensity;
+    encoder.shrink(depth, Image<Vec4u8>(), d, intensity);
+    ASSERT_EQ(d.size(), sum.size());
+    const double kernel[3] = {1.0, 2.0, 1.0};
+    for (int cy = 0; cy < small.y; ++cy)
+        for (int cx = 0; cx < small.x; ++cx) {
+            double s = 0.0, w = 0.0;
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx) {
+                    const int x = cx + dx, y = cy + dy;
+                    if (x < 0 || y < 0 || x >= small.x || y >= small.y) continue;
+                    const std::size_t c = std::size_t(x + y * small.x);
+                    if (count[c] == 0.0) continue;
+                    s += kernel[dx + 1] * kernel[dy + 1] * sum[c];  // weight x count x mean
+                    w += kernel[dx + 1] * kernel[dy + 1] * count[c];
+                }
+            EXPECT_NEAR(d[std::size_t(cx + cy * small.x)], w > 0.0 ? s / w : 0.0, 1e-5) << "cell " << cx << ", " << cy;
+        }
 }
 
 TEST(FernEncoderTest, RejectsSettingsItCannotUse) {
