@@ -42,76 +42,106 @@ constexpr float kAddressableVoxelRange = float((kMaxBlockCoordinate + 1) * kBloc
 // the coordinates an int16 block can have.
 constexpr float kSegmentMarginExtraVoxels = 1.01f;
 
-// Calls visit(Vec3i block) once for every block pixel (x, y) needs (see above). A segment beyond the
-// addressable range visits one non-addressable block instead.
-//
-// The segment a -> b (grid units) is 2 mu long, a block or two: its bounding box, grown by the margin,
-// holds a handful of candidate blocks, and each is kept when the segment meets its grown box (slab
-// test). Neighbouring pixels mostly need the same blocks; the caller remembers the ones it has seen.
-template <class Visit>
-VF_HOST_DEVICE inline void forEachBlockOnDepthSegment(const DepthSegmentFrame& f, int x, int y, Visit& visit) {
+// Pixel (x, y)'s depth segment a -> b (grid units) and its candidate blocks: the bounding box of the
+// segment, grown by the margin. Computed without branches, so that the CPU layer's loop over a row of
+// pixels vectorises; a pixel without a usable depth is computed on the slab's near depth instead and
+// marked not `valid`.
+struct DepthSegment {
+    Vec3f a;            // start (grid units)
+    Vec3f inv_ab;       // 1 / (b - a) per axis; 0 on an axis the segment does not move along (to 1e-30 voxels)
+    float margin;       // voxels the blocks' boxes grow by
+    Vec3i first, last;  // candidate blocks
+    bool valid;         // the pixel's depth lies in the slab: it needs blocks
+    bool outside;       // valid, but the segment leaves the addressable range
+};
+
+VF_HOST_DEVICE inline DepthSegment depthSegmentOfPixel(const DepthSegmentFrame& f, int x, int y) {
     const Intrinsics& in = f.intrinsics;
-    const float d = f.depth[x + y * in.width];
-    if (!(d >= f.min_depth_m && d <= f.max_depth_m)) return;  // also rejects 0 and NaN
-    const float z0 = fmaxf(d - f.mu_m, f.near_m), z1 = d + f.mu_m;
+    const float depth = f.depth[x + y * in.width];
+    DepthSegment s;
+    s.valid = depth >= f.min_depth_m && depth <= f.max_depth_m;  // also rejects 0 and NaN
+    const float d = s.valid ? depth : f.min_depth_m;
+    // A comparison, not fmaxf (which GCC does not vectorise); d is no NaN.
+    const float z0 = d - f.mu_m > f.near_m ? d - f.mu_m : f.near_m, z1 = d + f.mu_m;
     const Vec3f ray{(float(x) - in.cx) / in.fx, (float(y) - in.cy) / in.fy, 1.f};  // z = 1
     const Vec3f a = transformPoint(f.T_grid_camera, ray * z0);
     const Vec3f b = transformPoint(f.T_grid_camera, ray * z1);
-    for (int k = 0; k < 3; ++k)
-        if (!(fabsf(a[k]) < kAddressableVoxelRange && fabsf(b[k]) < kAddressableVoxelRange)) {
-            const Vec3i outside{kMaxBlockCoordinate + 1, kMaxBlockCoordinate + 1, kMaxBlockCoordinate + 1};
-            visit(outside);
-            return;
-        }
+    bool addressable = true;
+    for (int k = 0; k < 3; ++k) addressable = addressable && fabsf(a[k]) < kAddressableVoxelRange && fabsf(b[k]) < kAddressableVoxelRange;
+    s.outside = s.valid && !addressable;
     // Half a pixel at the far end is the widest the footprint gets along the segment.
-    const float margin = f.margin_voxels_per_m * z1 + kSegmentMarginExtraVoxels;
-    const Vec3f ab = b - a;
+    s.margin = f.margin_voxels_per_m * z1 + kSegmentMarginExtraVoxels;
+    s.a = a;
     // Reciprocals once per pixel: the slab tests below would otherwise divide twice per candidate block
     // per axis. Their one-ulp difference to a quotient is far inside the hundredth of a voxel that
-    // kSegmentMarginExtraVoxels adds. 0 marks an axis the segment does not move along (to 1e-30 voxels).
-    auto reciprocal = [](float v) { return fabsf(v) >= 1e-30f ? 1.f / v : 0.f; };
-    const Vec3f inv_ab{reciprocal(ab.x), reciprocal(ab.y), reciprocal(ab.z)};
-    Vec3i first, last;
+    // kSegmentMarginExtraVoxels adds.
+    const Vec3f ab = b - a;
     for (int k = 0; k < 3; ++k) {
-        const float lo = (a[k] < b[k] ? a[k] : b[k]) - margin, hi = (a[k] < b[k] ? b[k] : a[k]) + margin;
+        s.inv_ab[k] = fabsf(ab[k]) >= 1e-30f ? 1.f / ab[k] : 0.f;
+        // Clamped into int range, so that a segment beyond the addressable range converts without
+        // overflow (it visits no candidates: `outside` is all it reports).
+        const float range = 2.f * kAddressableVoxelRange;
+        float lo = (a[k] < b[k] ? a[k] : b[k]) - s.margin, hi = (a[k] < b[k] ? b[k] : a[k]) + s.margin;
+        lo = lo > -range ? (lo < range ? lo : range) : -range;
+        hi = hi > -range ? (hi < range ? hi : range) : -range;
         // Block c covers voxel centres [8c, 8c + 7].
-        first[k] = int(ceilf((lo - float(kBlockSide - 1)) / float(kBlockSide)));
-        last[k] = int(floorf(hi / float(kBlockSide)));
+        s.first[k] = int(ceilf((lo - float(kBlockSide - 1)) / float(kBlockSide)));
+        s.last[k] = int(floorf(hi / float(kBlockSide)));
+    }
+    return s;
+}
+
+// Calls visit(Vec3i block) once for every block a depth segment needs (see above): each candidate is
+// kept when the segment meets its grown box (slab test). A segment beyond the addressable range
+// visits one non-addressable block instead.
+template <class Visit>
+VF_HOST_DEVICE inline void forEachBlockOnSegment(const DepthSegment& s, Visit& visit) {
+    if (!s.valid) return;
+    if (s.outside) {
+        const Vec3i outside{kMaxBlockCoordinate + 1, kMaxBlockCoordinate + 1, kMaxBlockCoordinate + 1};
+        visit(outside);
+        return;
     }
     // The part of the segment (t in [0, 1]) inside the grown box of block c along axis k narrows
     // [t_in, t_out]; each axis's part is taken where its loop moves to the next block. (Minimum and
     // maximum are exact, so the order in which the axes narrow the range changes no result.)
     auto narrow = [&](int k, int c, float& t_in, float& t_out) {
-        const float lo = float(c * kBlockSide) - margin, hi = float(c * kBlockSide + kBlockSide - 1) + margin;
-        if (inv_ab[k] == 0.f) {
-            if (a[k] < lo || a[k] > hi) t_out = -1.f;
+        const float lo = float(c * kBlockSide) - s.margin, hi = float(c * kBlockSide + kBlockSide - 1) + s.margin;
+        if (s.inv_ab[k] == 0.f) {
+            if (s.a[k] < lo || s.a[k] > hi) t_out = -1.f;
             return;
         }
-        float t_lo = (lo - a[k]) * inv_ab[k], t_hi = (hi - a[k]) * inv_ab[k];
+        float t_lo = (lo - s.a[k]) * s.inv_ab[k], t_hi = (hi - s.a[k]) * s.inv_ab[k];
         if (t_lo > t_hi) {
-            const float s = t_lo;
+            const float swap = t_lo;
             t_lo = t_hi;
-            t_hi = s;
+            t_hi = swap;
         }
         // Comparisons, not fminf/fmaxf (library calls on the host); no value is NaN.
         t_in = t_lo > t_in ? t_lo : t_in;
         t_out = t_hi < t_out ? t_hi : t_out;
     };
-    for (int bz = first.z; bz <= last.z; ++bz) {
+    for (int bz = s.first.z; bz <= s.last.z; ++bz) {
         float z_in = 0.f, z_out = 1.f;
         narrow(2, bz, z_in, z_out);
         if (!(z_in <= z_out)) continue;
-        for (int by = first.y; by <= last.y; ++by) {
+        for (int by = s.first.y; by <= s.last.y; ++by) {
             float y_in = z_in, y_out = z_out;
             narrow(1, by, y_in, y_out);
             if (!(y_in <= y_out)) continue;
-            for (int bx = first.x; bx <= last.x; ++bx) {
+            for (int bx = s.first.x; bx <= s.last.x; ++bx) {
                 float t_in = y_in, t_out = y_out;
                 narrow(0, bx, t_in, t_out);
                 if (t_in <= t_out) visit(Vec3i{bx, by, bz});
             }
         }
     }
+}
+
+// Every block pixel (x, y) needs (see above), one pixel at a time.
+template <class Visit>
+VF_HOST_DEVICE inline void forEachBlockOnDepthSegment(const DepthSegmentFrame& f, int x, int y, Visit& visit) {
+    forEachBlockOnSegment(depthSegmentOfPixel(f, x, y), visit);
 }
 
 // Blocks visited recently by one loop element (direct-mapped, `Slots` a power of two): neighbouring
@@ -172,8 +202,35 @@ struct MarkBlocksForPixels {
             const int slot = atomicAddInt(missing_count, 1);
             if (slot < missing_capacity) missing[slot] = blockKey(block);
         };
+        if (tile.x == 1 && tile.y == 1) {  // the GPU's shape: one pixel
+            forEachBlockOnDepthSegment(frame, x0, y0, mark);
+            return;
+        }
+        // The segments of up to kSegmentRun pixels of a row first, in one loop over the pixels (which
+        // vectorises: the arrays hold them field by field), then their blocks.
+        constexpr int kSegmentRun = 32;
+        float ax[kSegmentRun], ay[kSegmentRun], az[kSegmentRun], ix[kSegmentRun], iy[kSegmentRun], iz[kSegmentRun], margin[kSegmentRun];
+        int fx[kSegmentRun], fy[kSegmentRun], fz[kSegmentRun], lx[kSegmentRun], ly[kSegmentRun], lz[kSegmentRun];
+        int valid[kSegmentRun], outside[kSegmentRun];  // ints: one width for every field, or GCC leaves the loop scalar
         for (int y = y0; y < y1; ++y)
-            for (int x = x0; x < x1; ++x) forEachBlockOnDepthSegment(frame, x, y, mark);
+            for (int run = x0; run < x1; run += kSegmentRun) {
+                const int n = x1 - run < kSegmentRun ? x1 - run : kSegmentRun;
+                for (int i = 0; i < n; ++i) {
+                    const DepthSegment s = depthSegmentOfPixel(frame, run + i, y);
+                    ax[i] = s.a.x, ay[i] = s.a.y, az[i] = s.a.z;
+                    ix[i] = s.inv_ab.x, iy[i] = s.inv_ab.y, iz[i] = s.inv_ab.z;
+                    margin[i] = s.margin;
+                    fx[i] = s.first.x, fy[i] = s.first.y, fz[i] = s.first.z;
+                    lx[i] = s.last.x, ly[i] = s.last.y, lz[i] = s.last.z;
+                    valid[i] = s.valid, outside[i] = s.outside;
+                }
+                for (int i = 0; i < n; ++i) {
+                    if (!valid[i]) continue;
+                    const DepthSegment s{{ax[i], ay[i], az[i]}, {ix[i], iy[i], iz[i]}, margin[i], {fx[i], fy[i], fz[i]},
+                                         {lx[i], ly[i], lz[i]}, true, outside[i] != 0};
+                    forEachBlockOnSegment(s, mark);
+                }
+            }
     }
 };
 
