@@ -52,8 +52,8 @@ public:
         if constexpr (TDevice::kOneThreadPerItem) {
             TDevice::parallelFor(int(in.pixelCount()), BilateralFilterPixels{src, in.size(), bilateralWeightsFor(p), dst});
         } else {
-            const BilateralFilterSpans spans{src, in.size(), bilateralWeightsFor(p), dst};
-            TDevice::parallelFor(spans.elementCount(), spans);
+            const BilateralFilterStrips strips{src, in.size(), bilateralWeightsFor(p), dst};
+            TDevice::parallelFor(strips.elementCount(), strips);
         }
     }
 

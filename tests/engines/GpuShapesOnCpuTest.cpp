@@ -168,9 +168,10 @@ TYPED_TEST(GpuShapesOnCpuTest, DenseIntegrationVoxelByVoxelEqualsTheClippedRows)
     expectSameSurfaceFromBothTeamShapes(rows);
 }
 
-// The bilateral filter by spans of a row, taps outer (CPU), and pixel by pixel (GPU): the same bits, on
-// a rendered frame with holes, an image width that is no multiple of the span, and every window size.
-TEST(GpuShapesOnCpuLowLevelTest, BilateralFilterBySpansEqualsPixelByPixel) {
+// The bilateral filter by strips, each pair weighed once (CPU), and pixel by pixel (GPU): the same bits, on
+// a rendered frame with holes, a size that is no multiple of the strip's, and every window size (strips
+// narrow as the radius grows).
+TEST(GpuShapesOnCpuLowLevelTest, BilateralFilterByStripsEqualsPixelByPixel) {
     static const synth::SyntheticScene world = synth::SyntheticScene::boxAndSphere();
     const Intrinsics intrinsics = test::kinectIntrinsics(330, 250);
     View view = test::renderView(world, intrinsics, poses()[0], false);

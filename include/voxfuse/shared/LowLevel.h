@@ -148,46 +148,102 @@ struct BilateralFilterPixels {
     VF_HOST_DEVICE void operator()(int i) const { out[i] = bilateralFilterDepthPixel(in, size, i % size.x, i / size.x, weights); }
 };
 
-// The CPU's launch shape of the same filter: element e is a span of up to kBilateralSpan pixels of one
-// row, taken tap by tap across the span (a loop the compiler vectorises). Every pixel gets the same
-// terms, added in the same order, as in bilateralFilterDepthPixel (a skipped tap adds +0): the images
-// are bit-identical.
-constexpr int kBilateralSpan = 128;
-struct BilateralFilterSpans {
+// The CPU's launch shape of the same filter: element e is a strip of up to kBilateralStripWidth
+// columns and kBilateralStripRows rows, taken row by row and tap by tap across the row (loops the
+// compiler vectorises). A tap's weight is symmetric, w(p, q) = w(q, p) (the same squared difference and
+// spatial factor), so each pair of pixels is weighed once: row y computes the pairs it makes with the
+// taps ahead of it (later rows, or later in its row) into a ring of the last radius + 1 rows, and a
+// pixel's taps behind it read the pair its tap's row computed. Every pixel still adds the same terms in
+// the same order as bilateralFilterDepthPixel (a skipped tap adds +0): the images are bit-identical
+// (for finite depths). The exponential was most of a tap's cost; now half the taps pay it.
+constexpr int kBilateralStripWidth = 128;
+constexpr int kBilateralStripRows = 32;
+constexpr int kBilateralPairBuffer = 16384;  // floats of pair weights per element (on its stack)
+struct BilateralFilterStrips {
     const float* in;
     Vec2i size;
     BilateralWeights weights;
     float* out;
 
-    VF_HOST_DEVICE int spansPerRow() const { return (size.x + kBilateralSpan - 1) / kBilateralSpan; }
-    VF_HOST_DEVICE int elementCount() const { return spansPerRow() * size.y; }
-    VF_HOST_DEVICE void operator()(int e) const {
-        const int y = e / spansPerRow(), x0 = (e % spansPerRow()) * kBilateralSpan;
-        const int n = size.x - x0 < kBilateralSpan ? size.x - x0 : kBilateralSpan;
-        const float* centre = in + y * size.x + x0;
-        float sum[kBilateralSpan], weight_sum[kBilateralSpan];
-        for (int i = 0; i < n; ++i) sum[i] = weight_sum[i] = 0.f;
+    // Taps ahead of a pixel: (0, 1..r), then (1..r, -r..r).
+    VF_HOST_DEVICE int aheadCount() const { return weights.radius_px * (2 * weights.radius_px + 2); }
+    VF_HOST_DEVICE int aheadIndex(int dy, int dx) const {
+        return dy == 0 ? dx - 1 : weights.radius_px + (dy - 1) * (2 * weights.radius_px + 1) + dx + weights.radius_px;
+    }
+    // Columns per strip: as many as the ring of pair weights holds (a large radius gets narrow strips).
+    VF_HOST_DEVICE int stripWidth() const {
         const int r = weights.radius_px;
-        const int y0 = y - r > 0 ? y - r : 0, y1 = y + r < size.y - 1 ? y + r : size.y - 1;
-        for (int yy = y0; yy <= y1; ++yy) {
-            const float wy = weights.spatial[yy > y ? yy - y : y - yy];
-            for (int dx = -r; dx <= r; ++dx) {
-                const float w_tap = wy * weights.spatial[dx > 0 ? dx : -dx];
-                const float* tap = in + yy * size.x + x0 + dx;
-                // The span's pixels whose tap lies inside the row.
-                const int i0 = x0 + dx < 0 ? -(x0 + dx) : 0;
-                const int i1 = size.x - (x0 + dx) < n ? size.x - (x0 + dx) : n;
-                for (int i = i0; i < i1; ++i) {
-                    const float d = tap[i], diff = d - centre[i];
-                    const float w = w_tap * expOfNegative(diff * diff * weights.inv_2_sigma_depth_sq);
-                    const bool valid = d > 0.f;
-                    sum[i] += valid ? w * d : 0.f;
-                    weight_sum[i] += valid ? w : 0.f;
+        if (r == 0) return kBilateralStripWidth;
+        const int fit = kBilateralPairBuffer / (aheadCount() * (r + 1)) - 2 * r;
+        return fit < kBilateralStripWidth ? (fit > 1 ? fit : 1) : kBilateralStripWidth;
+    }
+    VF_HOST_DEVICE int stripsPerRow() const { return (size.x + stripWidth() - 1) / stripWidth(); }
+    VF_HOST_DEVICE int elementCount() const { return stripsPerRow() * ((size.y + kBilateralStripRows - 1) / kBilateralStripRows); }
+
+    VF_HOST_DEVICE void operator()(int e) const {
+        const int r = weights.radius_px, width = stripWidth(), ahead = aheadCount();
+        const int x0 = (e % stripsPerRow()) * width, row0 = (e / stripsPerRow()) * kBilateralStripRows;
+        const int n = size.x - x0 < width ? size.x - x0 : width;
+        const int row1 = size.y - row0 < kBilateralStripRows ? size.y : row0 + kBilateralStripRows;
+        const int columns = n + 2 * r;  // the ring's columns: x0 - r .. x0 + n + r - 1
+        float pairs[kBilateralPairBuffer];  // [row % (r + 1)][ahead tap][column]
+        auto pairRow = [&](int y, int tap) { return pairs + ((y % (r + 1)) * ahead + tap) * columns; };
+        // Row y's pairs with its taps ahead, for the columns whose pair lies inside the image.
+        auto weighPairs = [&](int y) {
+            for (int dy = 0; dy <= r && y + dy < size.y; ++dy)
+                for (int dx = dy == 0 ? 1 : -r; dx <= r; ++dx) {
+                    const float w_tap = weights.spatial[dy] * weights.spatial[dx > 0 ? dx : -dx];
+                    int c0 = x0 - r > 0 ? x0 - r : 0, c1 = x0 + n + r < size.x ? x0 + n + r : size.x;
+                    c0 = c0 > -dx ? c0 : -dx;
+                    c1 = c1 < size.x - dx ? c1 : size.x - dx;
+                    float* w = pairRow(y, aheadIndex(dy, dx));  // column c at w[c - (x0 - r)]
+                    const float* here = in + y * size.x;
+                    const float* there = in + (y + dy) * size.x;
+                    for (int c = c0; c < c1; ++c) {
+                        const float diff = there[c + dx] - here[c];
+                        w[c - (x0 - r)] = w_tap * expOfNegative(diff * diff * weights.inv_2_sigma_depth_sq);
+                    }
                 }
-            }
+        };
+        for (int y = row0 - r > 0 ? row0 - r : 0; y < row0; ++y) weighPairs(y);
+        const float centre_weight = weights.spatial[0] * weights.spatial[0] * expOfNegative(0.f);
+        float sum[kBilateralStripWidth], weight_sum[kBilateralStripWidth];
+        for (int y = row0; y < row1; ++y) {
+            weighPairs(y);
+            const float* centre = in + y * size.x + x0;
+            for (int i = 0; i < n; ++i) sum[i] = weight_sum[i] = 0.f;
+            const int y0 = y - r > 0 ? y - r : 0, y1 = y + r < size.y - 1 ? y + r : size.y - 1;
+            for (int yy = y0; yy <= y1; ++yy)
+                for (int dx = -r; dx <= r; ++dx) {
+                    const int dy = yy - y;
+                    // The tap's pair weight: ahead, in this row's pairs; behind, in the tap's row's pairs
+                    // (its pair ahead by (-dy, -dx)); the centre, its own.
+                    const bool is_ahead = dy > 0 || (dy == 0 && dx > 0);
+                    const float* w = dy == 0 && dx == 0 ? nullptr
+                                     : is_ahead         ? pairRow(y, aheadIndex(dy, dx)) + r
+                                                        : pairRow(yy, aheadIndex(-dy, -dx)) + r + dx;
+                    const float* tap = in + yy * size.x + x0 + dx;
+                    const int i0 = x0 + dx < 0 ? -(x0 + dx) : 0;
+                    const int i1 = size.x - (x0 + dx) < n ? size.x - (x0 + dx) : n;
+                    if (w == nullptr) {
+                        for (int i = i0; i < i1; ++i) {
+                            const float d = tap[i];
+                            const bool valid = d > 0.f;
+                            sum[i] += valid ? centre_weight * d : 0.f;
+                            weight_sum[i] += valid ? centre_weight : 0.f;
+                        }
+                        continue;
+                    }
+                    for (int i = i0; i < i1; ++i) {
+                        const float d = tap[i];
+                        const bool valid = d > 0.f;
+                        sum[i] += valid ? w[i] * d : 0.f;
+                        weight_sum[i] += valid ? w[i] : 0.f;
+                    }
+                }
+            float* out_row = out + y * size.x + x0;
+            for (int i = 0; i < n; ++i) out_row[i] = centre[i] > 0.f ? sum[i] / weight_sum[i] : 0.f;
         }
-        float* out_span = out + y * size.x + x0;
-        for (int i = 0; i < n; ++i) out_span[i] = centre[i] > 0.f ? sum[i] / weight_sum[i] : 0.f;
     }
 };
 
