@@ -32,6 +32,33 @@ TEST(MemoryBlockTest, RangesAndFillsOnTheHost) {
     EXPECT_EQ(copy.host()[9], 9);
 }
 
+// A host block grown within its reserve keeps its data in place; beyond it, the data moves with it.
+TEST(MemoryBlockTest, GrowingOnTheHostKeepsTheContents) {
+    MemoryBlock<int> m(1000, true, false);  // a plain allocation: the first growth reserves
+    for (int i = 0; i < 1000; ++i) m.host()[i] = i;
+    m.growHost(2000, 1 << 20);
+    ASSERT_EQ(m.size(), 2000u);
+    for (int i = 1000; i < 2000; ++i) m.host()[i] = i;
+    const int* reserved = m.host();
+    m.growHost(1 << 19, 1 << 20);
+    EXPECT_EQ(m.host(), reserved) << "within the reserve nothing moves";
+    m.fill(Device::CPU, -1, 2000, (1 << 19) - 2000);
+    m.growHost((1 << 20) + 5, 1 << 20);  // beyond it
+    ASSERT_EQ(m.size(), std::size_t(1 << 20) + 5);
+    for (int i = 0; i < 2000; ++i) ASSERT_EQ(m.host()[i], i);
+    EXPECT_EQ(m.host()[(1 << 19) - 1], -1);
+    EXPECT_THROW(m.growHost(10, 0), Error) << "it does not shrink";
+
+    MemoryBlock<int> moved(std::move(m));
+    EXPECT_EQ(moved.host()[1999], 1999);
+    MemoryBlock<int> empty;
+    empty.growHost(3, 0);
+    empty.fill(7);
+    EXPECT_EQ(empty.host()[2], 7);
+    moved = std::move(empty);  // frees the grown block
+    EXPECT_EQ(moved.size(), 3u);
+}
+
 TEST(MemoryBlockTest, RangesOutsideTheBlockOrOnAMissingCopyAreRefused) {
     MemoryBlock<int> m(10, true, false);
     int v[4] = {};

@@ -15,11 +15,16 @@
 #include <cstdlib>
 #include <cstring>
 #include <new>
+#include <string>
 #include <type_traits>
 #include <utility>
 
 #include "voxfuse/core/DeviceMemory.h"
 #include "voxfuse/core/Error.h"
+
+#if defined(__unix__)
+#include <sys/mman.h>
+#endif
 
 namespace voxfuse {
 
@@ -173,6 +178,44 @@ public:
     // Host copy only (kept for callers that never have a device copy).
     void fillHost(const T& value) { std::fill(host(), host() + count_, value); }
 
+    // Grows a block that has only a host copy to `count` elements (at least its size), keeping its
+    // contents; the elements added are undefined. The first growth from a plain allocation reserves
+    // address space for `capacity` elements (on Unix an anonymous mapping without reservation, which
+    // the OS backs with memory only where it is written, so an untouched reserve costs no memory); every
+    // growth within it then keeps the data in place, with neither a copy nor a move. Without such a
+    // mapping it reallocates and copies.
+    void growHost(std::size_t count, std::size_t capacity) {
+        if (device_) throw DeviceError("MemoryBlock::growHost: the block has a device copy");
+        if (count < count_) throw Error("MemoryBlock::growHost: " + std::to_string(count) + " elements would shrink a block of " + std::to_string(count_));
+        if (host_ && count <= host_capacity_) {
+            count_ = count;
+            return;
+        }
+        const std::size_t reserve = std::max(count, capacity);
+        T* grown = nullptr;
+        std::size_t grown_capacity = count, grown_mapped_bytes = 0;
+#if defined(__unix__)
+        void* mapped = mmap(nullptr, reserve * sizeof(T), PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS | MAP_NORESERVE, -1, 0);
+        if (mapped != MAP_FAILED) {
+            grown = static_cast<T*>(mapped);
+            grown_capacity = reserve;
+            grown_mapped_bytes = reserve * sizeof(T);
+        }
+#endif
+        if (!grown) {
+            grown = static_cast<T*>(std::aligned_alloc(64, ((count * sizeof(T) + 63) / 64) * 64));
+            if (!grown) throw std::bad_alloc();
+        }
+        if (host_ && count_) std::memcpy(static_cast<void*>(grown), host_, bytes());
+        freeHost();
+        host_ = grown;
+        host_capacity_ = grown_capacity;
+        host_mapped_bytes_ = grown_mapped_bytes;
+        host_kind_ = HostMemory::Pageable;
+        host_current_ = device_current_ = true;
+        count_ = count;
+    }
+
     // Drops one copy (the other must be current); a block that only the GPU uses keeps no host memory.
     void releaseHost() {
         if (!host_) return;
@@ -189,6 +232,8 @@ public:
 private:
     void allocateHost() {
         host_pinned_ = false;
+        host_capacity_ = count_;
+        host_mapped_bytes_ = 0;
         if (host_kind_ == HostMemory::Pinned) {
             host_ = static_cast<T*>(device_memory::allocatePinned(bytes()));
             host_pinned_ = host_ != nullptr;
@@ -201,11 +246,19 @@ private:
         }
     }
     void freeHost() noexcept {
-        if (host_pinned_) device_memory::releasePinned(host_);
+        if (host_mapped_bytes_) unmapHost();
+        else if (host_pinned_) device_memory::releasePinned(host_);
         else std::free(host_);
+        host_capacity_ = 0;
+        host_mapped_bytes_ = 0;
         host_ = nullptr;
         host_pinned_ = false;
         host_current_ = true;
+    }
+    void unmapHost() noexcept {
+#if defined(__unix__)
+        munmap(static_cast<void*>(host_), host_mapped_bytes_);
+#endif
     }
     void requireBoth(const char* what) const {
         if (count_ && (!host_ || !device_)) throw DeviceError(std::string("MemoryBlock::") + what + ": needs both a host and a device copy");
@@ -230,6 +283,8 @@ private:
         std::swap(count_, o.count_);
         std::swap(host_kind_, o.host_kind_);
         std::swap(host_pinned_, o.host_pinned_);
+        std::swap(host_capacity_, o.host_capacity_);
+        std::swap(host_mapped_bytes_, o.host_mapped_bytes_);
         std::swap(host_current_, o.host_current_);
         std::swap(device_current_, o.device_current_);
     }
@@ -239,6 +294,8 @@ private:
     std::size_t count_ = 0;
     HostMemory host_kind_ = HostMemory::Pageable;
     bool host_pinned_ = false;     // host_ came from allocatePinned
+    std::size_t host_capacity_ = 0;      // elements host_ can hold (more than count_ after growHost)
+    std::size_t host_mapped_bytes_ = 0;  // host_ is a mapping of this many bytes (growHost), else 0
     bool host_current_ = true;     // meaningful only while host_ exists
     bool device_current_ = true;   // meaningful only while device_ exists
 };

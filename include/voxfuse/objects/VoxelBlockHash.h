@@ -59,6 +59,8 @@ public:
     bool canGrow() const { return block_capacity_ < settings_.max_block_count; }
     // Voxels the scene must store: blockCapacity() blocks of 512.
     std::size_t voxelCount() const { return std::size_t(block_capacity_) * kBlockVoxelCount; }
+    // Voxels it may come to store: settings().max_block_count blocks of 512.
+    std::size_t maxVoxelCount() const { return std::size_t(settings_.max_block_count) * kBlockVoxelCount; }
     // Memory of the index itself (entry table, free stacks, visibility, visible list); fixed by the settings.
     // The same, from the settings alone: what constructing the index will allocate.
     static std::size_t tableBytesFor(const Settings& settings);
