@@ -52,6 +52,8 @@ TEST(MemoryBlockTest, GrowingOnTheHostKeepsTheContents) {
     MemoryBlock<int> moved(std::move(m));
     EXPECT_EQ(moved.host()[1999], 1999);
     MemoryBlock<int> empty;
+    empty.growHost(0, 0);  // nothing to hold: no memory
+    EXPECT_FALSE(empty.onHost());
     empty.growHost(3, 0);
     empty.fill(7);
     EXPECT_EQ(empty.host()[2], 7);

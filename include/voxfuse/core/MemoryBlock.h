@@ -187,7 +187,7 @@ public:
     void growHost(std::size_t count, std::size_t capacity) {
         if (device_) throw DeviceError("MemoryBlock::growHost: the block has a device copy");
         if (count < count_) throw Error("MemoryBlock::growHost: " + std::to_string(count) + " elements would shrink a block of " + std::to_string(count_));
-        if (host_ && count <= host_capacity_) {
+        if ((host_ && count <= host_capacity_) || (count == 0 && capacity == 0)) {
             count_ = count;
             return;
         }

@@ -202,10 +202,12 @@ struct MarkBlocksForPixels {
             const int slot = atomicAddInt(missing_count, 1);
             if (slot < missing_capacity) missing[slot] = blockKey(block);
         };
-        if (tile.x == 1 && tile.y == 1) {  // the GPU's shape: one pixel
-            forEachBlockOnDepthSegment(frame, x0, y0, mark);
-            return;
-        }
+#if defined(__CUDA_ARCH__)
+        // A GPU thread takes single pixels: nothing to vectorise, and the row arrays below would cost
+        // every thread of the kernel a 1.9 KB stack frame even where they are never used.
+        for (int y = y0; y < y1; ++y)
+            for (int x = x0; x < x1; ++x) forEachBlockOnDepthSegment(frame, x, y, mark);
+#else
         // The segments of up to kSegmentRun pixels of a row first, in one loop over the pixels (which
         // vectorises: the arrays hold them field by field), then their blocks.
         constexpr int kSegmentRun = 32;
@@ -231,6 +233,7 @@ struct MarkBlocksForPixels {
                     forEachBlockOnSegment(s, mark);
                 }
             }
+#endif
     }
 };
 
