@@ -13,7 +13,7 @@ enum class TrackerKind {
     Icp,    // depth only: point-to-plane ICP against the model raycast, coarse to fine
     Color,  // colour only: photometric alignment of model points (Levenberg-Marquardt)
     Ren,    // ICP with a robust (Tukey) kernel on every level: outliers weigh alike at every resolution
-    Rgbd    // depth and colour residuals in one Gauss-Newton system
+    Rgbd    // ren's robust depth residuals and colour residuals in one Gauss-Newton system
 };
 const char* toString(TrackerKind kind);
 TrackerKind parseTrackerKind(const std::string& name);  // "icp", "color", "ren", "rgbd"; ConfigError otherwise
@@ -68,9 +68,10 @@ struct TrackerSettings {
     // resolution, doubled per coarser level): larger gaps are depth edges.
     float max_normal_edge_m = 0.05f;
 
-    // ren: the robust cost of every level. One cost for all levels gives every level the same optimum:
-    // with a kernel on the finest level only, the coarse levels converged to poses that outliers had
-    // pulled some 0.3 degrees away, and the finest level spent 9 of its 10 iterations crawling back.
+    // ren and rgbd: the robust cost of every level's depth terms. One cost for all levels gives every
+    // level the same optimum: with a kernel on the finest level only, the coarse levels converged to
+    // poses that outliers had pulled some 0.3 degrees away, and the finest level spent 9 of its 10
+    // iterations crawling back.
     RobustKernel robust_kernel = RobustKernel::Tukey;
     float robust_scale_m = 0.01f;  // Tukey: residuals beyond this get no weight
 
