@@ -77,6 +77,8 @@ void writeTimingsJson(const std::string& path, const RunRecord& run) {
             frame["inlier_ratio"] = double(f.result.tracking.inlier_ratio);
             frame["residual"] = double(f.result.tracking.residual_m);
             frame["condition"] = double(f.result.tracking.condition);
+            if (f.result.tracking.translation_constraint >= 0.f)
+                frame["translation_constraint"] = double(f.result.tracking.translation_constraint);
         }
         for (const auto& s : f.result.stages) frame[s.stage] = s.ms;
         frame["total"] = f.result.total_ms;

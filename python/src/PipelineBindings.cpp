@@ -267,6 +267,8 @@ void bindPipeline(py::module_& m) {
                                "RMS point-to-plane residual of the inliers (m; colour tracker: intensity).")
         .def_property_readonly("condition", [](const FrameOutcome& o) { return o.result.tracking.condition; },
                                "Smallest/largest eigenvalue of the scaled normal matrix (near 0: a motion is unconstrained).")
+        .def_property_readonly("translation_constraint", [](const FrameOutcome& o) { return o.result.tracking.translation_constraint; },
+                               "Share of the depth terms' weight along the least constrained translation (0..1/3, below 0.02 poor; -1 without depth terms).")
         .def_property_readonly("timings", [](const FrameOutcome& o) { return stageDict(o.result.stages, o.result.total_ms); },
                                "Milliseconds per stage of this frame, and 'total'.")
         .def_readonly("index", &FrameOutcome::index)

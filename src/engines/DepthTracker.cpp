@@ -47,6 +47,7 @@ public:
             state.inlier_ratio = 1.f;
             state.residual_m = 0.f;
             state.condition = 1.f;
+            state.translation_constraint = 1.f / 3.f;
         } else if (!model_ok || !frame_ok) {
             reportFailed(state);
         } else {
@@ -113,12 +114,14 @@ private:
         m.inliers = finest.count;
         m.inlier_ratio = float(finest.count) / float(valid_pixels_);
         m.condition = pose::conditionRatio(finest);
+        m.translation_constraint = float(pose::translationConstraint(finest).share(0));
         m.depth_rms_m = finest.count > 0 ? float(std::sqrt(finest.squared_sum / finest.count)) : 0.f;
         pose::motionBetween(T_start, T, m.motion_m, m.motion_deg);
         state.quality = T.allFinite() ? assessTrackingQuality(settings_, m) : TrackingQuality::Failed;
         state.inlier_ratio = m.inlier_ratio;
         state.residual_m = m.depth_rms_m;
         state.condition = m.condition;
+        state.translation_constraint = m.translation_constraint;
         if (state.quality != TrackingQuality::Failed) state.T_world_camera = pose::toMat4f(T);
     }
 
@@ -190,6 +193,7 @@ private:
         state.inlier_ratio = 0.f;
         state.residual_m = 0.f;
         state.condition = 0.f;
+        state.translation_constraint = 0.f;
     }
 
     TrackerSettings settings_;

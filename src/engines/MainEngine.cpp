@@ -300,6 +300,7 @@ private:
             // Only relocalisation runs: the frame has no verdict of the tracker's own.
             tracking_.quality = TrackingQuality::Failed;
             tracking_.inlier_ratio = tracking_.residual_m = tracking_.condition = 0.f;
+            if (tracking_.translation_constraint >= 0.f) tracking_.translation_constraint = 0.f;
         } else {
             const Mat4f T_world_last = tracking_.T_world_camera;
             tracker_->track(tracking_, view_, model_);

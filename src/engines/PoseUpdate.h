@@ -112,6 +112,27 @@ inline float conditionRatio(const NormalEquations<double>& eq) {
     return float(std::max(0.0, ev(0)) / ev(5));
 }
 
+// How well point-to-plane terms pin the translation down, direction by direction: the eigenvalues of
+// the translation block of their normal matrix (sum of w n n^T, the translation Jacobians being the
+// model normals in camera coordinates) over its trace (sum of w). Free of units and of the number of
+// terms: the share of the terms' weight along each direction, between 0 and 1/3 for the least
+// constrained one (0 for a single plane, or a corridor seen without anything facing along it; 1/3
+// when normals point evenly in all directions). Ascending, with the directions as columns.
+struct TranslationConstraint {
+    Eigen::Vector3d share = Eigen::Vector3d::Zero();
+    Eigen::Matrix3d directions = Eigen::Matrix3d::Identity();
+};
+inline TranslationConstraint translationConstraint(const NormalEquations<double>& eq) {
+    TranslationConstraint c;
+    const Eigen::Matrix3d Htt = fullMatrix(eq).bottomRightCorner<3, 3>();
+    const double trace = Htt.trace();
+    if (eq.count < 6 || !(trace > 0.0)) return c;
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(Htt);
+    c.share = solver.eigenvalues().cwiseMax(0.0) / trace;
+    c.directions = solver.eigenvectors();
+    return c;
+}
+
 // The translation (metres) and rotation angle (degrees) between two poses.
 inline void motionBetween(const Eigen::Matrix4d& a, const Eigen::Matrix4d& b, float& metres, float& degrees) {
     const Eigen::Matrix4d d = a.inverse() * b;

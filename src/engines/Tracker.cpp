@@ -29,7 +29,8 @@ TrackingQuality assessTrackingQuality(const TrackerSettings& s, const TrackingMe
     if (m.inliers < s.min_inliers || !(m.inlier_ratio >= s.failed_inlier_ratio) || !(m.condition >= s.failed_condition) ||
         !(m.color_rms <= s.failed_color_residual) || !(m.motion_m <= s.max_motion_m) || !(m.motion_deg <= s.max_motion_deg))
         return TrackingQuality::Failed;
-    if (m.inlier_ratio < s.good_inlier_ratio || m.condition < s.good_condition || !(m.depth_rms_m <= s.poor_residual_m))
+    if (m.inlier_ratio < s.good_inlier_ratio || m.condition < s.good_condition || m.translation_constraint < s.poor_translation_constraint ||
+        !(m.depth_rms_m <= s.poor_residual_m))
         return TrackingQuality::Poor;
     return TrackingQuality::Good;
 }

@@ -45,6 +45,9 @@ bool findInvalidSetting(const TrackerSettings& s, std::vector<std::string>& keys
     if (!(s.min_rotation_step_rad >= 0.f)) return fail({"min_rotation_step_rad"}, "must be >= 0");
     if (!(s.min_translation_step_m >= 0.f)) return fail({"min_translation_step_m"}, "must be >= 0");
     if (!(s.max_normal_edge_m > 0.f)) return fail({"max_normal_edge_m"}, "must be > 0");
+    // A share above 1/3 would call even normals pointing evenly everywhere poor.
+    if (!(s.poor_translation_constraint >= 0.f && s.poor_translation_constraint < 1.f / 3.f))
+        return fail({"poor_translation_constraint"}, "must be in [0, 1/3)");
     if (!(s.robust_scale_m > 0.f)) return fail({"robust_scale_m"}, "must be > 0");
     if (s.color_point_step < 1 || s.color_point_step > 16) return fail({"color_point_step"}, "must be in 1..16");
     if (!(s.color_kernel_scale > 0.f)) return fail({"color_kernel_scale"}, "must be > 0");
@@ -197,6 +200,7 @@ TrackerSettings parseTrackerSettings(const std::string& text, const std::string&
         {"failed_inlier_ratio", setFloat(s.failed_inlier_ratio)},
         {"good_condition", setFloat(s.good_condition)},
         {"failed_condition", setFloat(s.failed_condition)},
+        {"poor_translation_constraint", setFloat(s.poor_translation_constraint)},
         {"poor_residual_m", setFloat(s.poor_residual_m)},
         {"failed_color_residual", setFloat(s.failed_color_residual)},
         {"min_inliers", setInt(s.min_inliers)},

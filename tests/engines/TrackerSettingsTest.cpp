@@ -31,6 +31,7 @@ TEST(TrackerSettingsTest, ParsesEveryKindOfValue) {
         "bilateral_filter = off\n"
         "robust_kernel = huber\n"
         "color_weight = 0.5\n"
+        "poor_translation_constraint = 0\n"
         "min_inliers = 50\n",
         "test.txt");
     EXPECT_EQ(s.kind, TrackerKind::Rgbd);
@@ -47,6 +48,7 @@ TEST(TrackerSettingsTest, ParsesEveryKindOfValue) {
     EXPECT_FALSE(s.bilateral_filter);
     EXPECT_EQ(s.robust_kernel, RobustKernel::Huber);
     EXPECT_FLOAT_EQ(s.color_weight, 0.5f);
+    EXPECT_EQ(s.poor_translation_constraint, 0.f);
     EXPECT_EQ(s.min_inliers, 50);
 }
 
@@ -84,6 +86,7 @@ TEST(TrackerSettingsTest, BadLinesNameFileLineAndReason) {
     expectParseError("just some words\n", 1, "key = value");
     expectParseError("color_weight =\n", 1, "no value");
     expectParseError("good_inlier_ratio = 0.3\n\nfailed_inlier_ratio = 0.5\n", 3, "must not exceed");
+    expectParseError("poor_translation_constraint = 0.34\n", 1, "must be in [0, 1/3)");
 }
 
 TEST(TrackerSettingsTest, ReadsAFileAndReportsAMissingOne) {

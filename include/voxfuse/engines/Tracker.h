@@ -34,9 +34,9 @@ public:
     virtual ~Tracker() = default;
     // Estimates the pose of `view`, starting from tracking_state.T_world_camera (the previous pose),
     // against the model raycast `model` (points/normals in world coordinates seen from
-    // model.T_world_camera). Writes pose, quality, inlier_ratio, residual_m and condition into
-    // tracking_state. Never throws for bad frames: reports TrackingQuality::Failed instead and then
-    // leaves the pose as it was.
+    // model.T_world_camera). Writes pose, quality, inlier_ratio, residual_m, condition and (depth
+    // trackers) translation_constraint into tracking_state. Never throws for bad frames: reports
+    // TrackingQuality::Failed instead and then leaves the pose as it was.
     //
     // Call it for every frame, the first one included: while there is no map yet (the model has no
     // surface and never had one since construction or reset()) the pose is kept and reported Good,
@@ -67,6 +67,7 @@ struct TrackingMeasures {
     int inliers = 0;
     float inlier_ratio = 0.f;
     float condition = 0.f;     // see TrackingState::condition
+    float translation_constraint = 1.f / 3.f;  // see TrackingState::translation_constraint (1/3: no depth terms to judge)
     float depth_rms_m = 0.f;   // RMS point-to-plane residual (0 when the tracker has no depth terms)
     float color_rms = 0.f;     // RMS intensity residual (0 when colour is not what the tracker minimised)
     float motion_m = 0.f;      // pose change from the previous pose

@@ -92,6 +92,14 @@ struct TrackerSettings {
     float failed_inlier_ratio = 0.1f;   // below this: Failed
     float good_condition = 1e-3f;       // below this: Poor (one direction is weakly constrained)
     float failed_condition = 1e-6f;     // below this: Failed (a degenerate scene, e.g. one plane)
+    // Below this share of the depth terms' weight along the least constrained translation: Poor (see
+    // TrackingState::translation_constraint). Depth cannot tell how far the camera moved along that
+    // direction, so the pose there is what noise and a few small structures made of it. The condition
+    // above does not show it: it mixes rotation with translation, and a corridor's weak views (2e-3)
+    // overlap real views that track well (teddy's: 9e-3 and more). The share separates them: teddy's
+    // least is 0.13, the kinfu sample's 0.15, the synthetic room's 0.086; the corridor's walls-only
+    // views 0.002-0.009.
+    float poor_translation_constraint = 0.02f;
     float poor_residual_m = 0.01f;      // RMS point-to-plane residual above this: Poor
     // Colour tracker: an RMS intensity error above this means the images are not aligned (Failed);
     // aligned TUM frames stay below 0.06, unaligned ones are above 0.15.
@@ -114,7 +122,7 @@ void validateTrackerSettings(const TrackerSettings& settings);
 //   max_normal_angle_deg, min_rotation_step_rad, min_translation_step_m, max_normal_edge_m,
 //   predict_motion and bilateral_filter (true/false/on/off/1/0), robust_kernel (none/huber/tukey), robust_scale_m,
 //   color_point_step, color_kernel, color_kernel_scale, color_weight,
-//   good_inlier_ratio, failed_inlier_ratio, good_condition, failed_condition, poor_residual_m,
+//   good_inlier_ratio, failed_inlier_ratio, good_condition, failed_condition, poor_translation_constraint, poor_residual_m,
 //   failed_color_residual, min_inliers, max_motion_m, max_motion_deg
 // Throws IoError when the file cannot be read and ParseError(file, line, reason) for an unknown key,
 // a malformed line, a bad value or a per-level list whose length does not match `levels`.

@@ -20,6 +20,11 @@ struct TrackingState {
     // diagonal): 1 when the six motions are constrained independently, near 0 when the scene leaves
     // some motion unconstrained (a single plane, a corridor).
     float condition = 1.f;
+    // Depth trackers: the share of the final full-resolution depth terms' weight along the translation
+    // direction they constrain least (0..1/3; see TrackerSettings::poor_translation_constraint): near
+    // 0 in a corridor seen without anything facing along it, or facing a single wall. -1 for a tracker
+    // without depth terms.
+    float translation_constraint = -1.f;
 };
 
 }  // namespace voxfuse

@@ -1,0 +1,57 @@
+// The trackers' host algebra on systems built by hand: how much of the terms' weight constrains each
+// translation direction.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "engines/PoseUpdate.h"
+
+namespace voxfuse {
+namespace {
+
+// Point-to-plane terms of points p with model normals n (camera coordinates) and residuals r.
+struct Terms {
+    NormalEquations<double> eq = NormalEquations<double>::zero();
+    void add(const Eigen::Vector3f& p, const Eigen::Vector3f& n, float r) {
+        const Eigen::Vector3f pxn = p.cross(n);
+        const float J[6] = {pxn.x(), pxn.y(), pxn.z(), n.x(), n.y(), n.z()};
+        eq.addTerm(J, r, 1.f);
+    }
+};
+
+// A corridor seen along z: floor and ceiling (normals +-y), two walls (normals +-x), nothing facing z.
+Terms corridorTerms(std::mt19937& rng) {
+    std::uniform_real_distribution<float> u(-1.f, 1.f), depth(1.f, 4.f), r(-0.01f, 0.01f);
+    Terms t;
+    for (int i = 0; i < 400; ++i) {
+        const float z = depth(rng);
+        t.add({u(rng), 1.2f, z}, {0.f, -1.f, 0.f}, r(rng));
+        t.add({u(rng), -1.3f, z}, {0.f, 1.f, 0.f}, r(rng));
+        t.add({1.f, u(rng), z}, {-1.f, 0.f, 0.f}, r(rng));
+        t.add({-1.f, u(rng), z}, {1.f, 0.f, 0.f}, r(rng));
+    }
+    return t;
+}
+
+TEST(PoseUpdateTest, TheTranslationConstraintIsTheShareOfTheNormalsAlongEachDirection) {
+    std::mt19937 rng(3);
+    // Normals along the three axes, in proportions 1 : 2 : 7 of the weight.
+    Terms t;
+    for (int i = 0; i < 10; ++i) t.add({0.1f * i, 0.2f, 2.f}, i < 1 ? Eigen::Vector3f::UnitX() : i < 3 ? Eigen::Vector3f::UnitY() : Eigen::Vector3f::UnitZ(), 0.f);
+    const pose::TranslationConstraint c = pose::translationConstraint(t.eq);
+    EXPECT_NEAR(c.share(0), 0.1, 1e-9);
+    EXPECT_NEAR(c.share(1), 0.2, 1e-9);
+    EXPECT_NEAR(c.share(2), 0.7, 1e-9);
+    EXPECT_NEAR(std::abs(c.directions.col(0).x()), 1.0, 1e-9) << "the least constrained direction is x";
+
+    const pose::TranslationConstraint corridor = pose::translationConstraint(corridorTerms(rng).eq);
+    EXPECT_LT(corridor.share(0), 1e-12) << "nothing faces along the corridor";
+    EXPECT_NEAR(std::abs(corridor.directions.col(0).z()), 1.0, 1e-9);
+    EXPECT_NEAR(corridor.share(1), 0.5, 1e-9);
+    EXPECT_EQ(pose::translationConstraint(NormalEquations<double>::zero()).share(0), 0.0) << "no terms: nothing constrained";
+}
+
+}  // namespace
+}  // namespace voxfuse
