@@ -78,10 +78,10 @@ public:
                              NormalPixels{src, vertices.size(), max_edge_m, pixelGridOf(vertices.size(), pixel_step), dst});
     }
 
-    void copyDepth(const Image<float>& in, Image<float>& out) override {
+    void copyDepthUpTo(const Image<float>& in, Image<float>& out, float max_depth_m) override {
         const float* src = imageOn(kDevice, in, float_staging_);
         float* dst = outputOn(kDevice, out, in.size());
-        TDevice::parallelFor(int(in.pixelCount()), CopyPixels<float>{src, dst});
+        TDevice::parallelFor(int(in.pixelCount()), CopyDepthUpTo{src, max_depth_m, dst});
     }
 
     int countValidDepth(const Image<float>& depth, int pixel_step) override {

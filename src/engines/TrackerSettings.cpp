@@ -45,6 +45,8 @@ bool findInvalidSetting(const TrackerSettings& s, std::vector<std::string>& keys
     if (!(s.min_rotation_step_rad >= 0.f)) return fail({"min_rotation_step_rad"}, "must be >= 0");
     if (!(s.min_translation_step_m >= 0.f)) return fail({"min_translation_step_m"}, "must be >= 0");
     if (!(s.max_normal_edge_m > 0.f)) return fail({"max_normal_edge_m"}, "must be > 0");
+    if (!(s.max_tracking_depth_m >= 0.f && std::isfinite(s.max_tracking_depth_m)))
+        return fail({"max_tracking_depth_m"}, "must be >= 0 (0: no limit)");
     // A share above 1/3 would call even normals pointing evenly everywhere poor.
     if (!(s.poor_translation_constraint >= 0.f && s.poor_translation_constraint < 1.f / 3.f))
         return fail({"poor_translation_constraint"}, "must be in [0, 1/3)");
@@ -190,6 +192,7 @@ TrackerSettings parseTrackerSettings(const std::string& text, const std::string&
         {"bilateral_filter", setBool(s.bilateral_filter)},
         {"predict_motion", setBool(s.predict_motion)},
         {"max_normal_edge_m", setFloat(s.max_normal_edge_m)},
+        {"max_tracking_depth_m", setFloat(s.max_tracking_depth_m)},
         {"robust_kernel", setKernel(s.robust_kernel)},
         {"robust_scale_m", setFloat(s.robust_scale_m)},
         {"color_point_step", setInt(s.color_point_step)},

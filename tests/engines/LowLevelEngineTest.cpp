@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "SyntheticViews.h"
 #include "voxfuse/engines/LowLevelEngine.h"
@@ -95,6 +96,21 @@ TEST(LowLevelEngineTest, ValidDepthIsCountedOnEveryPixelOrOnAGrid) {
     // Columns 0, 2, 4 of rows 0 and 2: (0,0) and (4,2) are empty.
     EXPECT_EQ(engine->countValidDepth(depth, 2), 4);
     EXPECT_EQ(engine->countValidDepth(depth, 8), 0) << "only (0, 0)";
+}
+
+TEST(LowLevelEngineTest, DepthsBeyondTheLimitBecomeHoles) {
+    auto engine = makeLowLevelEngine(Device::CPU);
+    Image<float> depth({4, 1}), out;
+    const float v[4] = {0.5f, 2.5f, 2.5001f, 0.f};
+    for (int i = 0; i < 4; ++i) depth.host()[i] = v[i];
+    engine->copyDepthUpTo(depth, out, 2.5f);
+    ASSERT_EQ(out.size(), depth.size());
+    EXPECT_EQ(out.host()[0], 0.5f);
+    EXPECT_EQ(out.host()[1], 2.5f) << "the limit itself is kept";
+    EXPECT_EQ(out.host()[2], 0.f);
+    EXPECT_EQ(out.host()[3], 0.f);
+    engine->copyDepthUpTo(depth, out, std::numeric_limits<float>::infinity());
+    for (int i = 0; i < 4; ++i) EXPECT_EQ(out.host()[i], v[i]) << "no limit: a copy";
 }
 
 TEST(LowLevelEngineTest, DownsampleAveragesValidSamplesOnOneSurface) {

@@ -32,6 +32,7 @@ TEST(TrackerSettingsTest, ParsesEveryKindOfValue) {
         "robust_kernel = huber\n"
         "color_weight = 0.5\n"
         "poor_translation_constraint = 0\n"
+        "max_tracking_depth_m = 2.5\n"
         "min_inliers = 50\n",
         "test.txt");
     EXPECT_EQ(s.kind, TrackerKind::Rgbd);
@@ -49,6 +50,7 @@ TEST(TrackerSettingsTest, ParsesEveryKindOfValue) {
     EXPECT_EQ(s.robust_kernel, RobustKernel::Huber);
     EXPECT_FLOAT_EQ(s.color_weight, 0.5f);
     EXPECT_EQ(s.poor_translation_constraint, 0.f);
+    EXPECT_FLOAT_EQ(s.max_tracking_depth_m, 2.5f);
     EXPECT_EQ(s.min_inliers, 50);
 }
 
@@ -87,6 +89,7 @@ TEST(TrackerSettingsTest, BadLinesNameFileLineAndReason) {
     expectParseError("color_weight =\n", 1, "no value");
     expectParseError("good_inlier_ratio = 0.3\n\nfailed_inlier_ratio = 0.5\n", 3, "must not exceed");
     expectParseError("poor_translation_constraint = 0.34\n", 1, "must be in [0, 1/3)");
+    expectParseError("max_tracking_depth_m = -1\n", 1, "must be >= 0");
 }
 
 TEST(TrackerSettingsTest, ReadsAFileAndReportsAMissingOne) {

@@ -276,11 +276,12 @@ struct NormalPixels {
     }
 };
 
-template <class T>
-struct CopyPixels {
-    const T* in;
-    T* out;
-    VF_HOST_DEVICE void operator()(int i) const { out[i] = in[i]; }
+// A depth image without the depths beyond max_depth_m (0: no measurement, as elsewhere).
+struct CopyDepthUpTo {
+    const float* in;
+    float max_depth_m;
+    float* out;
+    VF_HOST_DEVICE void operator()(int i) const { out[i] = in[i] <= max_depth_m ? in[i] : 0.f; }
 };
 
 // Selections for the launchers' countIf.
