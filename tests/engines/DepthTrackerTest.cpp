@@ -118,22 +118,41 @@ INSTANTIATE_TEST_SUITE_P(KindsAndDevices, DepthTrackerTest,
                              return std::string(toString(std::get<0>(info.param))) + "_" + deviceName(std::get<1>(info.param));
                          });
 
+// Two exact views of the default room, 2 degrees and a few centimetres apart, and the model of the
+// first: a step for the robustness tests to spoil.
+struct RoomStep {
+    Intrinsics intr = test::kinectIntrinsics();
+    Mat4f start = test::lookAt({-1.6f, -1.3f, 1.5f}, {0.15f, 0.1f, 0.75f});
+    Mat4f moved = test::moveInCamera(start, {0.2f, 1.f, 0.3f}, 2.f, {0.02f, -0.01f, 0.015f});
+    View first, second;
+    RenderState model;
+    RoomStep() {
+        const synth::SyntheticScene room = synth::SyntheticScene::defaultRoom();
+        first = test::renderView(room, intr, start);
+        model = test::modelFromView(first, start);
+        second = test::renderView(room, intr, moved);
+    }
+    // A new tracker with settings `s` on the step; the state it ends in.
+    TrackingState track(const TrackerSettings& s) const {
+        auto tracker = makeTracker(s, Device::CPU);
+        TrackingState state;
+        state.T_world_camera = start;
+        tracker->track(state, first, test::emptyModel(intr));
+        tracker->track(state, second, model);
+        return state;
+    }
+};
+
 // Something the model does not have, close to it: a quarter of the frame (a 320x240 window in its
 // middle) seen 15 mm further away than the room is, as when an object has moved. Its pairs pass the
 // finest level's 2 cm distance and the normal test, so without a robust kernel they pull the camera
 // towards themselves; the Tukey kernel (1 cm) gives them no weight. rgbd adds colour to ren's robust
 // depth terms: with icp's plain least squares it was biased like icp (teddy: 12.1 mm ATE against 7.2).
 TEST(DepthTrackerRobustnessTest, APatchTheModelLacksPullsOnlyTheNonRobustTracker) {
-    const synth::SyntheticScene room = synth::SyntheticScene::defaultRoom();
-    const Intrinsics intr = test::kinectIntrinsics();
-    const Mat4f start = test::lookAt({-1.6f, -1.3f, 1.5f}, {0.15f, 0.1f, 0.75f});
-    const Mat4f moved = test::moveInCamera(start, {0.2f, 1.f, 0.3f}, 2.f, {0.02f, -0.01f, 0.015f});
-    const View first = test::renderView(room, intr, start);
-    const RenderState model = test::modelFromView(first, start);
-    View second = test::renderView(room, intr, moved);
+    RoomStep step;
     for (int y = 120; y < 360; ++y)
         for (int x = 160; x < 480; ++x) {
-            float& d = second.depth.host()[x + y * intr.width];
+            float& d = step.second.depth.host()[x + y * step.intr.width];
             if (d > 0.f) d += 0.015f;
         }
     float error_m[3] = {};
@@ -141,13 +160,9 @@ TEST(DepthTrackerRobustnessTest, APatchTheModelLacksPullsOnlyTheNonRobustTracker
     for (int k = 0; k < 3; ++k) {
         TrackerSettings s;
         s.kind = kinds[k];
-        auto tracker = makeTracker(s, Device::CPU);
-        TrackingState state;
-        state.T_world_camera = start;
-        tracker->track(state, first, test::emptyModel(intr));
-        tracker->track(state, second, model);
+        const TrackingState state = step.track(s);
         EXPECT_NE(state.quality, TrackingQuality::Failed) << toString(kinds[k]);
-        error_m[k] = test::translationErrorM(state.T_world_camera, moved);
+        error_m[k] = test::translationErrorM(state.T_world_camera, step.moved);
     }
     // Measured: icp 5.2 mm, ren 1.1 mm, rgbd 1.1 mm (the pairs whose residual, the offset along the
     // normal, falls inside the kernel's 1 cm keep some weight); rgbd without the kernel: icp's.
@@ -161,32 +176,23 @@ TEST(DepthTrackerRobustnessTest, APatchTheModelLacksPullsOnlyTheNonRobustTracker
 // median the tracker uses only the near half and is not pulled, and the verdict stays Good.
 // Measured: 8.3 mm every depth, 0.19 mm limited.
 TEST(DepthTrackerRobustnessTest, DepthsBeyondTheTrackingLimitDoNotPullThePose) {
-    const synth::SyntheticScene room = synth::SyntheticScene::defaultRoom();
-    const Intrinsics intr = test::kinectIntrinsics();
-    const Mat4f start = test::lookAt({-1.6f, -1.3f, 1.5f}, {0.15f, 0.1f, 0.75f});
-    const Mat4f moved = test::moveInCamera(start, {0.2f, 1.f, 0.3f}, 2.f, {0.02f, -0.01f, 0.015f});
-    const View first = test::renderView(room, intr, start);
-    const RenderState model = test::modelFromView(first, start);
-    View second = test::renderView(room, intr, moved);
+    RoomStep step;
+    Image<float>& depth = step.second.depth;
     std::vector<float> depths;
-    for (std::size_t i = 0; i < second.depth.pixelCount(); ++i)
-        if (second.depth.host()[i] > 0.f) depths.push_back(second.depth.host()[i]);
-    ASSERT_GT(depths.size(), second.depth.pixelCount() / 2);
+    for (std::size_t i = 0; i < depth.pixelCount(); ++i)
+        if (depth.host()[i] > 0.f) depths.push_back(depth.host()[i]);
+    ASSERT_GT(depths.size(), depth.pixelCount() / 2);
     std::nth_element(depths.begin(), depths.begin() + depths.size() / 2, depths.end());
     const float median_m = depths[depths.size() / 2];
-    for (std::size_t i = 0; i < second.depth.pixelCount(); ++i)
-        if (second.depth.host()[i] > median_m) second.depth.host()[i] += 0.006f;
+    for (std::size_t i = 0; i < depth.pixelCount(); ++i)
+        if (depth.host()[i] > median_m) depth.host()[i] += 0.006f;
     float error_m[2] = {};
     for (int limited = 0; limited < 2; ++limited) {
         TrackerSettings s;
         s.max_tracking_depth_m = limited ? median_m : 0.f;
-        auto tracker = makeTracker(s, Device::CPU);
-        TrackingState state;
-        state.T_world_camera = start;
-        tracker->track(state, first, test::emptyModel(intr));
-        tracker->track(state, second, model);
+        const TrackingState state = step.track(s);
         EXPECT_EQ(state.quality, TrackingQuality::Good) << (limited ? "limited" : "every depth");
-        error_m[limited] = test::translationErrorM(state.T_world_camera, moved);
+        error_m[limited] = test::translationErrorM(state.T_world_camera, step.moved);
     }
     EXPECT_GT(error_m[0], 0.002f) << "the far bias pulls a tracker that uses every depth (else this test shows nothing)";
     EXPECT_LT(error_m[1], 0.25f * error_m[0]);
