@@ -170,6 +170,8 @@ void writeSummaryJson(const std::string& path, const RunRecord& run) {
         std::string levels;
         for (const auto& l : run.settings.tracker.levels) levels += char(l.motion);
         settings["tracker_levels"] = levels;
+        // It changes the poses without changing max_depth_m: a run must say which depths it tracked on.
+        settings["max_tracking_depth_m"] = double(run.settings.tracker.max_tracking_depth_m);
         settings["relocalisation"] = run.settings.relocalisation.enabled;
     }
     j["outputs"] = run.outputs;
