@@ -6,7 +6,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <limits>
 
 #include "PhotometricFrames.h"
 #include "MotionPredictor.h"
@@ -90,17 +89,10 @@ private:
             if (i > 0) {
                 low_level_->downsampleDepth(pyramid_[std::size_t(i - 1)].depth, level.depth, kPyramidMaxDepthDiffM);
             } else {
-                // The limit comes after the filter, which mixes only depths close to each other.
-                const bool limited = settings_.max_tracking_depth_m > 0.f;
-                const float max_depth_m = limited ? settings_.max_tracking_depth_m : std::numeric_limits<float>::infinity();
-                if (settings_.bilateral_filter && limited) {
-                    low_level_->bilateralFilterDepth(view.depth, filtered_depth_, BilateralFilterParams{});
-                    low_level_->copyDepthUpTo(filtered_depth_, level.depth, max_depth_m);
-                } else if (settings_.bilateral_filter) {
-                    low_level_->bilateralFilterDepth(view.depth, level.depth, BilateralFilterParams{});
-                } else {
-                    low_level_->copyDepthUpTo(view.depth, level.depth, max_depth_m);
-                }
+                if (settings_.bilateral_filter) low_level_->bilateralFilterDepth(view.depth, level.depth, BilateralFilterParams{});
+                else low_level_->copyDepth(view.depth, level.depth);
+                // After the filter, which mixes only depths close to each other; the coarser levels inherit it.
+                if (settings_.max_tracking_depth_m > 0.f) low_level_->dropDepthBeyond(level.depth, settings_.max_tracking_depth_m);
             }
             low_level_->computeVertexMap(level.depth, level.intrinsics, level.vertices);
             // Only the normals the level's terms read (a level taking every second pixel reads a quarter).
@@ -211,7 +203,6 @@ private:
     std::unique_ptr<ColorTrackerKernels> color_kernels_;  // rgbd only
     std::unique_ptr<PhotometricFrames> photometric_;      // rgbd only
     std::vector<DepthFrameLevel> pyramid_;
-    Image<float> filtered_depth_;  // the filtered frame before max_tracking_depth_m, when that is set
     int valid_pixels_ = 0;
     float min_normal_cos_ = -2.f;
     bool seen_model_ = false;  // a map existed: from now on an empty model means lost tracking

@@ -78,10 +78,16 @@ public:
                              NormalPixels{src, vertices.size(), max_edge_m, pixelGridOf(vertices.size(), pixel_step), dst});
     }
 
-    void copyDepthUpTo(const Image<float>& in, Image<float>& out, float max_depth_m) override {
+    void copyDepth(const Image<float>& in, Image<float>& out) override {
         const float* src = imageOn(kDevice, in, float_staging_);
         float* dst = outputOn(kDevice, out, in.size());
-        TDevice::parallelFor(int(in.pixelCount()), CopyDepthUpTo{src, max_depth_m, dst});
+        TDevice::parallelFor(int(in.pixelCount()), CopyPixels<float>{src, dst});
+    }
+
+    void dropDepthBeyond(Image<float>& depth, float max_depth_m) override {
+        if (depth.empty()) return;
+        depth.memory().update(kDevice);
+        TDevice::parallelFor(int(depth.pixelCount()), DropDepthBeyond{depth.memory().data(kDevice), max_depth_m});
     }
 
     int countValidDepth(const Image<float>& depth, int pixel_step) override {

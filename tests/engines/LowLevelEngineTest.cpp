@@ -100,17 +100,18 @@ TEST(LowLevelEngineTest, ValidDepthIsCountedOnEveryPixelOrOnAGrid) {
 
 TEST(LowLevelEngineTest, DepthsBeyondTheLimitBecomeHoles) {
     auto engine = makeLowLevelEngine(Device::CPU);
-    Image<float> depth({4, 1}), out;
     const float v[4] = {0.5f, 2.5f, 2.5001f, 0.f};
+    Image<float> depth({4, 1});
     for (int i = 0; i < 4; ++i) depth.host()[i] = v[i];
-    engine->copyDepthUpTo(depth, out, 2.5f);
-    ASSERT_EQ(out.size(), depth.size());
-    EXPECT_EQ(out.host()[0], 0.5f);
-    EXPECT_EQ(out.host()[1], 2.5f) << "the limit itself is kept";
-    EXPECT_EQ(out.host()[2], 0.f);
-    EXPECT_EQ(out.host()[3], 0.f);
-    engine->copyDepthUpTo(depth, out, std::numeric_limits<float>::infinity());
-    for (int i = 0; i < 4; ++i) EXPECT_EQ(out.host()[i], v[i]) << "no limit: a copy";
+    engine->dropDepthBeyond(depth, 2.5f);
+    ASSERT_EQ(depth.size(), (Vec2i{4, 1}));
+    EXPECT_EQ(depth.host()[0], 0.5f);
+    EXPECT_EQ(depth.host()[1], 2.5f) << "the limit itself is kept";
+    EXPECT_EQ(depth.host()[2], 0.f);
+    EXPECT_EQ(depth.host()[3], 0.f);
+    for (int i = 0; i < 4; ++i) depth.host()[i] = v[i];
+    engine->dropDepthBeyond(depth, std::numeric_limits<float>::infinity());
+    for (int i = 0; i < 4; ++i) EXPECT_EQ(depth.host()[i], v[i]) << "no limit: nothing changes";
 }
 
 TEST(LowLevelEngineTest, DownsampleAveragesValidSamplesOnOneSurface) {

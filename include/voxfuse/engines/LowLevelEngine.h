@@ -34,8 +34,9 @@ public:
     // With `pixel_step` > 1 only the pixels of every pixel_step-th row and column (those a subsampled
     // tracker level reads) get their normal; the others are not written.
     virtual void computeNormalMap(const Image<Vec4f>& vertices, Image<Vec4f>& normals, float max_edge_m, int pixel_step = 1) = 0;
-    // out = in with the depths beyond max_depth_m set to 0 (no measurement); infinity keeps them all.
-    virtual void copyDepthUpTo(const Image<float>& in, Image<float>& out, float max_depth_m) = 0;
+    virtual void copyDepth(const Image<float>& in, Image<float>& out) = 0;
+    // In place: depths beyond max_depth_m become 0 (no measurement); infinity keeps them all.
+    virtual void dropDepthBeyond(Image<float>& depth, float max_depth_m) = 0;
     // Pixels with depth (> 0), points with w > 0. With `pixel_step` > 1, only the pixels of every
     // pixel_step-th row and column are counted (the pixels a subsampled tracker level uses).
     virtual int countValidDepth(const Image<float>& depth, int pixel_step = 1) = 0;

@@ -276,12 +276,20 @@ struct NormalPixels {
     }
 };
 
-// A depth image without the depths beyond max_depth_m (0: no measurement, as elsewhere).
-struct CopyDepthUpTo {
-    const float* in;
+template <class T>
+struct CopyPixels {
+    const T* in;
+    T* out;
+    VF_HOST_DEVICE void operator()(int i) const { out[i] = in[i]; }
+};
+
+// Depths beyond max_depth_m become 0 (no measurement, as elsewhere), in place.
+struct DropDepthBeyond {
+    float* depth;
     float max_depth_m;
-    float* out;
-    VF_HOST_DEVICE void operator()(int i) const { out[i] = in[i] <= max_depth_m ? in[i] : 0.f; }
+    VF_HOST_DEVICE void operator()(int i) const {
+        if (!(depth[i] <= max_depth_m)) depth[i] = 0.f;
+    }
 };
 
 // Selections for the launchers' countIf.
