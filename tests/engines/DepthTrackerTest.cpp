@@ -61,6 +61,24 @@ TEST_P(DepthTrackerTest, RecoversASmallMotion) {
     EXPECT_GT(state.condition, settings().good_condition);
 }
 
+// The tracking depth limit on every device: the near part of the room (about half its pixels lie
+// beyond 3 m from here) still recovers the step exactly, and the inlier ratio counts only that part.
+TEST_P(DepthTrackerTest, RecoversASmallMotionFromTheDepthsWithinTheLimit) {
+    TrackerSettings s = settings();
+    s.max_tracking_depth_m = 3.f;
+    auto tracker = makeTracker(s, device());
+    const Mat4f moved = test::moveInCamera(startPose(), {0.2f, 1.f, 0.3f}, 2.f, {0.02f, -0.01f, 0.015f});
+    const TrackingState state = track(*tracker, moved);
+    EXPECT_EQ(state.quality, TrackingQuality::Good);
+    EXPECT_LT(test::translationErrorM(state.T_world_camera, moved), 0.001f);
+    EXPECT_LT(test::rotationErrorDeg(state.T_world_camera, moved), 0.05f);
+    EXPECT_GT(state.inlier_ratio, 0.8f) << "of the pixels within the limit";
+    auto unlimited = makeTracker(settings(), device());
+    track(*unlimited, moved);
+    EXPECT_LT(tracker->lastStats().levels.back().inliers, 0.8 * unlimited->lastStats().levels.back().inliers)
+        << "the far pixels took no part";
+}
+
 TEST_P(DepthTrackerTest, RecoversEightCentimetresAndEightDegrees) {
     auto tracker = makeTracker(settings(), device());
     const Mat4f moved = test::moveInCamera(startPose(), {0.3f, 1.f, -0.2f}, 8.f, {0.06f, 0.03f, -0.045f});
