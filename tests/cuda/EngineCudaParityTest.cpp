@@ -62,9 +62,11 @@ void expectVoxelsAgree(const TVoxel* cpu, const TVoxel* gpu, std::size_t count) 
     EXPECT_LE(mismatched, observed / 1000) << mismatched << " of " << observed << " observed voxels differ";
 }
 
-// Raycast agreement over the pixels either device hit.
-void expectRaycastsAgree(RenderState& cpu, RenderState& gpu) {
-    gpu.updateHost();
+// Raycast agreement over the pixels either device hit. The GPU's results are read through a const
+// view: a writable host() would mark the device copy stale, and render() then refuses it.
+void expectRaycastsAgree(const RenderState& cpu, RenderState& gpu_raycast) {
+    gpu_raycast.updateHost();
+    const RenderState& gpu = gpu_raycast;
     long long hits = 0, far = 0;
     for (std::size_t i = 0; i < cpu.points_world.pixelCount(); ++i) {
         const Vec4f a = cpu.points_world.host()[i], b = gpu.points_world.host()[i];

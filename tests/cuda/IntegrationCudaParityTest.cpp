@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <utility>
+
 #include "SyntheticViews.h"
 #include "voxfuse/engines/IntegrationEngine.h"
 #include "voxfuse/objects/Voxel.h"
@@ -38,12 +40,15 @@ TYPED_TEST(IntegrationCudaParityTest, CpuAndCudaGiveTheSameVoxels) {
         cpu_engine->integrate(on_cpu, view, pose);
         gpu_engine->integrate(on_gpu, view, pose);
     }
-    on_gpu.voxels().copyDeviceToHost();
+    // The scene lives on the GPU only: its host copy is made here, for the comparison.
+    on_gpu.voxels().updateHost();
+    const auto& gpu_voxels = std::as_const(on_gpu).voxels();
+    const auto& cpu_voxels = std::as_const(on_cpu).voxels();
 
     // Same function, same inputs, no fused multiply-adds: the tolerance is the engines' promise, not a need.
     long long observed = 0, mismatched = 0;
-    for (std::size_t i = 0; i < on_cpu.voxels().size(); ++i) {
-        const TVoxel a = on_cpu.voxels().host()[i], b = on_gpu.voxels().host()[i];
+    for (std::size_t i = 0; i < cpu_voxels.size(); ++i) {
+        const TVoxel a = cpu_voxels.host()[i], b = gpu_voxels.host()[i];
         observed += a.w_depth > 0;
         bool same = a.w_depth == b.w_depth && std::fabs(TVoxel::sdfToFloat(a.sdf) - TVoxel::sdfToFloat(b.sdf)) <= 1e-3f;
         if constexpr (TVoxel::hasLabel) same = same && a.w_label == b.w_label && (a.w_label == 0 || a.label == b.label);
@@ -52,14 +57,14 @@ TYPED_TEST(IntegrationCudaParityTest, CpuAndCudaGiveTheSameVoxels) {
     EXPECT_GT(observed, 10000);
     if constexpr (TVoxel::hasLabel) {
         long long labelled = 0;
-        for (std::size_t i = 0; i < on_cpu.voxels().size(); ++i) labelled += on_cpu.voxels().host()[i].w_label > 0;
+        for (std::size_t i = 0; i < cpu_voxels.size(); ++i) labelled += cpu_voxels.host()[i].w_label > 0;
         EXPECT_GT(labelled, 1000) << "the label path ran";
     }
     EXPECT_LE(mismatched, observed / 1000) << mismatched << " of " << observed << " observed voxels differ";
 
     gpu_engine->resetScene(on_gpu);
-    on_gpu.voxels().copyDeviceToHost();
-    for (std::size_t i = 0; i < on_gpu.voxels().size(); ++i) ASSERT_EQ(on_gpu.voxels().host()[i].w_depth, 0);
+    on_gpu.voxels().updateHost();
+    for (std::size_t i = 0; i < gpu_voxels.size(); ++i) ASSERT_EQ(gpu_voxels.host()[i].w_depth, 0);
 }
 
 }  // namespace
