@@ -108,7 +108,8 @@ private:
         const Eigen::Matrix4d T_start = pose::toEigenD(state.T_world_camera);
         Eigen::Matrix4d T = settings_.predict_motion ? motion_.predict(state.T_world_camera, {view.timestamp_s, view.frame_index}) : T_start;
         NormalEquations<double> finest = NormalEquations<double>::zero();
-        for (int li = 0; li < levelCount(); ++li) finest = refineOnLevel(li, model, use_color, T);
+        bool robust = false;  // ren and rgbd: least squares has handed over to the kernel
+        for (int li = 0; li < levelCount(); ++li) finest = refineOnLevel(li, model, use_color, T, robust);
 
         // Quality from the last full-resolution system (evaluated just before the last, small, update).
         TrackingMeasures m;
@@ -126,21 +127,24 @@ private:
         if (state.quality != TrackingQuality::Failed) state.T_world_camera = pose::toMat4f(T);
     }
 
-    // Gauss-Newton on settings level `li` (coarse to fine), updating T. Returns the depth system of
-    // the last iteration.
-    NormalEquations<double> refineOnLevel(int li, const RenderState& model, bool use_color, Eigen::Matrix4d& T) {
+    // Gauss-Newton on settings level `li` (coarse to fine), updating T and `robust` (see below). Returns
+    // the depth system of the last iteration.
+    NormalEquations<double> refineOnLevel(int li, const RenderState& model, bool use_color, Eigen::Matrix4d& T, bool& robust) {
         const TrackerLevel& ls = settings_.levels[std::size_t(li)];
         const int pi = levelCount() - 1 - li;
         const DepthFrameLevel& level = pyramid_[std::size_t(pi)];
-        // ren: the coarsest level first converges without the kernel (least squares within the level's
-        // outlier distance captures motions far beyond the kernel's scale), then on with it; the finer
-        // levels start from a converged coarse pose and use the kernel throughout. Every level thus
-        // ends on the same robust cost.
+        // ren: least squares first converges without the kernel (within the level's outlier distance
+        // it captures motions far beyond the kernel's scale), then iterates on with it; the finer levels
+        // start from that pose and use the kernel throughout. Every level thus ends on the same robust
+        // cost. Should the coarsest level run out of iterations before least squares has converged (a
+        // large motion whose path first slides far along a weak direction), the next level goes on
+        // with least squares: the kernel's 1 cm basin cannot catch a pose centimetres off, and the
+        // hand-over must not depend on how the path's rounding happens to fall on a device.
         // rgbd adds colour to ren's depth terms: without the kernel its depth terms were icp's, and
         // teddy's ATE was icp's (12.1-12.6 mm at colour weights 1e-3 to 1e-5), not ren's (7.2 mm).
         const bool kernel_on_depth = settings_.kind == TrackerKind::Ren || settings_.kind == TrackerKind::Rgbd;
         const RobustKernel final_kernel = kernel_on_depth ? settings_.robust_kernel : RobustKernel::None;
-        bool robust = final_kernel == RobustKernel::None || li > 0;
+        if (final_kernel == RobustKernel::None) robust = true;
         const Mat4f T_model_world = rigidInverse(model.T_world_camera);
         TrackerLevelStats stats;
         stats.width = level.depth.width();
