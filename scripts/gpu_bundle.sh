@@ -2,7 +2,9 @@
 # Builds, on this machine, what the GPU check needs on a lent GPU machine (x86-64, NVIDIA Hopper,
 # sm_90; nvcc, CMake and Python there, but no Debian -dev packages and no package registry), and
 # gathers it in gpu_bundle/ (git-ignored, under 64 MiB): the core library without image I/O, the
-# cuda-labelled tests, voxfuse_bench, fallbacks for the C++ runtime libraries, and gpu_check.sh.
+# cuda-labelled tests, voxfuse_bench, fallbacks for the C++ runtime libraries, gpu_check.sh, and
+# TUM fr3/teddy's 200 depth frames from ../shared/data as a depth pack (13 MiB; needs numpy and Pillow)
+# for the CPU-GPU parity check on real frames.
 #
 #   ./scripts/gpu_bundle.sh            then, on the GPU machine, from the repository root:
 #   ./gpu_bundle/gpu_check.sh          (carry gpu_bundle with the call)
@@ -26,7 +28,13 @@ for lib in libgomp.so.1 libstdc++.so.6 libgcc_s.so.1 libz.so.1; do
   cp -L "$(g++ -print-file-name=$lib)" "$bundle/fallback/$lib"
 done
 strip --strip-unneeded "$bundle"/bin/* "$bundle"/lib/libvoxfuse_core.so.*.* 2>/dev/null || true
-cp scripts/gpu_check.sh "$bundle/"
+cp scripts/gpu_check.sh scripts/device_parity.py "$bundle/"
+teddy=../shared/data/tum_fr3_teddy_200
+if [ -d "$teddy" ]; then
+  python3 scripts/make_depth_pack.py "$teddy" "$bundle/teddy_pack" --frames 200 --calib calib/tum_fr3.txt
+else
+  echo "gpu_bundle: $teddy not found: the bundle has no real frames, the check runs on synthetic ones only" >&2
+fi
 git rev-parse --short HEAD >"$bundle/commit.txt" 2>/dev/null || echo unknown >"$bundle/commit.txt"
 
 size_kib=$(du -sk "$bundle" | cut -f1)

@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # The GPU check, run on a lent GPU machine from the bundle that scripts/gpu_bundle.sh built here:
-# the cuda-labelled tests (what only the GPU runs, and CPU-CUDA parity) and voxfuse_bench with
-# --device cuda on synthetic frames rendered in memory (no image files or codecs needed), then one
-# summary. Needs nothing on that machine but the NVIDIA driver and python3; takes a few minutes.
+# the cuda-labelled tests (what only the GPU runs, and CPU-CUDA parity), voxfuse_bench with
+# --device cuda on synthetic frames rendered in memory (no image files or codecs needed), and, when
+# the bundle carries teddy's depth pack, the tracked run on it on both devices compared frame by frame
+# and mesh by mesh (device_parity.py); then one summary. Needs nothing on that machine but the NVIDIA
+# driver and python3; takes a few minutes.
 #
 #   ./gpu_bundle/gpu_check.sh        (from the repository root; logs, XML and JSON go to $OUT or /tmp)
 set -uo pipefail
@@ -34,6 +36,18 @@ step bench_cuda_hash 120 "$bundle/bin/voxfuse_bench" "synthetic:$frames" --devic
 step bench_cuda_dense 120 "$bundle/bin/voxfuse_bench" "synthetic:$frames" --device cuda --poses groundtruth --index dense --mesh --cloud --repeats 5 --json bench_cuda_dense.json
 step bench_cuda_tracked 120 "$bundle/bin/voxfuse_bench" "synthetic:$frames" --device cuda --json bench_cuda_tracked.json
 step bench_cpu_hash 180 "$bundle/bin/voxfuse_bench" "synthetic:$frames" --device cpu --poses groundtruth --mesh --cloud --repeats 3 --json bench_cpu_hash.json
+if [ -d "$bundle/teddy_pack" ]; then
+  # The meshes (70 MB each) stay out of $OUT, which comes back.
+  work=$(mktemp -d)
+  for dev in cpu cuda; do
+    step teddy_$dev 180 "$bundle/bin/voxfuse_bench" "$bundle/teddy_pack" --device $dev --mesh --repeats 1 --json teddy_$dev.json \
+      --trajectory "$work/teddy_${dev}_trajectory.txt" --mesh-out "$work/teddy_${dev}_mesh.ply"
+    cp "teddy_$dev.json" "$work/" 2>/dev/null
+  done
+  step teddy_parity 120 python3 "$bundle/device_parity.py" "$work/teddy_cpu" "$work/teddy_cuda"
+  cp "$work"/teddy_*_trajectory.txt . 2>/dev/null
+  rm -rf "$work"
+fi
 
 python3 - "$out" <<'PY'
 import json, os, sys, xml.etree.ElementTree as ET
@@ -53,7 +67,7 @@ for name in ("cuda_tests", "engine_cuda_tests"):
             print("  FAILED", c.get("classname"), c.get("name"))
 stages = ("depth", "track", "allocate", "integrate", "raycast", "total")
 print(f"\n{'run':<20}" + "".join(f"{s:>10}" for s in stages) + f"{'a+i+r':>10}{'ATE mm':>9}")
-for name in ("bench_cuda_hash", "bench_cuda_dense", "bench_cuda_tracked", "bench_cpu_hash"):
+for name in ("bench_cuda_hash", "bench_cuda_dense", "bench_cuda_tracked", "bench_cpu_hash", "teddy_cuda", "teddy_cpu"):
     path = os.path.join(out, name + ".json")
     if not os.path.exists(path):
         print(f"{name:<20}no result (exit {status.get(name)})"); continue
@@ -72,5 +86,10 @@ for name in ("bench_cuda_hash", "bench_cuda_dense", "bench_cuda_tracked", "bench
         gpu_peak = f", GPU peak +{m['gpu_peak_extra_mb']:.1f} MB" if "gpu_peak_extra_mb" in m else ""
         print(f"{'':<20}mesh {m['median_ms']:.2f} ms ({m['triangles']} triangles, {m['vertices']} vertices{gpu_peak})"
               + (f"; cloud {c['extract_median_ms']:.2f} ms ({c['points']} points)" if c else ""))
+parity = os.path.join(out, "teddy_parity.log")
+if os.path.exists(parity):
+    print("\nteddy (200 depth frames, ren, 5 mm hash), cpu against cuda (device_parity.py):")
+    for line in open(parity):
+        print("  " + line.rstrip())
 print("logs and JSON:", out)
 PY

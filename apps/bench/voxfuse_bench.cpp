@@ -1,8 +1,9 @@
 // voxfuse_bench: per-stage timings of the pipeline on a recorded sequence, as a table and as JSON, and
 // on request what the map outputs cost (meshing, point clouds, the occupancy map's thread).
 // Defaults to TUM fr3/teddy from ../shared/data when present, else the bundled synthetic sequence.
-// `synthetic[:N]` renders the synthetic room in memory instead (no image files, no codec): the only
-// source of a build without I/O (VOXFUSE_IO=OFF), such as the GPU bundle of scripts/gpu_bundle.sh.
+// `synthetic[:N]` renders the synthetic room in memory instead (no image files, no codec); a depth pack
+// (DepthPackSource.h) is a recording without codecs. These two are the sources of a build without I/O
+// (VOXFUSE_IO=OFF), such as the GPU bundle of scripts/gpu_bundle.sh.
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
@@ -21,10 +22,13 @@
 #include "RunRecord.h"
 #include "SequenceRunner.h"
 #include "Statistics.h"
+#include "DepthPackSource.h"
 #include "SyntheticSource.h"
 #include "voxfuse/core/Error.h"
 #include "voxfuse/core/Timer.h"
 #include "voxfuse/io/AtomicFile.h"
+#include "voxfuse/io/MeshIO.h"
+#include "voxfuse/io/TrajectoryIO.h"
 #if VOXFUSE_WITH_IO
 #include "LabelInput.h"
 #include "voxfuse/io/UndistortedImageSource.h"
@@ -55,6 +59,12 @@ StageSummary summarise(std::vector<double> v) {
     return s;
 }
 
+std::string formatMillimetres(double metres) {
+    char text[32];
+    std::snprintf(text, sizeof(text), "%.2f", 1000.0 * metres);
+    return text;
+}
+
 std::string defaultSource() {
 #if VOXFUSE_WITH_IO
     const std::string teddy = std::string(VOXFUSE_SHARED_DATA_DIR) + "/tum_fr3_teddy_200";
@@ -67,10 +77,11 @@ std::string defaultSource() {
 
 std::unique_ptr<ImageSource> openSource(const std::string& path) {
     if (app::SyntheticSource::isSyntheticName(path)) return app::SyntheticSource::open(path);
+    if (app::DepthPackSource::isDepthPack(path)) return std::make_unique<app::DepthPackSource>(path);
 #if VOXFUSE_WITH_IO
     return openImageSource(path);  // undistorted after the labels are attached (framesForEngine)
 #else
-    throw ConfigError("this build has no image I/O (VOXFUSE_IO=OFF): the source must be synthetic or synthetic:N, not '" + path + "'");
+    throw ConfigError("this build has no image I/O (VOXFUSE_IO=OFF): the source must be synthetic[:N] or a depth pack (a folder with depth.bin.gz), not '" + path + "'");
 #endif
 }
 
@@ -78,7 +89,7 @@ std::unique_ptr<ImageSource> openSource(const std::string& path) {
 
 int main(int argc, char** argv) {
     CLI::App cli{"Per-stage timings of the VoxFuse pipeline on a sequence."};
-    std::string source_path, json_path = "voxfuse_bench.json", timings_path, index = "hash", poses = "track", device = "cpu";
+    std::string source_path, json_path = "voxfuse_bench.json", timings_path, trajectory_path, mesh_path, index = "hash", poses = "track", device = "cpu";
     TrackerOverrides tracker;  // --tracker, --tracker-config
 #if VOXFUSE_WITH_IO
     app::LabelInputOptions labels;  // and --voxel
@@ -130,6 +141,14 @@ int main(int argc, char** argv) {
     cli.add_option("--tracker-config", tracker.settings_file, "tracker settings file ('key = value' lines, as voxfuse reads them)")
         ->check(CLI::ExistingFile);
     cli.add_option("--timings", timings_path, "also write every frame's stage times and visible blocks to this JSON file (as voxfuse's timings.json)");
+    cli.add_option("--trajectory", trajectory_path, "also write the frames' poses to this file (TUM format, as voxfuse's trajectory.txt)");
+    cli.add_option("--mesh-out", mesh_path, "after the run, also write the map's mesh to this file (.ply, .obj or .stl)")
+        ->check(CLI::Validator(
+            [](std::string& path) {
+                const std::string ext = fs::path(path).extension().string();
+                return ext == ".ply" || ext == ".obj" || ext == ".stl" ? std::string() : "expected a .ply, .obj or .stl file, got '" + path + "'";
+            },
+            "MESH FILE"));
     CLI11_PARSE(cli, argc, argv);
 
     app::interrupt::install("voxfuse_bench");
@@ -147,6 +166,8 @@ int main(int argc, char** argv) {
                               " warm-up frames (--warmup)");
         requireWritable(json_path);  // before the run, not after it
         if (!timings_path.empty()) requireWritable(timings_path);
+        if (!trajectory_path.empty()) requireWritable(trajectory_path);
+        if (!mesh_path.empty()) requireWritable(mesh_path);
         if (source_path.empty()) source_path = defaultSource();
         std::unique_ptr<ImageSource> source = openSource(source_path);
 #if VOXFUSE_WITH_IO
@@ -232,10 +253,12 @@ int main(int argc, char** argv) {
         if (s.index_type == IndexType::Hash)
             std::printf("\n  hash: %d blocks in use, %lld allocation failures", record.allocation.blocks_allocated,
                         record.allocation.allocation_failures_total);
-        if (record.has_trajectory_error)
-            std::printf("\n  ATE RMSE %.2f mm over %d poses, RPE %.2f mm/s; %d frames failed tracking", 1000.0 * record.trajectory_error.ate_rmse_m,
-                        record.trajectory_error.pairs, 1000.0 * record.trajectory_error.rpe_trans_m_per_s,
+        if (record.has_trajectory_error) {
+            const TrajectoryError& e = record.trajectory_error;
+            const std::string rpe = e.rpe_pairs > 0 ? formatMillimetres(e.rpe_trans_m_per_s) + " mm/s" : "n/a (too short)";
+            std::printf("\n  ATE RMSE %.2f mm over %d poses, RPE %s; %d frames failed tracking", 1000.0 * e.ate_rmse_m, e.pairs, rpe.c_str(),
                         app::countQuality(record, TrackingQuality::Failed));
+        }
         if (s.relocalisation.enabled)
             std::printf("\n  relocalisation: %d frames lost, %d relocalised after %d attempts", app::countStatus(record, TrackingStatus::Lost),
                         app::countStatus(record, TrackingStatus::Relocalised), app::countRelocalisationAttempts(record));
@@ -289,7 +312,7 @@ int main(int argc, char** argv) {
         for (const auto& level : level_names) iterations[level.substr(2)] = meanOf(level_iterations[level]);
         if (record.has_trajectory_error) {
             j["ate_rmse_m"] = record.trajectory_error.ate_rmse_m;
-            j["rpe_trans_m_per_s"] = record.trajectory_error.rpe_trans_m_per_s;
+            if (record.trajectory_error.rpe_pairs > 0) j["rpe_trans_m_per_s"] = record.trajectory_error.rpe_trans_m_per_s;
         }
         j["tracking_failed_frames"] = app::countQuality(record, TrackingQuality::Failed);
         j["frames_lost"] = app::countStatus(record, TrackingStatus::Lost);
@@ -321,6 +344,16 @@ int main(int argc, char** argv) {
         if (!timings_path.empty()) {
             app::writeTimingsJson(timings_path, record);
             std::printf("  per-frame timings: %s\n", timings_path.c_str());
+        }
+        if (!trajectory_path.empty()) {
+            writeTumTrajectory(trajectory_path, record.trajectory);
+            std::printf("  trajectory: %s\n", trajectory_path.c_str());
+        }
+        if (!mesh_path.empty()) {
+            Mesh map_mesh;
+            engine->extractMesh(map_mesh);
+            writeMesh(mesh_path, map_mesh);
+            std::printf("  mesh: %s (%zu triangles)\n", mesh_path.c_str(), map_mesh.triangles.size());
         }
         return app::interrupt::exitStatus();
     });
