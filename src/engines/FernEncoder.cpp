@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <utility>
 
 #include "voxfuse/core/Error.h"
 
@@ -15,11 +16,12 @@ namespace {
 // libraries, and the tests must be the same everywhere for a seed.
 float uniform01(std::mt19937& rng) { return float(rng() >> 8) * (1.f / 16777216.f); }
 
-// 3x3 binomial smoothing over the cells that have a value (weight > 0): a shift of a cell or two
-// between two views of the same place then changes few test outcomes.
-void smooth(const std::vector<float>& in, const std::vector<float>& weight, Vec2i size, std::vector<float>& out) {
+// 3x3 binomial smoothing of cell means ({mean, pixels} per cell), weighted by how many pixels each
+// has (none: no weight): a shift of a cell or two between two views of the same place then changes
+// few test outcomes.
+void smooth(const Vec2f* cells, Vec2i size, std::vector<float>& out) {
     static constexpr float kKernel[3] = {1.f, 2.f, 1.f};
-    out.assign(in.size(), 0.f);
+    out.assign(std::size_t(size.x) * std::size_t(size.y), 0.f);
     for (int y = 0; y < size.y; ++y)
         for (int x = 0; x < size.x; ++x) {
             float sum = 0.f, sum_w = 0.f;
@@ -28,53 +30,12 @@ void smooth(const std::vector<float>& in, const std::vector<float>& weight, Vec2
                     const int xx = x + dx, yy = y + dy;
                     if (xx < 0 || yy < 0 || xx >= size.x || yy >= size.y) continue;
                     const std::size_t j = std::size_t(xx + yy * size.x);
-                    const float w = kKernel[dx + 1] * kKernel[dy + 1] * weight[j];
-                    sum += w * in[j];
+                    const float w = kKernel[dx + 1] * kKernel[dy + 1] * cells[j].y;
+                    sum += w * cells[j].x;
                     sum_w += w;
                 }
             out[std::size_t(x + y * size.x)] = sum_w > 0.f ? sum / sum_w : 0.f;
         }
-}
-
-// The first of `frame` pixels along an axis whose cell (pixel * cells / frame) is `cell`.
-int firstPixelOfCell(int cell, int cells, int frame) { return int((static_cast<long long>(cell) * frame + cells - 1) / cells); }
-
-// Averages of value(pixel) over the valid(pixel) pixels of each cell, cell (cx, cy) holding the frame's
-// pixels [cx * W / w, (cx + 1) * W / w) x [cy * H / h, (cy + 1) * H / h), and how many there were (0:
-// mean 0). A cell row is one thread's: its columns are summed down its rows first (independent sums,
-// which vectorise), then across each cell; the result does not depend on the thread count.
-template <class Pixel, class Valid, class Value>
-void cellAverages(Vec2i frame, Vec2i small, const Pixel* pixels, Valid valid, Value value, std::vector<float>& mean,
-                  std::vector<float>& count) {
-    mean.assign(std::size_t(small.x) * std::size_t(small.y), 0.f);
-    count.assign(mean.size(), 0.f);
-#pragma omp parallel
-    {
-        std::vector<float> column_sum(std::size_t(frame.x)), column_count(std::size_t(frame.x));
-#pragma omp for schedule(static)
-        for (int cy = 0; cy < small.y; ++cy) {
-            std::fill(column_sum.begin(), column_sum.end(), 0.f);
-            std::fill(column_count.begin(), column_count.end(), 0.f);
-            for (int y = firstPixelOfCell(cy, small.y, frame.y); y < firstPixelOfCell(cy + 1, small.y, frame.y); ++y) {
-                const Pixel* row = pixels + std::size_t(y) * std::size_t(frame.x);
-                for (int x = 0; x < frame.x; ++x) {
-                    const bool ok = valid(row[x]);
-                    column_sum[std::size_t(x)] += ok ? value(row[x]) : 0.f;
-                    column_count[std::size_t(x)] += ok ? 1.f : 0.f;
-                }
-            }
-            for (int cx = 0; cx < small.x; ++cx) {
-                float sum = 0.f, n = 0.f;
-                for (int x = firstPixelOfCell(cx, small.x, frame.x); x < firstPixelOfCell(cx + 1, small.x, frame.x); ++x) {
-                    sum += column_sum[std::size_t(x)];
-                    n += column_count[std::size_t(x)];
-                }
-                const std::size_t c = std::size_t(cx) + std::size_t(cy) * std::size_t(small.x);
-                mean[c] = n > 0.f ? sum / n : 0.f;
-                count[c] = n;
-            }
-        }
-    }
 }
 
 }  // namespace
@@ -86,8 +47,8 @@ float fernDissimilarity(const FernCode& a, const FernCode& b) {
     return float(differ) / float(a.size());
 }
 
-FernEncoder::FernEncoder(const FernSettings& settings, Vec2i frame_size, bool with_intensity)
-    : settings_(settings), frame_size_(frame_size), with_intensity_(with_intensity && settings.use_intensity) {
+FernEncoder::FernEncoder(const FernSettings& settings, Vec2i frame_size, bool with_intensity, Device device)
+    : settings_(settings), frame_size_(frame_size), with_intensity_(with_intensity && settings.use_intensity), low_level_(makeLowLevelEngine(device)) {
     if (settings.fern_count < 1 || settings.tests_per_fern < 1 || settings.tests_per_fern > 8)
         throw ConfigError("ferns: need at least one fern of 1 to 8 tests");
     if (settings.image_width < 4 || !(settings.max_depth_m > settings.min_depth_m))
@@ -108,19 +69,22 @@ FernEncoder::FernEncoder(const FernSettings& settings, Vec2i frame_size, bool wi
     }
 }
 
+FernEncoder::~FernEncoder() = default;
+
 void FernEncoder::shrink(const Image<float>& depth_m, const Image<Vec4u8>& rgb, std::vector<float>& depth_small,
-                         std::vector<float>& intensity_small) const {
+                         std::vector<float>& intensity_small) {
     if (depth_m.size() != frame_size_) throw ConfigError("ferns: the depth image is not of the size the encoder was made for");
     const std::size_t cells = std::size_t(small_size_.x) * std::size_t(small_size_.y);
-    std::vector<float> mean, count;
-    cellAverages(frame_size_, small_size_, depth_m.host(), [](float d) { return d > 0.f; }, [](float d) { return d; }, mean, count);
-    smooth(mean, count, small_size_, depth_small);
+    // The averages are taken where the images are (on the GPU only they come down), the rest here.
+    low_level_->averageDepthCells(depth_m, small_size_, cells_);
+    cells_.memory().updateHost();
+    smooth(std::as_const(cells_).host(), small_size_, depth_small);
 
     intensity_small.assign(cells, 0.f);
     if (!with_intensity_ || rgb.empty()) return;
-    cellAverages(rgb.size(), small_size_, rgb.host(), [](Vec4u8) { return true; },
-                 [](Vec4u8 c) { return float(c.x) + float(c.y) + float(c.z); }, mean, count);
-    smooth(mean, count, small_size_, intensity_small);
+    low_level_->averageIntensityCells(rgb, small_size_, cells_);
+    cells_.memory().updateHost();
+    smooth(std::as_const(cells_).host(), small_size_, intensity_small);
     double sum = 0.0, square = 0.0;
     for (const float v : intensity_small) sum += v;
     const double average = sum / double(cells);
@@ -129,7 +93,7 @@ void FernEncoder::shrink(const Image<float>& depth_m, const Image<Vec4u8>& rgb, 
     for (float& v : intensity_small) v = float((v - average) / deviation);
 }
 
-FernCode FernEncoder::encode(const Image<float>& depth_m, const Image<Vec4u8>& rgb) const {
+FernCode FernEncoder::encode(const Image<float>& depth_m, const Image<Vec4u8>& rgb) {
     std::vector<float> depth_small, intensity_small;
     shrink(depth_m, rgb, depth_small, intensity_small);
     FernCode code(std::size_t(settings_.fern_count), 0);

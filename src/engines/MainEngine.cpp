@@ -96,7 +96,7 @@ public:
                 cache_ = std::make_unique<GlobalCache>(sizeof(TVoxel) * kBlockVoxelCount, settings.swap.swap_file);
             }
         }
-        if (settings.relocalisation.enabled) relocaliser_ = std::make_unique<Relocaliser>(settings.relocalisation, calib.depth.size());
+        if (settings.relocalisation.enabled) relocaliser_ = std::make_unique<Relocaliser>(settings.relocalisation, calib.depth.size(), settings.device);
     }
 
     // On the GPU only the frame's images go up (raw depth, colour, classes); everything else stays there.
@@ -372,8 +372,7 @@ private:
         if (tracking_.quality != TrackingQuality::Good) return;
         relocaliser_->rememberGoodFrame(tracking_);
         if (frames_since_relocalisation_ <= settings_.relocalisation.keyframe_pause_frames) return;
-        if (onGpu()) view_.depth.memory().updateHost();
-        relocaliser_->addKeyframe(view_, tracking_.T_world_camera);
+        relocaliser_->addKeyframe(view_, tracking_.T_world_camera);  // the frame's code is made where its images are
         result.keyframes = relocaliser_->database().size();
         clock_.stageDone("keyframes");
     }

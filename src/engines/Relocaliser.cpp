@@ -32,8 +32,8 @@ bool acceptRelocalisation(const RelocalisationSettings& s, const RelocalisationC
            c.step_m <= s.max_refinement_step_m && c.step_deg <= s.max_refinement_step_deg;
 }
 
-Relocaliser::Relocaliser(const RelocalisationSettings& settings, Vec2i frame_size)
-    : settings_(settings), frame_size_(frame_size), database_(settings.max_keyframes) {
+Relocaliser::Relocaliser(const RelocalisationSettings& settings, Vec2i frame_size, Device device)
+    : settings_(settings), frame_size_(frame_size), device_(device), database_(settings.max_keyframes) {
     if (settings.candidates < 1) throw ConfigError("relocalisation tries at least one keyframe per frame");
     if (!(settings.keyframe_min_dissimilarity >= 0.f && settings.keyframe_min_dissimilarity <= 1.f))
         throw ConfigError("the keyframe dissimilarity threshold lies in [0, 1]");
@@ -43,7 +43,7 @@ Relocaliser::Relocaliser(const RelocalisationSettings& settings, Vec2i frame_siz
 Relocaliser::~Relocaliser() = default;
 
 FernCode Relocaliser::encode(const View& view) {
-    if (!encoder_) encoder_ = std::make_unique<FernEncoder>(settings_.ferns, frame_size_, !view.rgb.empty());
+    if (!encoder_) encoder_ = std::make_unique<FernEncoder>(settings_.ferns, frame_size_, !view.rgb.empty(), device_);
     return encoder_->encode(view.depth, view.rgb);
 }
 

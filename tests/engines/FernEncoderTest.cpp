@@ -6,6 +6,7 @@
 #include <cmath>
 #include <random>
 
+#include "DeviceTestSupport.h"
 #include "SyntheticViews.h"
 #include "voxfuse/core/Error.h"
 #include "voxfuse/engines/FernEncoder.h"
@@ -64,7 +65,14 @@ TEST(FernEncoderTest, IntensityIsNormalisedSoExposureMovesFewBits) {
     EXPECT_GT(fernDissimilarity(bright, depth_only), 0.2f);
 }
 
-TEST(FernEncoderTest, SmallImagesAverageValidDepthAndNormaliseIntensity) {
+// The small images are averaged where the frames are (the low-level engine's cell averages): these
+// closed-form and written-out cases run on every device.
+class FernEncoderDeviceTest : public ::testing::TestWithParam<Device> {
+protected:
+    void SetUp() override { VF_SKIP_IF_UNAVAILABLE(GetParam()); }
+};
+
+TEST_P(FernEncoderDeviceTest, SmallImagesAverageValidDepthAndNormaliseIntensity) {
     Image<float> depth(Vec2i{160, 120});
     Image<Vec4u8> rgb(Vec2i{160, 120});
     for (int y = 0; y < 120; ++y)
@@ -73,7 +81,7 @@ TEST(FernEncoderTest, SmallImagesAverageValidDepthAndNormaliseIntensity) {
             const unsigned char v = (unsigned char)(y < 60 ? 50 : 150);
             rgb.at(x, y) = Vec4u8{v, v, v, 255};
         }
-    const FernEncoder encoder(FernSettings{}, depth.size(), true);
+    FernEncoder encoder(FernSettings{}, depth.size(), true, GetParam());
     ASSERT_EQ(encoder.codeImageSize(), (Vec2i{80, 60}));
     std::vector<float> d, intensity;
     encoder.shrink(depth, rgb, d, intensity);
@@ -94,14 +102,14 @@ TEST(FernEncoderTest, SmallImagesAverageValidDepthAndNormaliseIntensity) {
 // A frame whose size is no multiple of the code image's (cells of 2 and 3 pixels), with holes, against
 // the definition written out pixel by pixel: each pixel adds to the cell (x * w / W, y * h / H), then
 // the 1-2-1 smoothing weighted by the cells' counts.
-TEST(FernEncoderTest, SmallDepthIsTheCellAverageOfValidPixelsSmoothed) {
+TEST_P(FernEncoderDeviceTest, SmallDepthIsTheCellAverageOfValidPixelsSmoothed) {
     const Vec2i frame{203, 151};
     Image<float> depth(frame);
     std::mt19937 rng(3);
     std::uniform_real_distribution<float> u(0.f, 1.f);
     for (int y = 0; y < frame.y; ++y)
         for (int x = 0; x < frame.x; ++x) depth.at(x, y) = u(rng) < 0.3f ? 0.f : 0.5f + 2.f * u(rng);
-    const FernEncoder encoder(FernSettings{}, frame, false);
+    FernEncoder encoder(FernSettings{}, frame, false, GetParam());
     const Vec2i small = encoder.codeImageSize();
     ASSERT_EQ(small, (Vec2i{80, 60}));
     std::vector<double> sum(std::size_t(small.x * small.y), 0.0), count(sum.size(), 0.0);
@@ -141,10 +149,12 @@ TEST(FernEncoderTest, RejectsSettingsItCannotUse) {
     EXPECT_THROW(FernEncoder(s, {640, 480}, true), ConfigError);
     EXPECT_THROW(FernEncoder(FernSettings{}, {0, 30}, true), ConfigError);
     EXPECT_EQ(FernEncoder(FernSettings{}, {40, 30}, true).codeImageSize(), (Vec2i{40, 30})) << "a frame smaller than the code image";
-    const FernEncoder encoder(FernSettings{}, {160, 120}, true);
+    FernEncoder encoder(FernSettings{}, {160, 120}, true);
     EXPECT_THROW(encoder.encode(Image<float>(Vec2i{320, 240}), Image<Vec4u8>()), ConfigError);
     EXPECT_EQ(fernDissimilarity(FernCode(500, 0), FernCode(400, 0)), 1.f);
 }
+
+INSTANTIATE_TEST_SUITE_P(Devices, FernEncoderDeviceTest, test::kAllDevices, test::DeviceName());
 
 }  // namespace
 }  // namespace voxfuse

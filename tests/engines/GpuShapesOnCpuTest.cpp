@@ -189,5 +189,30 @@ TEST(GpuShapesOnCpuLowLevelTest, BilateralFilterByStripsEqualsPixelByPixel) {
     }
 }
 
+// Cell averages (the relocaliser's code images) by cell rows in column chunks (CPU) and cell by cell
+// (GPU): the same bits, for grids whose cells are 2-3 pixels wide (many to a chunk), for cells wider
+// than a chunk (column by column), and for colour.
+TEST(GpuShapesOnCpuLowLevelTest, CellAveragesByRowsEqualCellByCell) {
+    static const synth::SyntheticScene world = synth::SyntheticScene::boxAndSphere();
+    const Intrinsics intrinsics = test::kinectIntrinsics(601, 451);
+    View view = test::renderView(world, intrinsics, poses()[0], true);
+    for (int i = 0; i < int(view.depth.pixelCount()); i += 7) view.depth.host()[i] = 0.f;  // dropouts
+    LowLevelEngineOn<CpuDevice> rows;
+    LowLevelEngineOn<CpuDeviceWithGpuShapes> cells;
+    for (const Vec2i grid : {Vec2i{80, 60}, Vec2i{211, 160}, Vec2i{2, 3}, Vec2i{601, 451}}) {
+        Image<Vec2f> a, b;
+        rows.averageDepthCells(view.depth, grid, a);
+        cells.averageDepthCells(view.depth, grid, b);
+        ASSERT_EQ(a.size(), grid);
+        ASSERT_EQ(b.size(), grid);
+        EXPECT_EQ(0, std::memcmp(a.host(), b.host(), a.pixelCount() * sizeof(Vec2f))) << "depth, " << grid.x << "x" << grid.y << " cells";
+        rows.averageIntensityCells(view.rgb, grid, a);
+        cells.averageIntensityCells(view.rgb, grid, b);
+        EXPECT_EQ(0, std::memcmp(a.host(), b.host(), a.pixelCount() * sizeof(Vec2f))) << "intensity, " << grid.x << "x" << grid.y << " cells";
+    }
+    Image<Vec2f> out;
+    EXPECT_THROW(rows.averageDepthCells(view.depth, Vec2i{602, 10}, out), Error) << "more cells than pixels";
+}
+
 }  // namespace
 }  // namespace voxfuse

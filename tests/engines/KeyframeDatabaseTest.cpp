@@ -90,7 +90,7 @@ RoomView roomView(float degrees) {
 
 TEST(KeyframeDatabaseTest, ARevisitedViewFindsTheKeyframeTakenNearestToIt) {
     // Half a lap in 2-degree steps: keyframes wherever the view has changed enough.
-    const FernEncoder encoder(FernSettings{}, {160, 120}, true);
+    FernEncoder encoder(FernSettings{}, {160, 120}, true);
     KeyframeDatabase db(1000);
     for (int step = 0; step < 90; ++step) {
         const RoomView v = roomView(180.f + 2.f * float(step));
@@ -119,7 +119,7 @@ TEST(KeyframeDatabaseTest, BuildingTheSameDatabaseTwiceGivesTheSameKeyframes) {
     std::vector<RoomView> views;
     for (int step = 0; step < 20; ++step) views.push_back(roomView(180.f + 3.f * float(step)));
     auto build = [&] {
-        const FernEncoder encoder(FernSettings{}, {160, 120}, true);
+        FernEncoder encoder(FernSettings{}, {160, 120}, true);
         KeyframeDatabase db(8);
         for (std::size_t i = 0; i < views.size(); ++i)
             db.addIfNovel(encoder.encode(views[i].view.depth, views[i].view.rgb), views[i].T_world_camera, int(i), 0.2f);

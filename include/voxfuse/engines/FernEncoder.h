@@ -8,9 +8,11 @@
 // views share few.
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "voxfuse/core/Image.h"
+#include "voxfuse/engines/LowLevelEngine.h"
 
 namespace voxfuse {
 
@@ -35,12 +37,14 @@ float fernDissimilarity(const FernCode& a, const FernCode& b);
 class FernEncoder {
 public:
     // For frames of `frame_size` pixels. `with_intensity` chooses the channels once: a database holds
-    // codes of one kind (settings.use_intensity off or no colour: depth only).
-    FernEncoder(const FernSettings& settings, Vec2i frame_size, bool with_intensity);
+    // codes of one kind (settings.use_intensity off or no colour: depth only). The frames are averaged
+    // down on `device` (the low-level engine's averageDepthCells), where the pipeline keeps them.
+    FernEncoder(const FernSettings& settings, Vec2i frame_size, bool with_intensity, Device device = Device::CPU);
+    ~FernEncoder();
 
     // The code of a frame: depth in metres (0 = no measurement) and its colour (may be empty; then
     // intensity tests read 0). A colour image of another size is sampled at the same relative position.
-    FernCode encode(const Image<float>& depth_m, const Image<Vec4u8>& rgb) const;
+    FernCode encode(const Image<float>& depth_m, const Image<Vec4u8>& rgb);
 
     Vec2i codeImageSize() const { return small_size_; }
     bool withIntensity() const { return with_intensity_; }
@@ -49,7 +53,7 @@ public:
     // each cell and smoothed (0 where a neighbourhood has none), intensity normalised to zero mean
     // and unit deviation over the image (so that exposure changes move few bits).
     void shrink(const Image<float>& depth_m, const Image<Vec4u8>& rgb, std::vector<float>& depth_small,
-                std::vector<float>& intensity_small) const;
+                std::vector<float>& intensity_small);
 
 private:
     struct Test {
@@ -62,6 +66,8 @@ private:
     Vec2i small_size_;
     bool with_intensity_;
     std::vector<Test> tests_;  // tests_per_fern per fern, fern after fern
+    std::unique_ptr<LowLevelEngine> low_level_;
+    Image<Vec2f> cells_;  // {mean, pixels} per cell of the code image
 };
 
 }  // namespace voxfuse

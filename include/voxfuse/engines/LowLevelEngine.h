@@ -41,6 +41,11 @@ public:
     // pixel_step-th row and column are counted (the pixels a subsampled tracker level uses).
     virtual int countValidDepth(const Image<float>& depth, int pixel_step = 1) = 0;
     virtual int countValidPoints(const Image<Vec4f>& points) = 0;
+    // Averages over a `cells` grid laid over the frame (shared/LowLevel.h: CellAverages), as
+    // {mean, valid pixels} per cell: depth over the pixels that have one,
+    // intensity (r + g + b) over all. The relocaliser's codes read these; on the GPU only they come down.
+    virtual void averageDepthCells(const Image<float>& depth_m, Vec2i cells, Image<Vec2f>& mean_and_count) = 0;
+    virtual void averageIntensityCells(const Image<Vec4u8>& rgb, Vec2i cells, Image<Vec2f>& mean_and_count) = 0;
     virtual Device device() const = 0;
 };
 

@@ -59,7 +59,8 @@ bool acceptRelocalisation(const RelocalisationSettings& settings, const Relocali
 class Relocaliser {
 public:
     // For frames of `frame_size` (the depth camera's).
-    Relocaliser(const RelocalisationSettings& settings, Vec2i frame_size);
+    // Frames are averaged down for their codes on `device` (FernEncoder), where the pipeline keeps them.
+    Relocaliser(const RelocalisationSettings& settings, Vec2i frame_size, Device device = Device::CPU);
     ~Relocaliser();
 
     // Whether a frame the tracker did not fail is still implausible (see lost_inlier_ratio_drop)...
@@ -84,6 +85,7 @@ private:
 
     RelocalisationSettings settings_;
     Vec2i frame_size_;
+    Device device_;
     std::unique_ptr<FernEncoder> encoder_;  // made for the first frame encoded: with intensity when it has colour
     KeyframeDatabase database_;
     std::vector<float> recent_inlier_ratios_;  // of the last good frames, oldest first

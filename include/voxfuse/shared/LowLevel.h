@@ -292,6 +292,100 @@ struct DropDepthBeyond {
     }
 };
 
+// Block averages of a frame, for the relocaliser's fern codes (engines/FernEncoder.h): cell (cx, cy) of
+// a cells.x x cells.y grid laid over the frame holds its pixels [cx * W / w, (cx + 1) * W / w) x
+// [cy * H / h, (cy + 1) * H / h) (bounds rounded up); its output is the mean of the cell's valid
+// samples and how many there were ({0, 0} for none). Every cell's sums run down each of its columns,
+// then across the columns in order, so both launch shapes below, and both devices, give the same bits.
+VF_HOST_DEVICE inline int firstPixelOfCell(int cell, int cells, int frame_pixels) {
+    return int((static_cast<long long>(cell) * frame_pixels + cells - 1) / cells);
+}
+
+// Depth in metres over the pixels that have one (> 0); intensity (r + g + b, 0..765) over every pixel.
+struct DepthSample {
+    const float* depth_m;
+    VF_HOST_DEVICE bool operator()(int pixel, float& value) const {
+        value = depth_m[pixel];
+        return value > 0.f;
+    }
+};
+struct IntensitySample {
+    const Vec4u8* rgb;
+    VF_HOST_DEVICE bool operator()(int pixel, float& value) const {
+        const Vec4u8 p = rgb[pixel];
+        value = float(p.x) + float(p.y) + float(p.z);
+        return true;
+    }
+};
+
+// The GPU's shape: element c is cell c (row-major), a thread per cell.
+template <class Sample>
+struct CellAverages {
+    Sample sample;
+    Vec2i frame, cells;
+    Vec2f* mean_and_count;
+    VF_HOST_DEVICE void operator()(int c) const {
+        const int cx = c % cells.x, cy = c / cells.x;
+        const int y_begin = firstPixelOfCell(cy, cells.y, frame.y), y_end = firstPixelOfCell(cy + 1, cells.y, frame.y);
+        float sum = 0.f, count = 0.f;
+        for (int x = firstPixelOfCell(cx, cells.x, frame.x); x < firstPixelOfCell(cx + 1, cells.x, frame.x); ++x) {
+            float column_sum = 0.f, column_count = 0.f;
+            for (int y = y_begin; y < y_end; ++y) {
+                float value;
+                const bool ok = sample(x + y * frame.x, value);
+                column_sum += ok ? value : 0.f;
+                column_count += ok ? 1.f : 0.f;
+            }
+            sum += column_sum;
+            count += column_count;
+        }
+        mean_and_count[c] = Vec2f{count > 0.f ? sum / count : 0.f, count};
+    }
+};
+
+// The CPU's shape: element r is cell row r, its columns' sums taken row by row across up to
+// kCellColumnChunk columns at a time (loops the compiler vectorises), then each cell's across them.
+constexpr int kCellColumnChunk = 256;
+template <class Sample>
+struct CellRowAverages {
+    Sample sample;
+    Vec2i frame, cells;
+    Vec2f* mean_and_count;
+    VF_HOST_DEVICE void operator()(int cy) const {
+        const int y_begin = firstPixelOfCell(cy, cells.y, frame.y), y_end = firstPixelOfCell(cy + 1, cells.y, frame.y);
+        float column_sum[kCellColumnChunk], column_count[kCellColumnChunk];
+        int cx = 0;
+        while (cx < cells.x) {
+            // As many whole cells as the chunk holds (at least one; a wider cell goes column by column).
+            const int x0 = firstPixelOfCell(cx, cells.x, frame.x);
+            int cx_end = cx + 1;
+            while (cx_end < cells.x && firstPixelOfCell(cx_end + 1, cells.x, frame.x) - x0 <= kCellColumnChunk) ++cx_end;
+            const int x1 = firstPixelOfCell(cx_end, cells.x, frame.x);
+            if (x1 - x0 > kCellColumnChunk) {
+                CellAverages<Sample>{sample, frame, cells, mean_and_count}(cx + cy * cells.x);
+                cx = cx_end;
+                continue;
+            }
+            for (int x = 0; x < x1 - x0; ++x) column_sum[x] = column_count[x] = 0.f;
+            for (int y = y_begin; y < y_end; ++y)
+                for (int x = x0; x < x1; ++x) {
+                    float value;
+                    const bool ok = sample(x + y * frame.x, value);
+                    column_sum[x - x0] += ok ? value : 0.f;
+                    column_count[x - x0] += ok ? 1.f : 0.f;
+                }
+            for (; cx < cx_end; ++cx) {
+                float sum = 0.f, count = 0.f;
+                for (int x = firstPixelOfCell(cx, cells.x, frame.x); x < firstPixelOfCell(cx + 1, cells.x, frame.x); ++x) {
+                    sum += column_sum[x - x0];
+                    count += column_count[x - x0];
+                }
+                mean_and_count[cx + cy * cells.x] = Vec2f{count > 0.f ? sum / count : 0.f, count};
+            }
+        }
+    }
+};
+
 // Selections for the launchers' countIf.
 struct DepthIsValid {
     const float* depth;
