@@ -34,7 +34,7 @@ step engine_cuda_tests 180 "$bundle/bin/voxfuse_core_tests" --gtest_brief=1 --gt
 cd "$out"
 step bench_cuda_hash 120 "$bundle/bin/voxfuse_bench" "synthetic:$frames" --device cuda --poses groundtruth --mesh --cloud --repeats 5 --json bench_cuda_hash.json
 step bench_cuda_dense 120 "$bundle/bin/voxfuse_bench" "synthetic:$frames" --device cuda --poses groundtruth --index dense --mesh --cloud --repeats 5 --json bench_cuda_dense.json
-step bench_cuda_tracked 120 "$bundle/bin/voxfuse_bench" "synthetic:$frames" --device cuda --json bench_cuda_tracked.json
+step bench_cuda_tracked 120 "$bundle/bin/voxfuse_bench" "synthetic:$frames" --device cuda --render --json bench_cuda_tracked.json
 step bench_cpu_hash 180 "$bundle/bin/voxfuse_bench" "synthetic:$frames" --device cpu --poses groundtruth --mesh --cloud --repeats 3 --json bench_cpu_hash.json
 if [ -d "$bundle/teddy_pack" ]; then
   # The meshes (70 MB each) stay out of $OUT, which comes back.
@@ -78,6 +78,10 @@ for name in ("bench_cuda_hash", "bench_cuda_dense", "bench_cuda_tracked", "bench
     ate = j.get("ate_rmse_m")
     row = "".join(f"{med[s]:>10.3f}" if med[s] is not None else f"{'-':>10}" for s in stages)
     print(f"{name:<20}{row}{air:>10.3f}{(1000 * ate if ate is not None else float('nan')):>9.2f}")
+    if "engine_fps_with_render" in j:
+        render = st.get("render", {}).get("median_ms")
+        print(f"{'':<20}{j['engine_fps']:.0f} frames/s; with a render per frame (shaded, brought to the host: {render:.3f} ms) "
+              f"{j['engine_fps_with_render']:.0f} frames/s")
     if name == "bench_cuda_hash":
         print(f"{'':<20}gpu: {j.get('gpu', '?')}; {j.get('frames')} frames, median ms per stage; blocks {j.get('blocks_allocated')}, "
               f"allocation failures {j.get('allocation_failures')}")

@@ -97,7 +97,7 @@ int main(int argc, char** argv) {
     std::string voxel = "s";
 #endif
     int max_frames = 0, warmup = 3, repeats = 3;
-    bool mesh = false, cloud = false;
+    bool mesh = false, cloud = false, render = false;
     float cloud_voxel_m = 0.f;
     OccupancySettings occupancy_settings;
     occupancy_settings.resolution_m = 0.f;  // off unless --occupancy
@@ -120,6 +120,9 @@ int main(int argc, char** argv) {
     cli.add_option("--poses", poses, "track the camera, or use the source's ground truth")
         ->capture_default_str()->check(CLI::IsMember({"track", "groundtruth"}));
     app::addRelocalisationOptions(cli, s.relocalisation);
+    cli.add_flag("--render", render,
+                 "after each frame, render the model from the frame's camera (shaded, the depth camera's resolution, the image "
+                 "brought to the host), as the viewer does: timed as stage 'render', outside 'total'");
     cli.add_flag("--mesh", mesh, "after the run, time marching cubes on the map (median of --repeats), its size and peak memory");
     cli.add_flag("--cloud", cloud, "after the run, time the point cloud extraction");
     cli.add_option("--cloud-voxel", cloud_voxel_m, "also time downsampling the cloud to cells of this size (m); implies --cloud")
@@ -192,7 +195,13 @@ int main(int argc, char** argv) {
         std::vector<std::string> level_names;
         std::map<std::string, std::vector<double>> level_samples, level_iterations;
         const Timer wall;
+        Image<Vec4u8> rendered;
         while ((max_frames <= 0 || int(record.frames.size()) < max_frames) && !app::interrupt::requested() && runner.step()) {
+            if (render) {
+                const Timer render_time;
+                engine->renderLast(RenderMode::Shaded, rendered);
+                record.frames.back().result.stages.push_back({"render", render_time.elapsedMs()});
+            }
             const FrameResult& fr = runner.lastRecord().result;
             if (occupancy && fr.fused) occupancy->submit(engine->view().depth, engine->view().calib.depth, fr.T_world_camera);
             if (!record.tracked || int(record.frames.size()) <= warmup) continue;
@@ -223,8 +232,15 @@ int main(int argc, char** argv) {
                 samples[st.stage].push_back(st.ms);
             }
             samples["total"].push_back(record.frames[i].result.total_ms);
+            if (render) {
+                double render_ms = 0.0;
+                for (const StageTime& st : record.frames[i].result.stages)
+                    if (std::string(st.stage) == "render") render_ms = st.ms;
+                samples["total+render"].push_back(record.frames[i].result.total_ms + render_ms);
+            }
         }
         order.push_back("total");
+        if (render) order.push_back("total+render");
 
         std::printf("VoxFuse benchmark: %s\n", record.source.c_str());
         const std::string device_text =
@@ -262,8 +278,10 @@ int main(int argc, char** argv) {
         if (s.relocalisation.enabled)
             std::printf("\n  relocalisation: %d frames lost, %d relocalised after %d attempts", app::countStatus(record, TrackingStatus::Lost),
                         app::countStatus(record, TrackingStatus::Relocalised), app::countRelocalisationAttempts(record));
-        std::printf("\n  engine frames/s (1000 / median total): %.1f\n  wall frames/s (incl. decoding): %.1f\n  peak RSS: %.0f MB, scene: %.0f MB\n",
-                    engine_fps, app::framesPerSecond(record), record.peak_rss_mb, record.scene_mb);
+        std::printf("\n  engine frames/s (1000 / median total): %.1f", engine_fps);
+        if (render) std::printf(", with a render per frame: %.1f", 1000.0 / summaries["total+render"].median_ms);
+        std::printf("\n  wall frames/s (incl. decoding): %.1f\n  peak RSS: %.0f MB, scene: %.0f MB\n", app::framesPerSecond(record),
+                    record.peak_rss_mb, record.scene_mb);
 
         // Swapping: blocks moved per frame (each way) and what stayed active.
         std::vector<double> swapped_in, swapped_out;
@@ -319,6 +337,7 @@ int main(int argc, char** argv) {
         j["relocalisation_attempts"] = app::countRelocalisationAttempts(record);
         j["relocalisations"] = app::countStatus(record, TrackingStatus::Relocalised);
         j["engine_fps"] = engine_fps;
+        if (render) j["engine_fps_with_render"] = 1000.0 / summaries["total+render"].median_ms;
         j["wall_fps"] = app::framesPerSecond(record);
         j["peak_rss_mb"] = record.peak_rss_mb;
         j["scene_mb"] = record.scene_mb;

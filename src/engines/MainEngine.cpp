@@ -105,6 +105,7 @@ public:
         const Timer total;
         clock_.start(result);
 
+        ++views_converted_;  // first: from here on view_.depth is no longer the last one's, even if this frame throws
         low_level_->convertDepthToMetres(frame.depth_raw, view_.calib.disparity, view_.calib.depth.fx,
                                          settings_.scene.view_frustum_min_m, settings_.scene.view_frustum_max_m, view_.depth);
         copyColor(frame);
@@ -279,14 +280,19 @@ private:
         const int factor = settings_.tracking_raycast_downsample;
         raycast_->raycast(scene_, factor > 1 ? view_.calib.depth.downsampled(factor) : view_.calib.depth, tracking_.T_world_camera, model_,
                           RaycastNormals::FromPoints, fused_depth);
+        model_depth_view_ = fused_depth ? views_converted_ : -1;
         ++model_version_;
     }
 
     // The model seen from the pose of the last model raycast, at the depth camera's resolution with
     // SDF normals, for renders and renderState(): made when first asked for after each model raycast.
+    // While the view still holds the depth that raycast was started from (the frame just fused from
+    // this pose), its rays start there too.
     RenderState& displayRaycast() const {
         if (display_version_ != model_version_) {
-            raycast_->raycast(scene_, view_.calib.depth, model_.T_world_camera, display_, RaycastNormals::SdfGradient);
+            const bool hint = model_depth_view_ >= 0 && model_depth_view_ == views_converted_;
+            raycast_->raycast(scene_, view_.calib.depth, model_.T_world_camera, display_, RaycastNormals::SdfGradient,
+                              hint ? &view_.depth : nullptr);
             display_version_ = model_version_;
         }
         return display_;
@@ -478,6 +484,8 @@ private:
     RenderState model_;                  // what the tracker aligns the next frame to (raycastModel)
     mutable RenderState display_;        // renders and renderState() (displayRaycast)
     long long model_version_ = 0;        // model raycasts so far
+    long long views_converted_ = 0;      // frames whose depth view_ took so far (source indices may repeat)
+    long long model_depth_view_ = -1;    // which of them started the last model raycast's rays; -1: none did
     mutable long long display_version_ = -1;  // the model raycast display_ shows
     RenderState free_view_;
     AllocationStats allocation_stats_;

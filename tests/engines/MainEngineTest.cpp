@@ -52,13 +52,59 @@ TEST_P(MainEngineVoxelTest, RaycastReproducesTheLastFrameDepth) {
     std::nth_element(errors.begin(), errors.begin() + errors.size() / 2, errors.end());
     EXPECT_LT(errors[errors.size() / 2], 0.003f) << "median raycast depth error (mm depth quantisation, 1 cm voxels)";
 
-    Image<Vec4u8> image;
+    // The render of the last frame starts its rays near the depth that frame fused; a free view from
+    // the same pose searches every ray whole. They must show the same model.
+    Image<Vec4u8> image, whole;
     engine->renderLast(RenderMode::Color, image);
     EXPECT_EQ(image.size(), intr.size());
+    engine->renderFromPose(pose, intr, RenderMode::Color, whole);
+    int differ = 0;
+    for (std::size_t i = 0; i < image.pixelCount(); ++i)
+        differ += std::abs(int(image.host()[i].x) - int(whole.host()[i].x)) > 2 || std::abs(int(image.host()[i].y) - int(whole.host()[i].y)) > 2;
+    EXPECT_LE(differ, int(image.pixelCount() / 200)) << "pixels where the last frame's render and a whole search disagree";
     engine->renderFromPose(test::lookAt({-0.5f, -1.0f, 1.0f}, {0.3f, 0.f, 0.1f}), intr, RenderMode::Shaded, image);
     int lit = 0;
     for (std::size_t i = 0; i < image.pixelCount(); ++i) lit += image.host()[i].x > 0;
     EXPECT_GT(lit, int(image.pixelCount() / 4)) << "a free viewpoint sees the fused surfaces";
+}
+
+// After a frame that failed tracking (not fused), the view holds that frame's depth, which says
+// nothing about the model's pose: the render of the last fused pose must not start its rays there.
+TEST_P(MainEngineVoxelTest, TheLastRenderIgnoresTheDepthOfAFrameNotFused) {
+    MainEngineSettings s;
+    s.device = std::get<0>(GetParam());
+    s.voxel_type = std::get<1>(GetParam());
+    s.scene.voxel_size_m = 0.01f;
+    s.scene.mu_m = 0.04f;
+    s.relocalisation.enabled = false;
+    const Intrinsics intr = test::kinectIntrinsics(160, 120);
+    RGBDCalib calib;
+    calib.depth = calib.rgb = intr;
+    calib.disparity = DisparityCalib::affine(0.001f);
+    auto engine = MainEngine::create(s, calib);
+    const synth::SyntheticScene world = synth::SyntheticScene::boxAndSphere();
+    Mat4f pose;
+    for (int k = 0; k < 3; ++k) {
+        pose = test::lookAt({1.0f + 0.05f * k, -0.8f + 0.1f * k, 0.7f}, {0.3f, 0.f, 0.1f});
+        ASSERT_TRUE(engine->processFrame(test::toRgbdFrame(test::renderView(world, intr, pose), k), &pose).fused);
+    }
+    // The same view with every depth 30 cm too far: not trackable, and rays started there would miss
+    // every surface.
+    View far = test::renderView(world, intr, pose);
+    for (std::size_t i = 0; i < far.depth.pixelCount(); ++i) far.depth.host()[i] = far.depth.host()[i] > 0.f ? far.depth.host()[i] + 0.3f : 0.f;
+    const FrameResult r = engine->processFrame(test::toRgbdFrame(far, 3), nullptr);
+    ASSERT_FALSE(r.fused) << "the test needs a frame that is not fused";
+
+    Image<Vec4u8> last, whole;
+    engine->renderLast(RenderMode::Shaded, last);
+    engine->renderFromPose(pose, intr, RenderMode::Shaded, whole);
+    int differ = 0, lit = 0;
+    for (std::size_t i = 0; i < last.pixelCount(); ++i) {
+        differ += std::abs(int(last.host()[i].x) - int(whole.host()[i].x)) > 2;
+        lit += whole.host()[i].x > 0;
+    }
+    EXPECT_GT(lit, int(last.pixelCount() / 2));
+    EXPECT_LE(differ, int(last.pixelCount() / 200));
 }
 
 INSTANTIATE_TEST_SUITE_P(AllVoxelTypes, MainEngineVoxelTest,
