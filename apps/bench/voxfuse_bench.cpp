@@ -12,6 +12,7 @@
 #include <iostream>
 #include <map>
 
+#include "DepthPackSource.h"
 #include "Interrupt.h"
 #include "JsonFile.h"
 #include "MapOutputBench.h"
@@ -22,7 +23,6 @@
 #include "RunRecord.h"
 #include "SequenceRunner.h"
 #include "Statistics.h"
-#include "DepthPackSource.h"
 #include "SyntheticSource.h"
 #include "voxfuse/core/Error.h"
 #include "voxfuse/core/Timer.h"
@@ -81,7 +81,8 @@ std::unique_ptr<ImageSource> openSource(const std::string& path) {
 #if VOXFUSE_WITH_IO
     return openImageSource(path);  // undistorted after the labels are attached (framesForEngine)
 #else
-    throw ConfigError("this build has no image I/O (VOXFUSE_IO=OFF): the source must be synthetic[:N] or a depth pack (a folder with depth.bin.gz), not '" + path + "'");
+    throw ConfigError("this build has no image I/O (VOXFUSE_IO=OFF): the source must be synthetic[:N] or a depth pack (a folder with "
+                      "depth.bin.gz), not '" + path + "'");
 #endif
 }
 
@@ -89,7 +90,8 @@ std::unique_ptr<ImageSource> openSource(const std::string& path) {
 
 int main(int argc, char** argv) {
     CLI::App cli{"Per-stage timings of the VoxFuse pipeline on a sequence."};
-    std::string source_path, json_path = "voxfuse_bench.json", timings_path, trajectory_path, mesh_path, index = "hash", poses = "track", device = "cpu";
+    std::string source_path, json_path = "voxfuse_bench.json", timings_path, trajectory_path, mesh_path;
+    std::string index = "hash", poses = "track", device = "cpu";
     TrackerOverrides tracker;  // --tracker, --tracker-config
 #if VOXFUSE_WITH_IO
     app::LabelInputOptions labels;  // and --voxel
@@ -149,7 +151,8 @@ int main(int argc, char** argv) {
         ->check(CLI::Validator(
             [](std::string& path) {
                 const std::string ext = fs::path(path).extension().string();
-                return ext == ".ply" || ext == ".obj" || ext == ".stl" ? std::string() : "expected a .ply, .obj or .stl file, got '" + path + "'";
+                if (ext == ".ply" || ext == ".obj" || ext == ".stl") return std::string();
+                return "expected a .ply, .obj or .stl file, got '" + path + "'";
             },
             "MESH FILE"));
     CLI11_PARSE(cli, argc, argv);

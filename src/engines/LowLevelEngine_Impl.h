@@ -98,11 +98,11 @@ public:
         return TDevice::countIf(int(points.pixelCount()), PointIsValid{imageOn(kDevice, points, point_staging_)}, scratch_);
     }
     void averageDepthCells(const Image<float>& depth_m, Vec2i cells, Image<Vec2f>& mean_and_count) override {
-        requireCellGrid(depth_m.size(), cells);
+        requireCellGrid(cells);
         averageCells(DepthSample{imageOn(kDevice, depth_m, float_staging_)}, depth_m.size(), cells, outputOn(kDevice, mean_and_count, cells));
     }
     void averageIntensityCells(const Image<Vec4u8>& rgb, Vec2i cells, Image<Vec2f>& mean_and_count) override {
-        requireCellGrid(rgb.size(), cells);
+        requireCellGrid(cells);
         averageCells(IntensitySample{imageOn(kDevice, rgb, rgb_staging_)}, rgb.size(), cells, outputOn(kDevice, mean_and_count, cells));
     }
     Device device() const override { return kDevice; }
@@ -113,10 +113,10 @@ private:
         if constexpr (TDevice::kOneThreadPerItem) TDevice::parallelFor(cells.x * cells.y, CellAverages<Sample>{sample, frame, cells, out});
         else TDevice::parallelFor(cells.y, CellRowAverages<Sample>{sample, frame, cells, out});
     }
-    static void requireCellGrid(Vec2i frame, Vec2i cells) {
-        if (cells.x < 1 || cells.y < 1 || cells.x > frame.x || cells.y > frame.y)
-            throw Error("cell averages: a grid of " + std::to_string(cells.x) + "x" + std::to_string(cells.y) + " cells does not fit a " +
-                        std::to_string(frame.x) + "x" + std::to_string(frame.y) + " image");
+    // Cells may hold no pixel (a grid finer than the image): theirs is {0, 0}.
+    static void requireCellGrid(Vec2i cells) {
+        if (cells.x < 1 || cells.y < 1)
+            throw Error("cell averages: a grid of " + std::to_string(cells.x) + "x" + std::to_string(cells.y) + " cells has no cell");
     }
 
     DeviceScratch scratch_{kDevice};

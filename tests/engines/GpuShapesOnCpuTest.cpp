@@ -191,7 +191,7 @@ TEST(GpuShapesOnCpuLowLevelTest, BilateralFilterByStripsEqualsPixelByPixel) {
 
 // Cell averages (the relocaliser's code images) by cell rows in column chunks (CPU) and cell by cell
 // (GPU): the same bits, for grids whose cells are 2-3 pixels wide (many to a chunk), for cells wider
-// than a chunk (column by column), and for colour.
+// than a chunk (column by column), for grids finer than the image (cells without pixels), and for colour.
 TEST(GpuShapesOnCpuLowLevelTest, CellAveragesByRowsEqualCellByCell) {
     static const synth::SyntheticScene world = synth::SyntheticScene::boxAndSphere();
     const Intrinsics intrinsics = test::kinectIntrinsics(601, 451);
@@ -199,7 +199,7 @@ TEST(GpuShapesOnCpuLowLevelTest, CellAveragesByRowsEqualCellByCell) {
     for (int i = 0; i < int(view.depth.pixelCount()); i += 7) view.depth.host()[i] = 0.f;  // dropouts
     LowLevelEngineOn<CpuDevice> rows;
     LowLevelEngineOn<CpuDeviceWithGpuShapes> cells;
-    for (const Vec2i grid : {Vec2i{80, 60}, Vec2i{211, 160}, Vec2i{2, 3}, Vec2i{601, 451}}) {
+    for (const Vec2i grid : {Vec2i{80, 60}, Vec2i{211, 160}, Vec2i{2, 3}, Vec2i{601, 451}, Vec2i{700, 500}}) {
         Image<Vec2f> a, b;
         rows.averageDepthCells(view.depth, grid, a);
         cells.averageDepthCells(view.depth, grid, b);
@@ -210,8 +210,16 @@ TEST(GpuShapesOnCpuLowLevelTest, CellAveragesByRowsEqualCellByCell) {
         cells.averageIntensityCells(view.rgb, grid, b);
         EXPECT_EQ(0, std::memcmp(a.host(), b.host(), a.pixelCount() * sizeof(Vec2f))) << "intensity, " << grid.x << "x" << grid.y << " cells";
     }
+    // A grid finer than the image: the cells without a pixel say so.
     Image<Vec2f> out;
-    EXPECT_THROW(rows.averageDepthCells(view.depth, Vec2i{602, 10}, out), Error) << "more cells than pixels";
+    rows.averageDepthCells(view.depth, Vec2i{1202, 2}, out);
+    EXPECT_EQ(out.host()[1].x, 0.f);
+    EXPECT_EQ(out.host()[1].y, 0.f) << "cell 1 of 1202 across 601 columns holds none";
+    double counted = 0.0, valid = 0.0;
+    for (std::size_t i = 0; i < out.pixelCount(); ++i) counted += out.host()[i].y;
+    for (std::size_t i = 0; i < view.depth.pixelCount(); ++i) valid += view.depth.host()[i] > 0.f;
+    EXPECT_EQ(counted, valid) << "every valid pixel in exactly one cell";
+    EXPECT_THROW(rows.averageDepthCells(view.depth, Vec2i{0, 10}, out), Error) << "a grid without cells";
 }
 
 }  // namespace
