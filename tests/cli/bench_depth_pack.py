@@ -10,12 +10,13 @@ import argparse
 import gzip
 import json
 import os
-import shutil
-import struct
 import subprocess
 import sys
 
 import numpy as np
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "scripts"))
+import make_depth_pack  # noqa: E402  (the format's one writer)
 
 W, H, FRAMES = 320, 240, 12
 FX = FY = 262.5
@@ -34,24 +35,19 @@ def corner_depth_mm():
     return np.round(z * 1000.0).astype("<u2")
 
 
-def write_pack(folder, frames=FRAMES, magic=b"VFDEPTH1", truncate_at=None):
-    shutil.rmtree(folder, ignore_errors=True)
-    os.makedirs(folder)
-    with open(os.path.join(folder, "calib.txt"), "w") as f:
-        for _ in range(2):
-            f.write(f"{W} {H}\n{FX} {FY}\n{CX} {CY}\n\n")
-        f.write("1 0 0 0\n0 1 0 0\n0 0 1 0\n\naffine 0.001 0\n")
+def write_pack(folder, magic_ok=True, cut_at_byte=None):
+    """The corner seen FRAMES times from the origin; returns the bytes of one frame's depth."""
+    calib = "".join(f"{W} {H}\n{FX} {FY}\n{CX} {CY}\n\n" for _ in range(2)) + "1 0 0 0\n0 1 0 0\n0 0 1 0\n\naffine 0.001 0\n"
     depth = corner_depth_mm().tobytes()
-    data = magic + struct.pack("<III", W, H, frames)
-    for k in range(frames):
-        data += struct.pack("<d", 100.0 + k / 30.0) + depth
-    if truncate_at is not None:
-        data = data[:truncate_at]
-    with gzip.open(os.path.join(folder, "depth.bin.gz"), "wb") as f:
-        f.write(data)
-    with open(os.path.join(folder, "groundtruth.txt"), "w") as f:
-        for k in range(frames):
-            f.write(f"{100.0 + k / 30.0:.6f} 0 0 0 0 0 0 1\n")
+    stamps = [100.0 + k / 30.0 for k in range(FRAMES)]
+    make_depth_pack.write_depth_pack(folder, calib, W, H, [(t, depth) for t in stamps], [f"{t:.6f} 0 0 0 0 0 0 1\n" for t in stamps],
+                                     cut_at_byte=cut_at_byte)
+    if not magic_ok:  # the same pack under another format's name
+        path = os.path.join(folder, "depth.bin.gz")
+        with gzip.open(path) as f:
+            data = f.read()
+        with gzip.open(path, "wb") as f:
+            f.write(b"VFDEPTH9" + data[8:])
     return len(depth)
 
 
@@ -98,7 +94,7 @@ def main():
     # A pack cut in frame 7's depth: as for any unreadable frame, the run reports it (file, frame,
     # reason) and goes on; a stream cannot skip to the next frame, so the first seven are all there is.
     cut = os.path.join(args.work, "cut")
-    write_pack(cut, truncate_at=20 + 7 * (8 + frame_bytes) + 8 + 1000)
+    write_pack(cut, cut_at_byte=20 + 7 * (8 + frame_bytes) + 8 + 1000)
     rc, out = run([args.bench, cut, "--warmup", "1", "--json", os.path.join(args.work, "cut.json")])
     check(rc == 0 and "depth.bin.gz: frame 7: truncated" in out, f"a truncated pack is reported with file, frame and reason (exit {rc})")
     cut_report = json.load(open(os.path.join(args.work, "cut.json"))) if rc == 0 else {}
@@ -106,7 +102,7 @@ def main():
     if "frame 7: truncated" not in out:
         print(out)
     bad = os.path.join(args.work, "bad")
-    write_pack(bad, magic=b"VFDEPTH9")
+    write_pack(bad, magic_ok=False)
     rc, out = run([args.bench, bad, "--json", os.path.join(args.work, "bad.json")])
     check(rc != 0 and "not a VoxFuse depth pack" in out, f"a wrong header is refused (exit {rc})")
 
