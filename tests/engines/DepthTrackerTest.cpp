@@ -25,6 +25,8 @@ protected:
         return scene;
     }
     static Mat4f startPose() { return test::lookAt({-1.6f, -1.3f, 1.5f}, {0.15f, 0.1f, 0.75f}); }
+    // 8 cm and 8 degrees from the start: beyond the finer levels' reach, the coarse ones must find it.
+    static Mat4f largeMotion() { return test::moveInCamera(startPose(), {0.3f, 1.f, -0.2f}, 8.f, {0.06f, 0.03f, -0.045f}); }
 
     TrackerSettings settings() const {
         TrackerSettings s;
@@ -81,7 +83,7 @@ TEST_P(DepthTrackerTest, RecoversASmallMotionFromTheDepthsWithinTheLimit) {
 
 TEST_P(DepthTrackerTest, RecoversEightCentimetresAndEightDegrees) {
     auto tracker = makeTracker(settings(), device());
-    const Mat4f moved = test::moveInCamera(startPose(), {0.3f, 1.f, -0.2f}, 8.f, {0.06f, 0.03f, -0.045f});
+    const Mat4f moved = largeMotion();
     ASSERT_NEAR(test::translationErrorM(startPose(), moved), 0.08f, 0.002f);
     const TrackingState state = track(*tracker, moved);
     EXPECT_NE(state.quality, TrackingQuality::Failed);
@@ -102,7 +104,7 @@ TEST_P(DepthTrackerTest, RecoversEightCentimetresWhenTheCoarsestLevelStopsEarly)
     TrackerSettings s = settings();
     s.levels.front().max_iterations = 5;
     auto tracker = makeTracker(s, device());
-    const Mat4f moved = test::moveInCamera(startPose(), {0.3f, 1.f, -0.2f}, 8.f, {0.06f, 0.03f, -0.045f});
+    const Mat4f moved = largeMotion();
     const TrackingState state = track(*tracker, moved);
     EXPECT_NE(state.quality, TrackingQuality::Failed);
     EXPECT_LT(test::translationErrorM(state.T_world_camera, moved), 0.005f);

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
 #include <tuple>
 
 #include "DeviceTestSupport.h"
@@ -16,28 +17,50 @@ namespace {
 class MainEngineVoxelTest : public ::testing::TestWithParam<std::tuple<Device, VoxelType>> {
 protected:
     void SetUp() override { VF_SKIP_IF_UNAVAILABLE(std::get<0>(GetParam())); }
+
+    // 1 cm voxels on the parameter's device and voxel type; a dense array holding the box and sphere.
+    MainEngineSettings settings() const {
+        MainEngineSettings s;
+        s.device = std::get<0>(GetParam());
+        s.voxel_type = std::get<1>(GetParam());
+        s.scene.voxel_size_m = 0.01f;
+        s.scene.mu_m = 0.04f;
+        s.dense_offset = {-80, -80, -10};
+        s.dense_size = {160, 160, 100};
+        return s;
+    }
+    static std::unique_ptr<MainEngine> makeEngine(const MainEngineSettings& s) {
+        RGBDCalib calib;
+        calib.depth = calib.rgb = kCamera;
+        calib.disparity = DisparityCalib::affine(0.001f);
+        return MainEngine::create(s, calib);
+    }
+    // Frame k of a camera moving past the box and sphere.
+    static Mat4f pathPose(int k) { return test::lookAt({1.0f + 0.05f * k, -0.8f + 0.1f * k, 0.7f}, {0.3f, 0.f, 0.1f}); }
+    static const synth::SyntheticScene& world() {
+        static const synth::SyntheticScene scene = synth::SyntheticScene::boxAndSphere();
+        return scene;
+    }
+    // Pixels where some channel of two renders differs by more than 2 levels.
+    static int pixelsDiffering(const Image<Vec4u8>& a, const Image<Vec4u8>& b) {
+        int differ = 0;
+        for (std::size_t i = 0; i < a.pixelCount(); ++i) {
+            const Vec4u8 p = a.host()[i], q = b.host()[i];
+            differ += std::abs(int(p.x) - int(q.x)) > 2 || std::abs(int(p.y) - int(q.y)) > 2 || std::abs(int(p.z) - int(q.z)) > 2;
+        }
+        return differ;
+    }
+    static inline const Intrinsics kCamera = test::kinectIntrinsics(160, 120);
 };
 
 TEST_P(MainEngineVoxelTest, RaycastReproducesTheLastFrameDepth) {
-    MainEngineSettings s;
-    s.device = std::get<0>(GetParam());
-    s.voxel_type = std::get<1>(GetParam());
-    s.scene.voxel_size_m = 0.01f;
-    s.scene.mu_m = 0.04f;
-    s.dense_offset = {-80, -80, -10};
-    s.dense_size = {160, 160, 100};
-    const Intrinsics intr = test::kinectIntrinsics(160, 120);
-    RGBDCalib calib;
-    calib.depth = calib.rgb = intr;
-    calib.disparity = DisparityCalib::affine(0.001f);
-    auto engine = MainEngine::create(s, calib);
-
-    const synth::SyntheticScene world = synth::SyntheticScene::boxAndSphere();
+    const Intrinsics intr = kCamera;
+    auto engine = makeEngine(settings());
     Mat4f pose;
     View last;
     for (int k = 0; k < 5; ++k) {
-        pose = test::lookAt({1.0f + 0.05f * k, -0.8f + 0.1f * k, 0.7f}, {0.3f, 0.f, 0.1f});
-        last = test::renderView(world, intr, pose);
+        pose = pathPose(k);
+        last = test::renderView(world(), intr, pose);
         const FrameResult r = engine->processFrame(test::toRgbdFrame(last, k), &pose);
         EXPECT_TRUE(r.fused);
         ASSERT_EQ(r.stages.size(), 5u);
@@ -58,10 +81,7 @@ TEST_P(MainEngineVoxelTest, RaycastReproducesTheLastFrameDepth) {
     engine->renderLast(RenderMode::Color, image);
     EXPECT_EQ(image.size(), intr.size());
     engine->renderFromPose(pose, intr, RenderMode::Color, whole);
-    int differ = 0;
-    for (std::size_t i = 0; i < image.pixelCount(); ++i)
-        differ += std::abs(int(image.host()[i].x) - int(whole.host()[i].x)) > 2 || std::abs(int(image.host()[i].y) - int(whole.host()[i].y)) > 2;
-    EXPECT_LE(differ, int(image.pixelCount() / 200)) << "pixels where the last frame's render and a whole search disagree";
+    EXPECT_LE(pixelsDiffering(image, whole), int(image.pixelCount() / 200)) << "pixels where the last frame's render and a whole search disagree";
     engine->renderFromPose(test::lookAt({-0.5f, -1.0f, 1.0f}, {0.3f, 0.f, 0.1f}), intr, RenderMode::Shaded, image);
     int lit = 0;
     for (std::size_t i = 0; i < image.pixelCount(); ++i) lit += image.host()[i].x > 0;
@@ -71,40 +91,28 @@ TEST_P(MainEngineVoxelTest, RaycastReproducesTheLastFrameDepth) {
 // After a frame that failed tracking (not fused), the view holds that frame's depth, which says
 // nothing about the model's pose: the render of the last fused pose must not start its rays there.
 TEST_P(MainEngineVoxelTest, TheLastRenderIgnoresTheDepthOfAFrameNotFused) {
-    MainEngineSettings s;
-    s.device = std::get<0>(GetParam());
-    s.voxel_type = std::get<1>(GetParam());
-    s.scene.voxel_size_m = 0.01f;
-    s.scene.mu_m = 0.04f;
+    MainEngineSettings s = settings();
     s.relocalisation.enabled = false;
-    const Intrinsics intr = test::kinectIntrinsics(160, 120);
-    RGBDCalib calib;
-    calib.depth = calib.rgb = intr;
-    calib.disparity = DisparityCalib::affine(0.001f);
-    auto engine = MainEngine::create(s, calib);
-    const synth::SyntheticScene world = synth::SyntheticScene::boxAndSphere();
+    auto engine = makeEngine(s);
     Mat4f pose;
     for (int k = 0; k < 3; ++k) {
-        pose = test::lookAt({1.0f + 0.05f * k, -0.8f + 0.1f * k, 0.7f}, {0.3f, 0.f, 0.1f});
-        ASSERT_TRUE(engine->processFrame(test::toRgbdFrame(test::renderView(world, intr, pose), k), &pose).fused);
+        pose = pathPose(k);
+        ASSERT_TRUE(engine->processFrame(test::toRgbdFrame(test::renderView(world(), kCamera, pose), k), &pose).fused);
     }
     // The same view with every depth 30 cm too far: not trackable, and rays started there would miss
     // every surface.
-    View far = test::renderView(world, intr, pose);
+    View far = test::renderView(world(), kCamera, pose);
     for (std::size_t i = 0; i < far.depth.pixelCount(); ++i) far.depth.host()[i] = far.depth.host()[i] > 0.f ? far.depth.host()[i] + 0.3f : 0.f;
     const FrameResult r = engine->processFrame(test::toRgbdFrame(far, 3), nullptr);
     ASSERT_FALSE(r.fused) << "the test needs a frame that is not fused";
 
     Image<Vec4u8> last, whole;
     engine->renderLast(RenderMode::Shaded, last);
-    engine->renderFromPose(pose, intr, RenderMode::Shaded, whole);
-    int differ = 0, lit = 0;
-    for (std::size_t i = 0; i < last.pixelCount(); ++i) {
-        differ += std::abs(int(last.host()[i].x) - int(whole.host()[i].x)) > 2;
-        lit += whole.host()[i].x > 0;
-    }
+    engine->renderFromPose(pose, kCamera, RenderMode::Shaded, whole);
+    int lit = 0;
+    for (std::size_t i = 0; i < whole.pixelCount(); ++i) lit += whole.host()[i].x > 0;
     EXPECT_GT(lit, int(last.pixelCount() / 2));
-    EXPECT_LE(differ, int(last.pixelCount() / 200));
+    EXPECT_LE(pixelsDiffering(last, whole), int(last.pixelCount() / 200));
 }
 
 INSTANTIATE_TEST_SUITE_P(AllVoxelTypes, MainEngineVoxelTest,
