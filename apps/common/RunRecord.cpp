@@ -163,6 +163,7 @@ void writeSummaryJson(const std::string& path, const RunRecord& run) {
     settings["max_weight"] = run.settings.scene.max_weight;
     settings["min_depth_m"] = double(run.settings.scene.view_frustum_min_m);
     settings["max_depth_m"] = double(run.settings.scene.view_frustum_max_m);
+    settings["depth_gap_tolerance"] = double(run.settings.depth_gap_tolerance);
     if (voxelTypeHasLabels(run.settings.voxel_type))
         settings["label_update"] = run.settings.scene.label_update == LabelUpdate::Vote ? "vote" : "probabilistic";
     if (run.tracked) {

@@ -431,6 +431,9 @@ int main(int argc, char** argv) {
     cli.add_option("--max-weight", o.engine.scene.max_weight, "cap on the per-voxel weight")->capture_default_str()->check(app::intIn(1, 255));
     cli.add_option("--min-depth", o.engine.scene.view_frustum_min_m, "ignore depth below (m)")->capture_default_str()->check(app::floatIn(0.0, 1000.0));
     cli.add_option("--max-depth", o.engine.scene.view_frustum_max_m, "ignore depth beyond (m)")->capture_default_str()->check(app::floatIn(0.0, 1000.0, true));
+    cli.add_option("--depth-gap-tolerance", o.engine.depth_gap_tolerance,
+                   "fill a pixel without depth whose two neighbours (left-right, else up-down) agree within this fraction of their depth; 0 = never")
+        ->capture_default_str()->check(app::floatIn(0.0, 0.5));
     app::addVoxelAndLabelOptions(cli, o.labels, "s_rgb");
     cli.add_option("--index", o.index, "voxel index")->capture_default_str()->check(CLI::IsMember({"dense", "hash"}));
     cli.add_option("--max-blocks", o.engine.hash.max_block_count, "hash: most 8^3 voxel blocks (memory grows on demand up to this)")

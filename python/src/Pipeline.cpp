@@ -16,6 +16,7 @@ MainEngineSettings PipelineSettings::toEngineSettings() const {
     s.scene.max_weight = max_weight;
     s.scene.view_frustum_min_m = min_depth;
     s.scene.view_frustum_max_m = max_depth;
+    s.depth_gap_tolerance = depth_gap_tolerance;
     if (label_update != "probabilistic" && label_update != "vote")
         throw ConfigError("label_update: 'probabilistic' or 'vote', not '" + label_update + "'");
     s.scene.label_update = label_update == "vote" ? LabelUpdate::Vote : LabelUpdate::Probabilistic;

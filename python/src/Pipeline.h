@@ -23,6 +23,7 @@ struct PipelineSettings {
     int max_weight = SceneParams{}.max_weight;
     float min_depth = SceneParams{}.view_frustum_min_m;
     float max_depth = SceneParams{}.view_frustum_max_m;
+    float depth_gap_tolerance = MainEngineSettings{}.depth_gap_tolerance;
     int max_blocks = VoxelBlockHashSettings{}.max_block_count;
     int hash_buckets = VoxelBlockHashSettings{}.bucket_count;
     int hash_excess = VoxelBlockHashSettings{}.excess_entry_count;

@@ -229,6 +229,8 @@ void bindPipeline(py::module_& m) {
         .def_readwrite("max_weight", &PipelineSettings::max_weight, "cap on the per-voxel weight")
         .def_readwrite("min_depth", &PipelineSettings::min_depth, "depth below this (m) is ignored")
         .def_readwrite("max_depth", &PipelineSettings::max_depth, "depth beyond this (m) is ignored")
+        .def_readwrite("depth_gap_tolerance", &PipelineSettings::depth_gap_tolerance,
+                       "a pixel without depth between two neighbours agreeing within this fraction of their depth gets their mean (0 = never)")
         .def_readwrite("max_blocks", &PipelineSettings::max_blocks, "hash: most 8^3 voxel blocks (memory grows on demand up to this)")
         .def_readwrite("hash_buckets", &PipelineSettings::hash_buckets, "hash: ordered buckets")
         .def_readwrite("hash_excess", &PipelineSettings::hash_excess, "hash: entries of the excess list")
@@ -247,7 +249,7 @@ void bindPipeline(py::module_& m) {
         .def("to_dict", [](const PipelineSettings& s) {
             py::dict d;
             py::object obj = py::cast(s);
-            for (const char* name : {"voxel", "index", "device", "voxel_size", "mu", "max_weight", "min_depth", "max_depth", "max_blocks",
+            for (const char* name : {"voxel", "index", "device", "voxel_size", "mu", "max_weight", "min_depth", "max_depth", "depth_gap_tolerance", "max_blocks",
                                      "hash_buckets", "hash_excess", "volume_size", "volume_offset", "tracker", "tracker_config", "tracker_levels",
                                      "tracker_iterations", "tracker_max_distance", "label_update", "swap", "active_blocks", "swap_file",
                                      "swap_blocks_per_frame"})

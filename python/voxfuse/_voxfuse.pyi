@@ -102,6 +102,7 @@ class Settings:
     max_weight: int
     min_depth: float
     max_depth: float
+    depth_gap_tolerance: float
     max_blocks: int
     hash_buckets: int
     hash_excess: int

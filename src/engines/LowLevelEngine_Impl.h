@@ -40,10 +40,10 @@ class LowLevelEngineOn final : public LowLevelEngine {
 
 public:
     void convertDepthToMetres(const Image<std::uint16_t>& raw, const DisparityCalib& calib, float fx_depth, float min_m, float max_m,
-                              Image<float>& depth_m) override {
+                              float gap_tolerance, Image<float>& depth_m) override {
         const std::uint16_t* in = imageOn(kDevice, raw, raw_staging_);
         float* out = outputOn(kDevice, depth_m, raw.size());
-        TDevice::parallelFor(int(raw.pixelCount()), ConvertDepthPixels{in, calib, fx_depth, min_m, max_m, out});
+        TDevice::parallelFor(int(raw.pixelCount()), ConvertDepthPixels{in, raw.size(), calib, fx_depth, min_m, max_m, gap_tolerance, out});
     }
 
     void bilateralFilterDepth(const Image<float>& in, Image<float>& out, const BilateralFilterParams& p) override {

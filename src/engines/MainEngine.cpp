@@ -107,7 +107,8 @@ public:
 
         ++views_converted_;  // first: from here on view_.depth is no longer the last one's, even if this frame throws
         low_level_->convertDepthToMetres(frame.depth_raw, view_.calib.disparity, view_.calib.depth.fx,
-                                         settings_.scene.view_frustum_min_m, settings_.scene.view_frustum_max_m, view_.depth);
+                                         settings_.scene.view_frustum_min_m, settings_.scene.view_frustum_max_m,
+                                         settings_.depth_gap_tolerance, view_.depth);
         copyColor(frame);
         copyLabels(frame);
         view_.frame_index = frame.index;
@@ -618,6 +619,9 @@ std::unique_ptr<MainEngine> MainEngine::create(const MainEngineSettings& s, cons
                           " m, mu " + std::to_string(s.scene.mu_m) + " m)");
     if (s.scene.max_weight < 1 || s.scene.max_weight > 255) throw ConfigError("max weight must be in 1..255");
     validateDepthRange(s.scene);
+    if (!(s.depth_gap_tolerance >= 0.f && s.depth_gap_tolerance <= 0.5f))
+        throw ConfigError("the depth gap tolerance is a fraction of the depth in [0, 0.5], 0 to keep every gap (--depth-gap-tolerance); got " +
+                          std::to_string(s.depth_gap_tolerance));
     if (s.index_type == IndexType::Dense) validateDenseVolume(s);
     if (s.swap.enabled && s.index_type != IndexType::Hash) throw ConfigError("swapping needs the hash index (--index hash)");
     if (s.swap.enabled && s.swap.blocks_per_frame < 1) throw ConfigError("swapping moves at least one block per frame");

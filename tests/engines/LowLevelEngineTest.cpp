@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 
+#include "DeviceTestSupport.h"
 #include "SyntheticViews.h"
 #include "voxfuse/engines/LowLevelEngine.h"
 #include "voxfuse/shared/LowLevel.h"
@@ -21,7 +22,7 @@ TEST(LowLevelEngineTest, ConvertsAffineAndKinectDepth) {
     raw.host()[2] = 10000;
     raw.host()[3] = 60000;
     Image<float> depth;
-    engine->convertDepthToMetres(raw, DisparityCalib::affine(0.0002f), 525.f, 0.2f, 5.0f, depth);
+    engine->convertDepthToMetres(raw, DisparityCalib::affine(0.0002f), 525.f, 0.2f, 5.0f, 0.f, depth);
     EXPECT_EQ(depth.host()[0], 0.f);
     EXPECT_FLOAT_EQ(depth.host()[1], 1.0f);
     EXPECT_FLOAT_EQ(depth.host()[2], 2.0f);
@@ -31,10 +32,54 @@ TEST(LowLevelEngineTest, ConvertsAffineAndKinectDepth) {
     const DisparityCalib kinect = DisparityCalib::kinect(1135.09f, 0.0819141f);
     raw.host()[1] = 800;
     raw.host()[2] = 1135;  // k1 - raw ~ 0: effectively infinite depth
-    engine->convertDepthToMetres(raw, kinect, 573.71f, 0.2f, 10.f, depth);
+    engine->convertDepthToMetres(raw, kinect, 573.71f, 0.2f, 10.f, 0.f, depth);
     EXPECT_NEAR(depth.host()[1], 8.f * 0.0819141f * 573.71f / (1135.09f - 800.f), 1e-5f);
     EXPECT_EQ(depth.host()[2], 0.f);
 }
+
+// One-pixel gaps between two agreeing neighbours are filled with their mean, left-right first, then
+// up-down; wider gaps, gaps at a depth edge, gaps beside a sample out of range and range-rejected
+// samples themselves stay empty. Depth in metres below is raw / 5000 (0 = no measurement).
+class LowLevelDeviceTest : public ::testing::TestWithParam<Device> {};
+
+TEST_P(LowLevelDeviceTest, FillsOnePixelGapsBetweenAgreeingNeighbours) {
+    VF_SKIP_IF_UNAVAILABLE(GetParam());
+    auto engine = makeLowLevelEngine(GetParam());
+    const float metres[5][5] = {{1.00f, 0.f, 1.01f, 0.f, 2.00f},
+                                {0.f, 0.f, 1.00f, 1.00f, 1.00f},
+                                {1.00f, 0.f, 0.f, 1.00f, 9.00f},
+                                {1.00f, 1.00f, 1.04f, 0.f, 0.f},
+                                {0.f, 1.00f, 9.00f, 1.00f, 0.f}};
+    Image<std::uint16_t> raw({5, 5});
+    for (int y = 0; y < 5; ++y)
+        for (int x = 0; x < 5; ++x) raw.at(x, y) = std::uint16_t(std::lround(metres[y][x] * 5000.f));
+    const DisparityCalib calib = DisparityCalib::affine(0.0002f);
+    const auto metresOf = [&](float m) { return calib.toMetres(std::uint16_t(std::lround(m * 5000.f)), 525.f); };
+    Image<float> depth;
+    engine->convertDepthToMetres(raw, calib, 525.f, 0.2f, 5.f, 0.02f, depth);
+    depth.memory().updateHost();
+    const Image<float>& filled = depth;
+    EXPECT_FLOAT_EQ(filled.at(1, 0), 0.5f * (metresOf(1.00f) + metresOf(1.01f))) << "left and right agree within 2%";
+    EXPECT_EQ(filled.at(3, 0), 0.f) << "a depth edge (1.01 | 2.00 m) on the top row: not bridged";
+    EXPECT_FLOAT_EQ(filled.at(0, 1), metresOf(1.00f)) << "the left column: filled from above and below";
+    EXPECT_EQ(filled.at(1, 1), 0.f) << "a gap two pixels wide";
+    EXPECT_EQ(filled.at(1, 2), 0.f) << "only one side measured";
+    EXPECT_EQ(filled.at(2, 2), 0.f) << "above and below differ by 4%";
+    EXPECT_FLOAT_EQ(filled.at(3, 3), metresOf(1.00f)) << "left-right fails (a gap on the right), up-down agrees";
+    EXPECT_EQ(filled.at(4, 3), 0.f) << "the sample above is beyond the 5 m limit";
+    EXPECT_EQ(filled.at(2, 4), 0.f) << "a measured sample out of range stays empty";
+    EXPECT_EQ(filled.at(4, 2), 0.f);
+    EXPECT_FLOAT_EQ(filled.at(2, 3), metresOf(1.04f)) << "measured samples are kept as measured";
+
+    engine->convertDepthToMetres(raw, calib, 525.f, 0.2f, 5.f, 0.f, depth);
+    depth.memory().updateHost();
+    const Image<float>& kept = depth;
+    for (int y = 0; y < 5; ++y)
+        for (int x = 0; x < 5; ++x)
+            EXPECT_EQ(kept.at(x, y), metres[y][x] > 0.f && metres[y][x] <= 5.f ? metresOf(metres[y][x]) : 0.f) << x << "," << y << ": tolerance 0 fills nothing";
+}
+
+INSTANTIATE_TEST_SUITE_P(Devices, LowLevelDeviceTest, test::kAllDevices, test::DeviceName());
 
 TEST(LowLevelEngineTest, BilateralFilterKeepsPlanesAndEdges) {
     auto engine = makeLowLevelEngine(Device::CPU);

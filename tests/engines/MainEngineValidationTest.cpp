@@ -47,6 +47,20 @@ TEST(MainEngineCreate, TheDepthRangeMustBeARange) {
     }
 }
 
+TEST(MainEngineCreate, TheDepthGapToleranceIsAFractionUpToAHalf) {
+    for (float tolerance : {-0.01f, 0.51f, std::numeric_limits<float>::quiet_NaN()}) {
+        SCOPED_TRACE(tolerance);
+        MainEngineSettings s;
+        s.depth_gap_tolerance = tolerance;
+        expectRefused(s, "--depth-gap-tolerance");
+    }
+    for (float tolerance : {0.f, 0.5f}) {
+        MainEngineSettings s;
+        s.depth_gap_tolerance = tolerance;
+        EXPECT_EQ(createError(s), "") << tolerance;
+    }
+}
+
 TEST(MainEngineCreate, VoxelSizeAndMuMustBeFinite) {
     MainEngineSettings s;
     s.scene.voxel_size_m = INFINITY;

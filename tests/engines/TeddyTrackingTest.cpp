@@ -12,6 +12,7 @@
 #include "voxfuse/core/Timer.h"
 #include "voxfuse/engines/IntegrationEngine.h"
 #include "voxfuse/engines/LowLevelEngine.h"
+#include "voxfuse/engines/MainEngine.h"  // the pipeline's default depth gap tolerance
 #include "voxfuse/engines/RaycastEngine.h"
 #include "voxfuse/engines/Tracker.h"
 #include "voxfuse/eval/TrajectoryError.h"
@@ -46,7 +47,7 @@ TEST(TeddyTrackingTest, DefaultTrackerStaysWithinTenMillimetresAte) {
     double track_ms = 0.0;
     while (source->next(frame)) {
         low_level->convertDepthToMetres(frame.depth_raw, calib.disparity, calib.depth.fx, params.view_frustum_min_m,
-                                        params.view_frustum_max_m, view.depth);
+                                        params.view_frustum_max_m, MainEngineSettings{}.depth_gap_tolerance, view.depth);
         view.rgb.resize(frame.rgb.size());
         std::memcpy(static_cast<void*>(view.rgb.host()), frame.rgb.host(), frame.rgb.pixelCount() * sizeof(Vec4u8));
         const Timer t;

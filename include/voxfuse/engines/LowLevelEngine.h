@@ -24,9 +24,11 @@ public:
     // Images are read and written on the engine's device (input copies made when they are current
     // elsewhere; outputs sized and written there).
     //
-    // Raw samples to metres through the calibration; samples outside [min_m, max_m] become 0.
+    // Raw samples to metres through the calibration; samples outside [min_m, max_m] become 0. Pixels
+    // without a measurement between two agreeing neighbours are filled when gap_tolerance > 0 (see
+    // ConvertDepthPixels in shared/LowLevel.h).
     virtual void convertDepthToMetres(const Image<std::uint16_t>& raw, const DisparityCalib& calib, float fx_depth,
-                                      float min_m, float max_m, Image<float>& depth_m) = 0;
+                                      float min_m, float max_m, float gap_tolerance, Image<float>& depth_m) = 0;
     virtual void bilateralFilterDepth(const Image<float>& in, Image<float>& out, const BilateralFilterParams& params) = 0;
     // Half resolution; see downsampleDepthPixel for how holes and edges are handled.
     virtual void downsampleDepth(const Image<float>& in, Image<float>& out, float max_diff_m) = 0;

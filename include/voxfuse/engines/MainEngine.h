@@ -58,6 +58,10 @@ struct MainEngineSettings {
     // (its finest level still uses every pixel of the frame) at a quarter of the rays; renders and
     // renderState() are always raycast at full resolution.
     int tracking_raycast_downsample = 2;
+    // A pixel without a depth measurement between two neighbours that agree within this fraction of
+    // their depth (left and right, else above and below) takes their mean, for tracking and fusion
+    // alike; 0 keeps every gap. See ConvertDepthPixels in shared/LowLevel.h.
+    float depth_gap_tolerance = 0.02f;
     // Hash only: only the part of the map near the view stays in the voxel array.
     SwapSettings swap;
     // Keyframes while tracking is good, and finding the camera again from them once it is lost.
