@@ -3,8 +3,10 @@
 # the cuda-labelled tests (what only the GPU runs, and CPU-CUDA parity), voxfuse_bench with
 # --device cuda on synthetic frames rendered in memory (no image files or codecs needed), and, when
 # the bundle carries teddy's depth pack, the tracked run on it on both devices compared frame by frame
-# and mesh by mesh (device_parity.py); then one summary. Needs nothing on that machine but the NVIDIA
-# driver and python3; takes a few minutes.
+# and mesh by mesh (device_parity.py); last, where compute-sanitizer runs, the cuda tests once more
+# under its memcheck (out-of-bounds and misaligned accesses, leaks of device memory, failed CUDA
+# calls); then one summary. Needs nothing on that machine but the NVIDIA driver and python3; takes a
+# few minutes (VOXFUSE_GPU_CHECK_MEMCHECK=0 leaves the memcheck out).
 #
 #   ./gpu_bundle/gpu_check.sh        (from the repository root; logs, XML and JSON go to $OUT or /tmp)
 set -uo pipefail
@@ -48,6 +50,16 @@ if [ -d "$bundle/teddy_pack" ]; then
   cp "$work"/teddy_*_trajectory.txt . 2>/dev/null
   rm -rf "$work"
 fi
+# Memcheck slows kernels many times over: two voxel types (plain, colour) of each typed suite, the
+# tracked pipeline and the per-device engine tests, each within a time limit (a run cut short still
+# reports what it found until then).
+sanitizer=$(command -v compute-sanitizer || ls /usr/local/cuda/bin/compute-sanitizer 2>/dev/null || true)
+if [ "${VOXFUSE_GPU_CHECK_MEMCHECK:-1}" != 0 ] && [ -n "$sanitizer" ]; then
+  memcheck=("$sanitizer" --tool memcheck --leak-check full --error-exitcode 3)
+  step memcheck_cuda_tests 150 "${memcheck[@]}" "$bundle/bin/voxfuse_cuda_tests" --gtest_brief=1 \
+    --gtest_filter='*/0.*:*/2.*:Indexes/*:EngineCudaCapacity*:CudaDevice*'
+  step memcheck_engine_tests 120 "${memcheck[@]}" "$bundle/bin/voxfuse_core_tests" --gtest_brief=1 --gtest_filter='*cuda*'
+fi
 
 python3 - "$out" <<'PY'
 import json, os, sys, xml.etree.ElementTree as ET
@@ -90,6 +102,18 @@ for name in ("bench_cuda_hash", "bench_cuda_dense", "bench_cuda_tracked", "bench
         gpu_peak = f", GPU peak +{m['gpu_peak_extra_mb']:.1f} MB" if "gpu_peak_extra_mb" in m else ""
         print(f"{'':<20}mesh {m['median_ms']:.2f} ms ({m['triangles']} triangles, {m['vertices']} vertices{gpu_peak})"
               + (f"; cloud {c['extract_median_ms']:.2f} ms ({c['points']} points)" if c else ""))
+for name in ("memcheck_cuda_tests", "memcheck_engine_tests"):
+    path = os.path.join(out, name + ".log")
+    if not os.path.exists(path):
+        continue
+    lines = [l.rstrip() for l in open(path, errors="replace")]
+    summary = [l.strip("= ") for l in lines if "ERROR SUMMARY" in l or "LEAK SUMMARY" in l]
+    exit_code = status.get(name)
+    verdict = {"0": "clean", "3": "errors found", "124": "cut short by its time limit"}.get(exit_code, f"exit {exit_code}")
+    print(f"\n{name} (compute-sanitizer): {verdict}; " + ("; ".join(summary) if summary else "no summary line"))
+    failed = [l for l in lines if l.startswith("[  FAILED  ]")]
+    for l in ([l for l in lines if l.startswith("========= Invalid") or l.startswith("========= Program hit")] + failed)[:8]:
+        print("  " + l)
 parity = os.path.join(out, "teddy_parity.log")
 if os.path.exists(parity):
     print("\nteddy (200 depth frames, ren, 5 mm hash), cpu against cuda (device_parity.py):")
