@@ -249,10 +249,10 @@ void bindPipeline(py::module_& m) {
         .def("to_dict", [](const PipelineSettings& s) {
             py::dict d;
             py::object obj = py::cast(s);
-            for (const char* name : {"voxel", "index", "device", "voxel_size", "mu", "max_weight", "min_depth", "max_depth", "depth_gap_tolerance", "max_blocks",
-                                     "hash_buckets", "hash_excess", "volume_size", "volume_offset", "tracker", "tracker_config", "tracker_levels",
-                                     "tracker_iterations", "tracker_max_distance", "label_update", "swap", "active_blocks", "swap_file",
-                                     "swap_blocks_per_frame"})
+            for (const char* name : {"voxel", "index", "device", "voxel_size", "mu", "max_weight", "min_depth", "max_depth",
+                                     "depth_gap_tolerance", "max_blocks", "hash_buckets", "hash_excess", "volume_size", "volume_offset",
+                                     "tracker", "tracker_config", "tracker_levels", "tracker_iterations", "tracker_max_distance",
+                                     "label_update", "swap", "active_blocks", "swap_file", "swap_blocks_per_frame"})
                 d[name] = obj.attr(name);
             return d;
         }, "Every setting by name.")

@@ -35,7 +35,7 @@ list(LENGTH poses n)
 if(NOT n EQUAL 30)
   message(FATAL_ERROR "expected 30 poses in trajectory.txt, got ${n}")
 endif()
-# A tracker settings file reaches the run, and summary.json records what it changed.
+# A tracker settings file and --depth-gap-tolerance reach the run, and summary.json records what they changed.
 file(WRITE ${WORK_DIR}/near.txt "max_tracking_depth_m = 2.5\n")
 execute_process(COMMAND ${VOXFUSE_CLI} --frames 3 --tracker-config near.txt --depth-gap-tolerance 0 --out near WORKING_DIRECTORY ${WORK_DIR}
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
