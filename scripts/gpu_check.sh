@@ -4,7 +4,7 @@
 # --device cuda on synthetic frames rendered in memory (no image files or codecs needed), and, when
 # the bundle carries teddy's depth pack, the tracked run on it on both devices compared frame by frame
 # and mesh by mesh (device_parity.py); last, where compute-sanitizer runs, the cuda tests once more
-# under its memcheck (out-of-bounds and misaligned accesses, leaks of device memory, failed CUDA
+# under its memcheck (out-of-bounds and misaligned accesses, hardware exceptions, failed CUDA
 # calls); then one summary. Needs nothing on that machine but the NVIDIA driver and python3; takes a
 # few minutes (VOXFUSE_GPU_CHECK_MEMCHECK=0 leaves the memcheck out).
 #
@@ -55,7 +55,9 @@ fi
 # reports what it found until then).
 sanitizer=$(command -v compute-sanitizer || ls /usr/local/cuda/bin/compute-sanitizer 2>/dev/null || true)
 if [ "${VOXFUSE_GPU_CHECK_MEMCHECK:-1}" != 0 ] && [ -n "$sanitizer" ]; then
-  memcheck=("$sanitizer" --tool memcheck --leak-check full --error-exitcode 3)
+  # No leak check: the test programs exit without destroying their CUDA context, which the leak
+  # report needs to be meaningful.
+  memcheck=("$sanitizer" --tool memcheck --error-exitcode 3)
   step memcheck_cuda_tests 150 "${memcheck[@]}" "$bundle/bin/voxfuse_cuda_tests" --gtest_brief=1 \
     --gtest_filter='*/0.*:*/2.*:Indexes/*:EngineCudaCapacity*:CudaDevice*'
   step memcheck_engine_tests 120 "${memcheck[@]}" "$bundle/bin/voxfuse_core_tests" --gtest_brief=1 --gtest_filter='*cuda*'
@@ -107,7 +109,7 @@ for name in ("memcheck_cuda_tests", "memcheck_engine_tests"):
     if not os.path.exists(path):
         continue
     lines = [l.rstrip() for l in open(path, errors="replace")]
-    summary = [l.strip("= ") for l in lines if "ERROR SUMMARY" in l or "LEAK SUMMARY" in l]
+    summary = [l.strip("= ") for l in lines if "ERROR SUMMARY" in l]
     exit_code = status.get(name)
     verdict = {"0": "clean", "3": "errors found", "124": "cut short by its time limit"}.get(exit_code, f"exit {exit_code}")
     print(f"\n{name} (compute-sanitizer): {verdict}; " + ("; ".join(summary) if summary else "no summary line"))
