@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <utility>
 #include <vector>
 
 #include "ResourceUsage.h"
@@ -12,7 +13,7 @@
 
 namespace voxfuse::app {
 
-MeshingBench benchMeshing(MainEngine& engine, int repeats) {
+MeshingBench benchMeshing(MainEngine& engine, int repeats, Mesh* first_mesh) {
     MeshingBench b;
     b.repeats = std::max(1, repeats);
     std::vector<double> ms;
@@ -32,6 +33,7 @@ MeshingBench benchMeshing(MainEngine& engine, int repeats) {
             b.vertices = (long long)mesh.vertices.size();
             b.triangles = (long long)mesh.triangles.size();
             b.mesh_mb = double(mesh.bytes()) / (1024.0 * 1024.0);
+            if (first_mesh) *first_mesh = std::move(mesh);
         }
     }
     b.median_ms = median(ms);

@@ -28,8 +28,9 @@ struct CloudBench {
     long long downsampled_points = 0;
 };
 
-// Extracts the engine's mesh `repeats` times (the first also measures the peak memory).
-MeshingBench benchMeshing(MainEngine& engine, int repeats);
+// Extracts the engine's mesh `repeats` times (the first also measures the peak memory, and its mesh
+// goes to `first_mesh` when given, for a caller that also writes it out).
+MeshingBench benchMeshing(MainEngine& engine, int repeats, Mesh* first_mesh = nullptr);
 // Extracts the point cloud, and downsamples it when cell_m > 0, `repeats` times.
 CloudBench benchCloud(MainEngine& engine, int repeats, float cell_m);
 

@@ -149,11 +149,7 @@ int main(int argc, char** argv) {
     cli.add_option("--trajectory", trajectory_path, "also write the frames' poses to this file (TUM format, as voxfuse's trajectory.txt)");
     cli.add_option("--mesh-out", mesh_path, "after the run, also write the map's mesh to this file (.ply, .obj or .stl)")
         ->check(CLI::Validator(
-            [](std::string& path) {
-                const std::string ext = fs::path(path).extension().string();
-                if (ext == ".ply" || ext == ".obj" || ext == ".stl") return std::string();
-                return "expected a .ply, .obj or .stl file, got '" + path + "'";
-            },
+            [](std::string& path) { return isMeshFileName(path) ? std::string() : "expected a .ply, .obj or .stl file, got '" + path + "'"; },
             "MESH FILE"));
     CLI11_PARSE(cli, argc, argv);
 
@@ -304,8 +300,9 @@ int main(int argc, char** argv) {
 
         app::MeshingBench meshing;
         app::CloudBench cloud_bench;
+        Mesh map_mesh;  // for --mesh-out: the timed extraction's, or one made for it below
         if (mesh) {
-            meshing = app::benchMeshing(*engine, repeats);
+            meshing = app::benchMeshing(*engine, repeats, mesh_path.empty() ? nullptr : &map_mesh);
             app::printMeshing(meshing);
         }
         if (cloud || cloud_voxel_m > 0.f) {
@@ -372,8 +369,7 @@ int main(int argc, char** argv) {
             std::printf("  trajectory: %s\n", trajectory_path.c_str());
         }
         if (!mesh_path.empty()) {
-            Mesh map_mesh;
-            engine->extractMesh(map_mesh);
+            if (!mesh) engine->extractMesh(map_mesh);
             writeMesh(mesh_path, map_mesh);
             std::printf("  mesh: %s (%zu triangles)\n", mesh_path.c_str(), map_mesh.triangles.size());
         }

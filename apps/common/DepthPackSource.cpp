@@ -8,6 +8,7 @@
 
 #include "voxfuse/core/Error.h"
 #include "voxfuse/io/CalibIO.h"
+#include "voxfuse/io/TumSource.h"  // packs come from TUM folders: their frames meet ground truth as there
 
 namespace fs = std::filesystem;
 
@@ -15,7 +16,6 @@ namespace voxfuse::app {
 namespace {
 constexpr char kMagic[8] = {'V', 'F', 'D', 'E', 'P', 'T', 'H', '1'};
 constexpr int kMaxSide = 1 << 14;
-constexpr double kMaxGroundTruthGap_s = 0.02;  // as TUM's own tools pair poses with frames
 
 std::uint32_t littleEndian32(const unsigned char* b) {
     return std::uint32_t(b[0]) | std::uint32_t(b[1]) << 8 | std::uint32_t(b[2]) << 16 | std::uint32_t(b[3]) << 24;
@@ -88,7 +88,7 @@ bool DepthPackSource::next(RGBDFrame& frame) {
     frame.labels = Image<ClassId>();
     frame.depth_path = depth_path_;
     frame.T_world_camera_gt = Mat4f::identity();
-    frame.has_ground_truth = interpolatePose(ground_truth_, timestamp_s, kMaxGroundTruthGap_s, frame.T_world_camera_gt);
+    frame.has_ground_truth = interpolatePose(ground_truth_, timestamp_s, TumSource::kMaxTimeDifference_s, frame.T_world_camera_gt);
     return true;
 }
 

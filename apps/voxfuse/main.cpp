@@ -202,10 +202,9 @@ void checkCombinations(const CliOptions& o) {
 void checkOutputPaths(const CliOptions& o) {
     if (!o.mesh_path.empty()) {
         requireWritable(o.mesh_path);
-        std::string ext = fs::path(o.mesh_path).extension().string();
-        std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-        if (ext != ".ply" && ext != ".obj" && ext != ".stl")
-            throw ConfigError("--mesh-file " + o.mesh_path + ": unknown mesh format '" + ext + "' (expected .ply, .obj or .stl)");
+        if (!isMeshFileName(o.mesh_path))
+            throw ConfigError("--mesh-file " + o.mesh_path + ": unknown mesh format '" + fs::path(o.mesh_path).extension().string() +
+                              "' (expected .ply, .obj or .stl)");
     }
     if (!o.save_map.empty()) requireWritable(o.save_map);
 }

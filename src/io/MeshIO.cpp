@@ -201,4 +201,9 @@ void writeMesh(const std::string& path, const Mesh& mesh) {
     throw IoError(path, "unknown mesh format '" + ext + "' (expected .ply, .obj or .stl)");
 }
 
+bool isMeshFileName(const std::string& path) {
+    const std::string ext = lowerExtension(path);
+    return ext == ".ply" || ext == ".obj" || ext == ".stl";
+}
+
 }  // namespace voxfuse

@@ -26,6 +26,8 @@ void writeMeshObj(const std::string& path, const Mesh& mesh);
 void writeMeshStl(const std::string& path, const Mesh& mesh);
 // Picks the format by extension: .ply, .obj or .stl (any case); IoError for anything else.
 void writeMesh(const std::string& path, const Mesh& mesh);
+// Whether writeMesh can write to `path` (its extension), for checking output names before a run.
+bool isMeshFileName(const std::string& path);
 
 // Binary little-endian PLY with element vertex only (x y z, nx ny nz, red green blue and label as above).
 void writePointCloudPly(const std::string& path, const PointCloud& cloud);
