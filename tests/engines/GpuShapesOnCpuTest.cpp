@@ -168,14 +168,19 @@ TYPED_TEST(GpuShapesOnCpuTest, DenseIntegrationVoxelByVoxelEqualsTheClippedRows)
     expectSameSurfaceFromBothTeamShapes(rows);
 }
 
+// A rendered view of the box and sphere from the first pose, every `dropout_every`-th depth pixel emptied.
+View viewWithDropouts(Vec2i size, bool colour, int dropout_every) {
+    static const synth::SyntheticScene world = synth::SyntheticScene::boxAndSphere();
+    View view = test::renderView(world, test::kinectIntrinsics(size.x, size.y), poses()[0], colour);
+    for (int i = 0; i < int(view.depth.pixelCount()); i += dropout_every) view.depth.host()[i] = 0.f;
+    return view;
+}
+
 // The bilateral filter by strips, each pair weighed once (CPU), and pixel by pixel (GPU): the same bits, on
 // a rendered frame with holes, a size that is no multiple of the strip's, and every window size (strips
 // narrow as the radius grows).
 TEST(GpuShapesOnCpuLowLevelTest, BilateralFilterByStripsEqualsPixelByPixel) {
-    static const synth::SyntheticScene world = synth::SyntheticScene::boxAndSphere();
-    const Intrinsics intrinsics = test::kinectIntrinsics(330, 250);
-    View view = test::renderView(world, intrinsics, poses()[0], false);
-    for (int i = 0; i < int(view.depth.pixelCount()); i += 13) view.depth.host()[i] = 0.f;  // dropouts
+    const View view = viewWithDropouts({330, 250}, false, 13);
     LowLevelEngineOn<CpuDevice> spans;
     LowLevelEngineOn<CpuDeviceWithGpuShapes> pixels;
     for (int radius = 0; radius <= kMaxBilateralRadius; ++radius) {
@@ -193,10 +198,7 @@ TEST(GpuShapesOnCpuLowLevelTest, BilateralFilterByStripsEqualsPixelByPixel) {
 // (GPU): the same bits, for grids whose cells are 2-3 pixels wide (many to a chunk), for cells wider
 // than a chunk (column by column), for grids finer than the image (cells without pixels), and for colour.
 TEST(GpuShapesOnCpuLowLevelTest, CellAveragesByRowsEqualCellByCell) {
-    static const synth::SyntheticScene world = synth::SyntheticScene::boxAndSphere();
-    const Intrinsics intrinsics = test::kinectIntrinsics(601, 451);
-    View view = test::renderView(world, intrinsics, poses()[0], true);
-    for (int i = 0; i < int(view.depth.pixelCount()); i += 7) view.depth.host()[i] = 0.f;  // dropouts
+    const View view = viewWithDropouts({601, 451}, true, 7);
     LowLevelEngineOn<CpuDevice> rows;
     LowLevelEngineOn<CpuDeviceWithGpuShapes> cells;
     for (const Vec2i grid : {Vec2i{80, 60}, Vec2i{211, 160}, Vec2i{2, 3}, Vec2i{601, 451}, Vec2i{700, 500}}) {
