@@ -23,6 +23,10 @@ struct SyntheticSource::Renderer {
     synth::PinholeCamera camera;
     synth::KinectDepthModel depth_model;
     std::mt19937 colour_rng;
+    // Kept between frames, so that a sequence allocates no image memory per frame.
+    synth::RenderedFrame rendered;
+    std::vector<float> depth_m;
+    FrameImageBuffers images;
     Renderer(Kind kind, int width, int height, unsigned seed)
         : scene(kind == Kind::Corridor ? synth::SyntheticScene::corridor(kCorridorLength) : synth::SyntheticScene::defaultRoom()),
           camera(synth::PinholeCamera::kinectV1(width, height)),
@@ -87,25 +91,29 @@ bool SyntheticSource::next(RGBDFrame& frame) {
     Renderer& r = *renderer_;
     Eigen::Isometry3f pose;
     pose.matrix() = toEigen(ground_truth_[std::size_t(i)].T_world_camera);
-    const synth::RenderedFrame rendered = r.scene.render(r.camera, pose, 1);
-    const std::vector<float> depth = r.depth_model.apply(rendered.depth, rendered.cosIncidence, rendered.width, rendered.height);
+    r.scene.render(r.camera, pose, 1, r.rendered);
+    r.depth_model.apply(r.rendered.depth, r.rendered.cosIncidence, r.rendered.width, r.rendered.height, r.depth_m);
 
-    frame = RGBDFrame();
+    r.images.depth_raw.resize(Vec2i{r.rendered.width, r.rendered.height});
+    r.images.rgb.resize(Vec2i{r.rendered.width, r.rendered.height});
+    std::normal_distribution<float> noise(0.f, 1.5f);  // 8-bit colour sensor noise, as the bundled data
+    for (std::size_t p = 0; p < r.depth_m.size(); ++p) {
+        const float raw = std::round(r.depth_m[p] * kDepthScale);
+        r.images.depth_raw.host()[p] = raw >= 1.f && raw <= 65535.f ? std::uint16_t(raw) : 0;
+        auto channel = [&](float v) { return std::uint8_t(std::clamp(std::round(v * 255.f + noise(r.colour_rng)), 0.f, 255.f)); };
+        const Eigen::Vector3f& c = r.rendered.rgb[p];
+        const std::uint8_t red = channel(c.x()), green = channel(c.y()), blue = channel(c.z());
+        r.images.rgb.host()[p] = Vec4u8{red, green, blue, 255};
+    }
+    r.images.handOver(frame, true);
     frame.index = i;
     frame.timestamp_s = ground_truth_[std::size_t(i)].timestamp_s;
+    frame.rgb_timestamp_s = -1.0;
     frame.has_ground_truth = true;
     frame.T_world_camera_gt = ground_truth_[std::size_t(i)].T_world_camera;
     frame.depth_path = "synthetic frame " + std::to_string(i);
-    frame.depth_raw.resize(Vec2i{rendered.width, rendered.height});
-    frame.rgb.resize(Vec2i{rendered.width, rendered.height});
-    std::normal_distribution<float> noise(0.f, 1.5f);  // 8-bit colour sensor noise, as the bundled data
-    for (std::size_t p = 0; p < depth.size(); ++p) {
-        const float raw = std::round(depth[p] * kDepthScale);
-        frame.depth_raw.host()[p] = raw >= 1.f && raw <= 65535.f ? std::uint16_t(raw) : 0;
-        auto channel = [&](float v) { return std::uint8_t(std::clamp(std::round(v * 255.f + noise(r.colour_rng)), 0.f, 255.f)); };
-        const std::uint8_t red = channel(rendered.rgb[p].x()), green = channel(rendered.rgb[p].y()), blue = channel(rendered.rgb[p].z());
-        frame.rgb.host()[p] = Vec4u8{red, green, blue, 255};
-    }
+    frame.labels = Image<ClassId>();
+    frame.labels_path.clear();
     return true;
 }
 

@@ -33,20 +33,22 @@ bool KinectDepthModel::onFarSideOfEdge(const std::vector<float>& depth, int widt
     return false;
 }
 
-std::vector<float> KinectDepthModel::noiseField(int width, int height) {
-    std::vector<float> field(static_cast<std::size_t>(width) * height);
-    for (float& value : field) value = noise_(rng_);
+const std::vector<float>& KinectDepthModel::noiseField(int width, int height) {
+    const std::size_t count = static_cast<std::size_t>(width) * height;
+    field_.resize(count);
+    for (float& value : field_) value = noise_(rng_);
     const int r = params_.noiseCorrelationRadius;
-    if (r <= 0) return field;
+    if (r <= 0) return field_;
     // Separable box sums; dividing by sqrt(number of samples) keeps every
     // pixel exactly standard normal, borders included.
-    std::vector<float> rows(field.size()), out(field.size());
+    rows_.resize(count);
+    correlated_.resize(count);
     for (int y = 0; y < height; ++y)
         for (int x = 0; x < width; ++x) {
             float sum = 0.0f;
             for (int nx = std::max(x - r, 0); nx <= std::min(x + r, width - 1); ++nx)
-                sum += field[static_cast<std::size_t>(y) * width + nx];
-            rows[static_cast<std::size_t>(y) * width + x] = sum;
+                sum += field_[static_cast<std::size_t>(y) * width + nx];
+            rows_[static_cast<std::size_t>(y) * width + x] = sum;
         }
     for (int y = 0; y < height; ++y) {
         const int countY = std::min(y + r, height - 1) - std::max(y - r, 0) + 1;
@@ -54,20 +56,27 @@ std::vector<float> KinectDepthModel::noiseField(int width, int height) {
             const int countX = std::min(x + r, width - 1) - std::max(x - r, 0) + 1;
             float sum = 0.0f;
             for (int ny = std::max(y - r, 0); ny <= std::min(y + r, height - 1); ++ny)
-                sum += rows[static_cast<std::size_t>(ny) * width + x];
-            out[static_cast<std::size_t>(y) * width + x] =
+                sum += rows_[static_cast<std::size_t>(ny) * width + x];
+            correlated_[static_cast<std::size_t>(y) * width + x] =
                 sum / std::sqrt(static_cast<float>(countX * countY));
         }
     }
-    return out;
+    return correlated_;
 }
 
 std::vector<float> KinectDepthModel::apply(const std::vector<float>& exactDepth,
                                            const std::vector<float>& cosIncidence, int width,
                                            int height) {
+    std::vector<float> out;
+    apply(exactDepth, cosIncidence, width, height, out);
+    return out;
+}
+
+void KinectDepthModel::apply(const std::vector<float>& exactDepth, const std::vector<float>& cosIncidence,
+                             int width, int height, std::vector<float>& out) {
     const float minCos = std::cos(params_.maxIncidenceDeg * 3.14159265f / 180.0f);
-    const std::vector<float> noise = noiseField(width, height);
-    std::vector<float> out(exactDepth.size(), 0.0f);
+    const std::vector<float>& noise = noiseField(width, height);
+    out.assign(exactDepth.size(), 0.0f);
     for (int y = 0; y < height; ++y) {
         for (int x = 0; x < width; ++x) {
             const std::size_t i = static_cast<std::size_t>(y) * width + x;
@@ -80,7 +89,6 @@ std::vector<float> KinectDepthModel::apply(const std::vector<float>& exactDepth,
             out[i] = measureWithNoise(z, noise[i]);
         }
     }
-    return out;
 }
 
 float KinectDepthModel::depthStepAt(float z) const {

@@ -44,6 +44,10 @@ public:
     // Draws from the model's generator: call in a fixed order for repeatable output.
     std::vector<float> apply(const std::vector<float>& exactDepth,
                              const std::vector<float>& cosIncidence, int width, int height);
+    // The same into `out`, reusing its memory and the model's scratch: a sequence made this way
+    // allocates nothing per frame.
+    void apply(const std::vector<float>& exactDepth, const std::vector<float>& cosIncidence, int width,
+               int height, std::vector<float>& out);
 
     // One noisy, quantised measurement of a surface at depth z seen head-on
     // (no holes except out of range), with independent noise.
@@ -63,14 +67,15 @@ public:
     const Params& params() const { return params_; }
 
 private:
-    // Standard-normal noise per pixel, correlated over noiseCorrelationRadius.
-    std::vector<float> noiseField(int width, int height);
+    // Standard-normal noise per pixel, correlated over noiseCorrelationRadius (in the scratch below).
+    const std::vector<float>& noiseField(int width, int height);
     bool onFarSideOfEdge(const std::vector<float>& depth, int width, int height, int x, int y) const;
 
     Params params_;
     std::mt19937 rng_;
     std::normal_distribution<float> noise_{0.0f, 1.0f};
     std::uniform_real_distribution<float> uniform_{0.0f, 1.0f};
+    std::vector<float> field_, rows_, correlated_;  // noiseField's scratch, kept between frames
 };
 
 }  // namespace voxfuse::synth

@@ -521,6 +521,12 @@ RenderedFrame SyntheticScene::render(const PinholeCamera& camera,
                                      const Eigen::Isometry3f& T_world_camera,
                                      int colourSamples) const {
     RenderedFrame frame;
+    render(camera, T_world_camera, colourSamples, frame);
+    return frame;
+}
+
+void SyntheticScene::render(const PinholeCamera& camera, const Eigen::Isometry3f& T_world_camera,
+                            int colourSamples, RenderedFrame& frame) const {
     frame.width = camera.width;
     frame.height = camera.height;
     const std::size_t count = static_cast<std::size_t>(camera.width) * camera.height;
@@ -563,7 +569,6 @@ RenderedFrame SyntheticScene::render(const PinholeCamera& camera,
             frame.rgb[idx] = gammaEncode(colour / static_cast<float>(n * n));
         }
     }
-    return frame;
 }
 
 // ------------------------------------------------------------------ factories

@@ -139,6 +139,10 @@ public:
     // colourSamples x colourSamples samples per pixel against aliasing.
     RenderedFrame render(const PinholeCamera& camera, const Eigen::Isometry3f& T_world_camera,
                          int colourSamples = 2) const;
+    // The same into `frame`, whose buffers are reused: rendering a sequence this way allocates no
+    // image memory per frame (megabyte temporaries freed every frame fragment the heap).
+    void render(const PinholeCamera& camera, const Eigen::Isometry3f& T_world_camera, int colourSamples,
+                RenderedFrame& frame) const;
 
     const std::vector<Primitive>& primitives() const { return primitives_; }
     const std::vector<PointLight>& lights() const { return lights_; }
