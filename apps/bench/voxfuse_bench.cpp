@@ -18,6 +18,7 @@
 #include "MapOutputBench.h"
 #include "RelocalisationOptions.h"
 #include "OptionChecks.h"
+#include "HeapPolicy.h"
 #include "ProgramMain.h"
 #include "ResourceUsage.h"
 #include "RunRecord.h"
@@ -89,6 +90,7 @@ std::unique_ptr<ImageSource> openSource(const std::string& path) {
 }  // namespace
 
 int main(int argc, char** argv) {
+    app::useLongRunHeapPolicy();
     CLI::App cli{"Per-stage timings of the VoxFuse pipeline on a sequence."};
     std::string source_path, json_path = "voxfuse_bench.json", timings_path, trajectory_path, mesh_path;
     std::string index = "hash", poses = "track", device = "cpu";

@@ -9,6 +9,7 @@
 #include "LabelInput.h"
 #include "RelocalisationOptions.h"
 #include "OptionChecks.h"
+#include "HeapPolicy.h"
 #include "ProgramMain.h"
 #include "ViewerApp.h"
 #include "voxfuse/core/Error.h"
@@ -96,6 +97,7 @@ int run(Options& o) {
 }  // namespace
 
 int main(int argc, char** argv) {
+    app::useLongRunHeapPolicy();
     CLI::App cli{"VoxFuse viewer: watch the reconstruction grow, frame by frame.\n"
                  "With no SOURCE, runs on the bundled synthetic sequence.\n" + std::string(kKeyHelp)};
     Options o;

@@ -15,6 +15,7 @@
 #include "RelocalisationOptions.h"
 #include "OptionChecks.h"
 #include "OutputFolder.h"
+#include "HeapPolicy.h"
 #include "ProgramMain.h"
 #include "ResourceUsage.h"
 #include "RunRecord.h"
@@ -388,6 +389,7 @@ int run(CliOptions& o) {
 }  // namespace
 
 int main(int argc, char** argv) {
+    app::useLongRunHeapPolicy();
     CLI::App cli{"VoxFuse: dense 3D reconstruction from RGB-D sequences.\n"
                  "With no SOURCE, runs on the bundled synthetic sequence.\n"
                  "Ctrl-C (or SIGTERM) stops after the current frame and writes the outputs of the frames done; a second one quits at once."};
