@@ -10,7 +10,12 @@ on recorded data, e.g. (frame numbers count the depth images on disk, from 0):
   scripts/edit_tum_sequence.py ../shared/data/tum_fr3_teddy_200 /tmp/teddy_back --frames 0-120/2,119-101/2,19-1/2 --calib calib/tum_fr3.txt
   # a covered lens for 20 frames
   scripts/edit_tum_sequence.py ../shared/data/tum_fr3_teddy_200 /tmp/teddy_covered --blank 80-99 --calib calib/tum_fr3.txt
+  # a long run: played to and fro three times (1152 frames), newly timed at 30 Hz, without ground truth
+  scripts/edit_tum_sequence.py ../shared/data/tum_fr3_teddy_200 /tmp/teddy_long --frames 0-192,191-1,0-192,191-1,0-192,191-1 --retime 30 --calib calib/tum_fr3.txt
   voxfuse_bench /tmp/teddy_cut
+
+A frame played twice keeps its timestamp, and a source pairs each colour image with one depth image:
+give such sequences new timestamps (--retime), which drops the ground truth.
 """
 
 import argparse
@@ -68,7 +73,11 @@ def main():
     parser.add_argument("--blank", help="frames whose depth is replaced by zeros")
     parser.add_argument("--calib", help="calibration file to put in OUT/calib.txt (default: the source's own, if any)")
     parser.add_argument("--size", default="640x480", help="depth image size for the blank PNG (default 640x480)")
+    parser.add_argument("--retime", type=float, metavar="HZ",
+                        help="new timestamps, HZ per second, for each played frame and its colour image (no ground truth then)")
     args = parser.parse_args()
+    if args.retime is not None and not args.retime > 0:
+        sys.exit("edit_tum_sequence: --retime needs a rate above 0")
 
     depth = read_list(args.source, "depth.txt")
     frames = parse_ranges(args.frames, len(depth)) if args.frames else list(range(len(depth)))
@@ -78,18 +87,30 @@ def main():
     if blank:
         width, height = (int(v) for v in args.size.lower().split("x"))
         write_zero_png(blank_png, width, height)
+    rgb = read_list(args.source, "rgb.txt")
+    # Played frame k's timestamp: its own, or k / HZ from the source's first.
+    def stamp_of(k, i):
+        return depth[i][0] if args.retime is None else f"{float(depth[0][0]) + k / args.retime:.6f}"
     with open(os.path.join(args.out, "depth.txt"), "w") as f:
         f.write("# depth maps, edited by edit_tum_sequence.py\n")
-        for i in frames:
-            stamp, path = depth[i]
-            f.write(f"{stamp} {blank_png if i in blank else path}\n")
+        for k, i in enumerate(frames):
+            f.write(f"{stamp_of(k, i)} {blank_png if i in blank else depth[i][1]}\n")
     with open(os.path.join(args.out, "rgb.txt"), "w") as f:
-        f.write("# colour images of the source\n")
-        for stamp, path in read_list(args.source, "rgb.txt"):
-            f.write(f"{stamp} {path}\n")
+        if args.retime is None:
+            f.write("# colour images of the source\n")
+            for stamp, path in rgb:
+                f.write(f"{stamp} {path}\n")
+        else:
+            f.write("# the colour image nearest in time to each played depth image, edited by edit_tum_sequence.py\n")
+            for k, i in enumerate(frames if rgb else []):
+                nearest = min(rgb, key=lambda r: abs(float(r[0]) - float(depth[i][0])))
+                f.write(f"{stamp_of(k, i)} {nearest[1]}\n")
     gt = os.path.abspath(os.path.join(args.source, "groundtruth.txt"))
     link = os.path.join(args.out, "groundtruth.txt")
-    if os.path.exists(gt) and not os.path.lexists(link):
+    if args.retime is not None:
+        if os.path.lexists(link):
+            os.remove(link)  # an earlier edit's: its times no longer match
+    elif os.path.exists(gt) and not os.path.lexists(link):
         os.symlink(gt, link)
     calib = args.calib or os.path.join(args.source, "calib.txt")
     if os.path.exists(calib):
