@@ -10,7 +10,7 @@ on recorded data, e.g. (frame numbers count the depth images on disk, from 0):
   scripts/edit_tum_sequence.py ../shared/data/tum_fr3_teddy_200 /tmp/teddy_back --frames 0-120/2,119-101/2,19-1/2 --calib calib/tum_fr3.txt
   # a covered lens for 20 frames
   scripts/edit_tum_sequence.py ../shared/data/tum_fr3_teddy_200 /tmp/teddy_covered --blank 80-99 --calib calib/tum_fr3.txt
-  # a long run: played to and fro three times (1152 frames), newly timed at 30 Hz, without ground truth
+  # a long run: played to and fro three times (1140 frames with colour), newly timed at 30 Hz, without ground truth
   scripts/edit_tum_sequence.py ../shared/data/tum_fr3_teddy_200 /tmp/teddy_long --frames 0-192,191-1,0-192,191-1,0-192,191-1 --retime 30 --calib calib/tum_fr3.txt
   voxfuse_bench /tmp/teddy_cut
 
@@ -19,6 +19,7 @@ give such sequences new timestamps (--retime), which drops the ground truth.
 """
 
 import argparse
+import bisect
 import os
 import shutil
 import struct
@@ -38,6 +39,27 @@ def read_list(folder, name):
             if os.path.exists(path):
                 entries.append((fields[0], path))
     return entries
+
+
+def pair_colour(depth, rgb, max_difference_s=0.02):
+    """The colour image of each depth image (None: none), paired as TumSource pairs them: one to one,
+    closest in time first, at most max_difference_s apart."""
+    rgb_times = sorted((float(stamp), path) for stamp, path in rgb)
+    times = [t for t, _ in rgb_times]
+    candidates = []
+    for d, (stamp, _) in enumerate(depth):
+        t = float(stamp)
+        r = bisect.bisect_left(times, t - max_difference_s)
+        while r < len(times) and times[r] <= t + max_difference_s:
+            candidates.append((abs(times[r] - t), d, r))
+            r += 1
+    candidates.sort(key=lambda c: c[0])  # stable: ties keep depth order, as TumSource's stable_sort
+    rgb_for, used = [None] * len(depth), set()
+    for _, d, r in candidates:
+        if rgb_for[d] is None and r not in used:
+            rgb_for[d] = rgb_times[r][1]
+            used.add(r)
+    return rgb_for
 
 
 def parse_ranges(text, count):
@@ -101,10 +123,11 @@ def main():
             for stamp, path in rgb:
                 f.write(f"{stamp} {path}\n")
         else:
-            f.write("# the colour image nearest in time to each played depth image, edited by edit_tum_sequence.py\n")
-            for k, i in enumerate(frames if rgb else []):
-                nearest = min(rgb, key=lambda r: abs(float(r[0]) - float(depth[i][0])))
-                f.write(f"{stamp_of(k, i)} {nearest[1]}\n")
+            f.write("# the colour image of each played depth image, edited by edit_tum_sequence.py\n")
+            rgb_for = pair_colour(depth, rgb)
+            for k, i in enumerate(frames):
+                if rgb_for[i] is not None:  # else the source drops this frame, as it dropped the original
+                    f.write(f"{stamp_of(k, i)} {rgb_for[i]}\n")
     gt = os.path.abspath(os.path.join(args.source, "groundtruth.txt"))
     link = os.path.join(args.out, "groundtruth.txt")
     if args.retime is not None:

@@ -10,8 +10,8 @@ namespace voxfuse::app {
 // glibc maps blocks of 128 KiB and more on their own, but once it unmaps one it raises that limit to
 // the block's size (up to 32 MiB) and the limit above which it returns the heap's free top to the
 // system to twice that. A map's start-up allocations of tens of megabytes raise both, and from then
-// on the heap keeps what it frees. Teddy played to and fro for 1152 frames (`voxfuse`, a render
-// written every 25 frames) peaked at 349 MB, against 298 MB without the renders, with the live heap
+// on the heap keeps what it frees. Teddy played to and fro for 1140 frames (`voxfuse`, a render
+// written every 25 frames) peaked at 346-349 MB, against 298 MB without the renders, with the live heap
 // flat (heaptrack); with the limits fixed it peaks at 299 MB. Setting them turns the adjustment off.
 // No frame makes a block this large (sources decode into reused images), so the fixed limits cost no
 // time (teddy 1.000x side by side, meshing unchanged).
