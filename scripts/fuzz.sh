@@ -29,9 +29,9 @@ fi
 # Third-party libraries that keep allocations until exit are not VoxFuse's leaks.
 export LSAN_OPTIONS="suppressions=$PWD/tests/io/lsan_third_party.supp"
 export UBSAN_OPTIONS="print_stacktrace=1"
-# One OpenMP thread: fuzzing runs one input at a time, and spinning threads on two shared cores turned
-# 10 ms inputs into 26 s timeouts.
-export OMP_NUM_THREADS=1
+# One CPU thread: fuzzing runs one input at a time, and (OpenMP's) spinning threads on two shared cores
+# turned 10 ms inputs into 26 s timeouts.
+export VOXFUSE_NUM_THREADS=1
 status=0
 printf '%-16s %12s %8s %8s %8s %s\n' target executions exec/s cov ft findings > build-fuzz/summary.txt
 for t in "${targets[@]}"; do

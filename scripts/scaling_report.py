@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """How a frame's time scales with the threads and with what the camera sees.
 
-Runs voxfuse_bench alternately with 1 and 2 OpenMP threads (ABBA over --rounds, so machine drift hits
+Runs voxfuse_bench alternately with 1 and 2 CPU threads (ABBA over --rounds, so machine drift hits
 both alike), each run writing its per-frame stage times (--timings), and prints:
   - each stage's median ms with 1 and with 2 threads, and the speed-up;
   - the frames split into thirds by the number of visible blocks: median blocks and stage ms of the
@@ -26,8 +26,8 @@ WARMUP = 3  # frames left out, as voxfuse_bench's default --warmup
 
 
 def run(build, bench_args, threads):
-    """The per-frame timings of one run with `threads` OpenMP threads."""
-    env = dict(os.environ, OMP_NUM_THREADS=str(threads))
+    """The per-frame timings of one run with `threads` CPU threads."""
+    env = dict(os.environ, VOXFUSE_NUM_THREADS=str(threads))
     return run_bench(build, [*bench_args, "--warmup", str(WARMUP)], env=env, timings=True)[1]
 
 

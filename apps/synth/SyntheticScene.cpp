@@ -10,6 +10,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "voxfuse/core/CpuThreads.h"
+
 namespace voxfuse::synth {
 namespace {
 
@@ -538,8 +540,8 @@ void SyntheticScene::render(const PinholeCamera& camera, const Eigen::Isometry3f
     const Eigen::Vector3f origin = T_world_camera.translation();
     const int n = std::max(colourSamples, 1);
 
-#pragma omp parallel for schedule(dynamic, 4)
-    for (int v = 0; v < camera.height; ++v) {
+    // A row per task, on the library's CPU threads (not a second set of threads beside them).
+    forEachCpuTask(camera.height, [&](int v) {
         for (int u = 0; u < camera.width; ++u) {
             const std::size_t idx = static_cast<std::size_t>(v) * camera.width + u;
             // Camera ray with z = 1, so the hit parameter is the depth itself.
@@ -568,7 +570,7 @@ void SyntheticScene::render(const PinholeCamera& camera, const Eigen::Isometry3f
             }
             frame.rgb[idx] = gammaEncode(colour / static_cast<float>(n * n));
         }
-    }
+    });
 }
 
 // ------------------------------------------------------------------ factories

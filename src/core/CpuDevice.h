@@ -17,16 +17,17 @@
 //                                 robustly weighted, summed in double in an order fixed by n alone
 //   read(p, scratch), write(p, v) one element between the device's memory and the host
 //
-// Loop bodies are functors from include/voxfuse/shared/ with VF_HOST_DEVICE operator()(int).
-
-#include <omp.h>
+// Loop bodies are functors from include/voxfuse/shared/ with VF_HOST_DEVICE operator()(int). Every loop
+// runs on the library's CPU threads (voxfuse/core/CpuThreads.h).
 
 #include <algorithm>
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <vector>
 
 #include "core/DeviceScratch.h"
+#include "voxfuse/core/CpuThreads.h"
 #include "voxfuse/core/Team.h"
 #include "voxfuse/core/DeviceMemory.h"
 #include "voxfuse/shared/NormalEquations.h"
@@ -112,6 +113,24 @@ VF_CPU_CLONES NormalEquations<double> sumTermShare(const Terms& terms, RobustKer
     return sums;
 }
 
+// Folds [0, n) in equal shares of at least 4096 elements, each share from `init` (add_share(begin, end,
+// value)), and combines the shares' values with `init` in share order; `init` must be what `combine`
+// leaves unchanged or absorbs (0 for a sum, the start for a maximum).
+template <class T, class AddShare, class Combine>
+T reduceShares(int n, T init, const AddShare& add_share, const Combine& combine) {
+    if (n <= 0) return init;
+    const int shares = std::max(1, std::min(4 * cpuThreadCount(), n / 4096));
+    std::vector<T> values(static_cast<std::size_t>(shares), init);
+    forEachCpuTask(shares, [&](int s) {
+        T value = init;
+        add_share(int((long long)n * s / shares), int((long long)n * (s + 1) / shares), value);
+        values[std::size_t(s)] = value;
+    });
+    T total = init;
+    for (const T& v : values) total = combine(total, v);
+    return total;
+}
+
 }  // namespace cpu_detail
 
 struct CpuDevice {
@@ -126,23 +145,24 @@ struct CpuDevice {
     template <class Body>
     static void parallelFor(int n, const Body& body) {
         if (n <= 0) return;
-        const int chunk = std::max(1, n / (32 * omp_get_max_threads()));
+        const int chunk = std::max(1, n / (32 * cpuThreadCount()));
         const int chunks = (n + chunk - 1) / chunk;
-#pragma omp parallel for schedule(dynamic, 1)
-        for (int c = 0; c < chunks; ++c) cpu_detail::runElements(body, c * chunk, std::min(n, c * chunk + chunk));
+        forEachCpuTask(chunks, [&](int c) { cpu_detail::runElements(body, c * chunk, std::min(n, c * chunk + chunk)); });
     }
 
-    // A team is one thread; its shared memory is allocated once per thread and reused for every item.
+    // A team is one thread; its shared memory is allocated once per task (one task per thread) and
+    // reused for every item the task claims.
     template <class Shared, class Body>
     static void parallelForTeams(int n, const Body& body) {
         if (n <= 0) return;
-        const int chunk = std::max(1, n / (32 * omp_get_max_threads()));
-#pragma omp parallel
-        {
+        const int threads = cpuThreadCount();
+        const int chunk = std::max(1, n / (32 * threads));
+        std::atomic<int> next{0};
+        forEachCpuTask(std::min(threads, (n + chunk - 1) / chunk), [&](int) {
             const auto shared = std::make_unique<Shared>();
-#pragma omp for schedule(dynamic, chunk)
-            for (int i = 0; i < n; ++i) body(Team{0, 1}, i, *shared);
-        }
+            for (int begin = next.fetch_add(chunk); begin < n; begin = next.fetch_add(chunk))
+                for (int i = begin; i < std::min(n, begin + chunk); ++i) body(Team{0, 1}, i, *shared);
+        });
     }
 
     template <class T>
@@ -168,22 +188,20 @@ struct CpuDevice {
         auto share_begin = [&](int s) { return int((long long)n * s / shares); };
         // Each share's bounds in locals: the stores through `o` may alias anything the lambda reads
         // by reference, which made the loop recompute its bound (a 64-bit division) per element.
-#pragma omp parallel for schedule(static)
-        for (int s = 0; s < shares; ++s) {
+        forEachCpuTask(shares, [&](int s) {
             const int begin = share_begin(s), end = share_begin(s + 1);
             int c = 0;
             for (int i = begin; i < end; ++i) c += pred(i) ? 1 : 0;
             counts[std::size_t(s) + 1] = c;
-        }
+        });
         for (int s = 0; s < shares; ++s) counts[std::size_t(s) + 1] += counts[std::size_t(s)];
-#pragma omp parallel for schedule(dynamic, 4)
-        for (int s = 0; s < shares; ++s) {
-            if (counts[std::size_t(s) + 1] == counts[std::size_t(s)]) continue;
+        forEachCpuTask(shares, [&](int s) {
+            if (counts[std::size_t(s) + 1] == counts[std::size_t(s)]) return;
             const int begin = share_begin(s), end = share_begin(s + 1);
             int* o = out + counts[std::size_t(s)];
             for (int i = begin; i < end; ++i)
                 if (pred(i)) *o++ = i;
-        }
+        });
         return counts.back();
     }
 
@@ -194,35 +212,32 @@ struct CpuDevice {
 
     template <class Pred>
     static int countIf(int n, const Pred& pred, DeviceScratch&) {
-        int count = 0;
-#pragma omp parallel for schedule(static) reduction(+ : count)
-        for (int i = 0; i < n; ++i) count += pred(i) ? 1 : 0;
-        return count;
+        return cpu_detail::reduceShares(n, 0, [&](int begin, int end, int& count) {
+            for (int i = begin; i < end; ++i) count += pred(i) ? 1 : 0;
+        }, [](int a, int b) { return a + b; });
     }
 
     template <class Value>
     static float maxOf(int n, const Value& value, float init, DeviceScratch&) {
-        float best = init;
-#pragma omp parallel for schedule(static) reduction(max : best)
-        for (int i = 0; i < n; ++i) best = std::max(best, value(i));
-        return best;
+        return cpu_detail::reduceShares(n, init, [&](int begin, int end, float& best) {
+            for (int i = begin; i < end; ++i) best = std::max(best, value(i));
+        }, [](float a, float b) { return std::max(a, b); });
     }
 
     // Partial sums over fixed shares of the terms, taken by whichever thread is free and added in share
     // order: the result depends on n alone (not on the thread count or on which thread finished first,
-    // which an omp reduction clause would not promise), and threads do not wait on the one whose static
-    // half held more of the image's valid pixels.
+    // as a reduction in completion order would), and threads do not wait on the one whose static half
+    // held more of the image's valid pixels.
     template <class Terms>
     static NormalEquations<double> sumNormalEquations(int n, const Terms& terms, RobustKernel kernel, float kernel_scale, DeviceScratch&) {
         constexpr int kMaxShares = 64;
         constexpr int kMinShareTerms = 1024;
         const int shares = std::max(1, std::min(kMaxShares, n / kMinShareTerms));
         std::vector<NormalEquations<double>> partials(static_cast<std::size_t>(shares));
-#pragma omp parallel for schedule(dynamic, 1)
-        for (int s = 0; s < shares; ++s) {
+        forEachCpuTask(shares, [&](int s) {
             const int begin = int((long long)n * s / shares), end = int((long long)n * (s + 1) / shares);
             partials[std::size_t(s)] = cpu_detail::sumTermShare(terms, kernel, kernel_scale, begin, end);
-        }
+        });
         NormalEquations<double> total = NormalEquations<double>::zero();
         for (const NormalEquations<double>& p : partials) total.add(p);
         return total;

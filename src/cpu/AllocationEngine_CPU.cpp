@@ -1,4 +1,4 @@
-// CPU/OpenMP layer of the allocation engine: the stages of src/engines/AllocationEngine_Impl.h on the
+// CPU layer of the allocation engine: the stages of src/engines/AllocationEngine_Impl.h on the
 // CPU launcher and primitives.
 
 #include "core/CpuDevice.h"

@@ -1,4 +1,4 @@
-// CPU/OpenMP layer of the integration engine: src/engines/IntegrationEngine_Impl.h on the CPU launcher.
+// CPU layer of the integration engine: src/engines/IntegrationEngine_Impl.h on the CPU launcher.
 
 #include "core/CpuDevice.h"
 #include "engines/IntegrationEngine_Impl.h"

@@ -1,4 +1,4 @@
-// CPU/OpenMP layer of the low-level engine: src/engines/LowLevelEngine_Impl.h on the CPU launcher.
+// CPU layer of the low-level engine: src/engines/LowLevelEngine_Impl.h on the CPU launcher.
 
 #include "core/CpuDevice.h"
 #include "engines/LowLevelEngine_Impl.h"

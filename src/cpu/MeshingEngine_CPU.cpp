@@ -1,4 +1,4 @@
-// CPU/OpenMP layer of the meshing engine: src/engines/MeshingEngine_Impl.h on the CPU launcher (a team
+// CPU layer of the meshing engine: src/engines/MeshingEngine_Impl.h on the CPU launcher (a team
 // is one thread, which meshes its block alone).
 
 #include "core/CpuDevice.h"

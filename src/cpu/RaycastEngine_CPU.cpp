@@ -1,4 +1,4 @@
-// CPU/OpenMP layer of the raycast engine: src/engines/RaycastEngine_Impl.h on the CPU launcher.
+// CPU layer of the raycast engine: src/engines/RaycastEngine_Impl.h on the CPU launcher.
 
 #include "core/CpuDevice.h"
 #include "engines/RaycastEngine_Impl.h"

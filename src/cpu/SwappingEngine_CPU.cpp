@@ -1,4 +1,4 @@
-// CPU/OpenMP layer of the swapping engine: src/engines/SwappingEngine_Impl.h on the CPU launcher.
+// CPU layer of the swapping engine: src/engines/SwappingEngine_Impl.h on the CPU launcher.
 
 #include "core/CpuDevice.h"
 #include "engines/SwappingEngine_Impl.h"

@@ -1,4 +1,4 @@
-// CPU/OpenMP layer of the trackers: src/engines/TrackerKernels_Impl.h on the CPU launcher.
+// CPU layer of the trackers: src/engines/TrackerKernels_Impl.h on the CPU launcher.
 
 #include "core/CpuDevice.h"
 #include "engines/TrackerKernels_Impl.h"

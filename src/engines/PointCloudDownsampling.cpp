@@ -3,11 +3,13 @@
 #include "voxfuse/engines/PointCloudDownsampling.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
 
+#include "voxfuse/core/CpuThreads.h"
 #include "voxfuse/core/Error.h"
 
 namespace voxfuse {
@@ -54,20 +56,23 @@ PointCloud downsampleVoxelGrid(const PointCloud& cloud, float cell_m) {
     const double inv_cell = 1.0 / double(cell_m);
     std::vector<BinnedPoint> binned(n);
     std::vector<std::uint8_t> keep(n);
-    bool out_of_range = false;
-#pragma omp parallel for schedule(static) reduction(|| : out_of_range)
-    for (long long i = 0; i < (long long)n; ++i) {
-        const Vec3f p = cloud.points[std::size_t(i)];
-        keep[std::size_t(i)] = std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
-        if (!keep[std::size_t(i)]) continue;
-        Vec3i cell{0, 0, 0};
-        for (int a = 0; a < 3; ++a) {
-            const double c = std::floor(double(p[a]) * inv_cell);
-            out_of_range = out_of_range || c < double(INT32_MIN) || c > double(INT32_MAX);
-            cell[a] = out_of_range ? 0 : int(c);
+    std::atomic<bool> out_of_range{false};
+    forEachCpuShare(n, 4096, [&](std::size_t begin, std::size_t end) {
+        bool share_out_of_range = false;
+        for (std::size_t i = begin; i < end; ++i) {
+            const Vec3f p = cloud.points[i];
+            keep[i] = std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+            if (!keep[i]) continue;
+            Vec3i cell{0, 0, 0};
+            for (int a = 0; a < 3; ++a) {
+                const double c = std::floor(double(p[a]) * inv_cell);
+                share_out_of_range = share_out_of_range || c < double(INT32_MIN) || c > double(INT32_MAX);
+                cell[a] = share_out_of_range ? 0 : int(c);
+            }
+            binned[i] = BinnedPoint{cell, std::uint32_t(i)};
         }
-        binned[std::size_t(i)] = BinnedPoint{cell, std::uint32_t(i)};
-    }
+        if (share_out_of_range) out_of_range = true;
+    });
     if (out_of_range) throw ConfigError("downsampling: cells of " + std::to_string(cell_m) + " m are too small for the cloud's extent");
     std::size_t kept = 0;
     for (std::size_t i = 0; i < n; ++i)
@@ -80,34 +85,35 @@ PointCloud downsampleVoxelGrid(const PointCloud& cloud, float cell_m) {
     for (std::size_t i = 0; i < binned.size(); ++i)
         if (i == 0 || binned[i].cell != binned[i - 1].cell) run_starts.push_back(i);
     run_starts.push_back(binned.size());
-    const long long runs = (long long)run_starts.size() - 1;
+    const std::size_t runs = run_starts.size() - 1;
 
     PointCloud out;
-    out.points.resize(std::size_t(runs));
-    if (cloud.hasNormals()) out.normals.resize(std::size_t(runs));
-    if (cloud.hasColors()) out.colors.resize(std::size_t(runs));
-    if (cloud.hasLabels()) out.labels.resize(std::size_t(runs));
-#pragma omp parallel for schedule(static)
-    for (long long r = 0; r < runs; ++r) {
-        const std::size_t begin = run_starts[std::size_t(r)], end = run_starts[std::size_t(r) + 1];
-        double sum_p[3] = {0, 0, 0}, sum_n[3] = {0, 0, 0}, sum_c[3] = {0, 0, 0};
-        for (std::size_t k = begin; k < end; ++k) {
-            const std::size_t i = binned[k].point;
-            for (int a = 0; a < 3; ++a) {
-                sum_p[a] += cloud.points[i][a];
-                if (cloud.hasNormals()) sum_n[a] += cloud.normals[i][a];
-                if (cloud.hasColors()) sum_c[a] += cloud.colors[i][a];
+    out.points.resize(runs);
+    if (cloud.hasNormals()) out.normals.resize(runs);
+    if (cloud.hasColors()) out.colors.resize(runs);
+    if (cloud.hasLabels()) out.labels.resize(runs);
+    forEachCpuShare(runs, 256, [&](std::size_t first_run, std::size_t end_run) {
+        for (std::size_t r = first_run; r < end_run; ++r) {
+            const std::size_t begin = run_starts[r], end = run_starts[r + 1];
+            double sum_p[3] = {0, 0, 0}, sum_n[3] = {0, 0, 0}, sum_c[3] = {0, 0, 0};
+            for (std::size_t k = begin; k < end; ++k) {
+                const std::size_t i = binned[k].point;
+                for (int a = 0; a < 3; ++a) {
+                    sum_p[a] += cloud.points[i][a];
+                    if (cloud.hasNormals()) sum_n[a] += cloud.normals[i][a];
+                    if (cloud.hasColors()) sum_c[a] += cloud.colors[i][a];
+                }
             }
+            const double count = double(end - begin);
+            out.points[r] = Vec3f{float(sum_p[0] / count), float(sum_p[1] / count), float(sum_p[2] / count)};
+            if (cloud.hasNormals()) out.normals[r] = normalize(Vec3f{float(sum_n[0]), float(sum_n[1]), float(sum_n[2])});
+            if (cloud.hasColors())
+                out.colors[r] = Vec3u8{std::uint8_t(std::lround(sum_c[0] / count)), std::uint8_t(std::lround(sum_c[1] / count)),
+                                       std::uint8_t(std::lround(sum_c[2] / count))};
+            // Last: it reorders the run (the sums above needed input order).
+            if (cloud.hasLabels()) out.labels[r] = majorityLabel(binned.data() + begin, binned.data() + end, cloud.labels);
         }
-        const double count = double(end - begin);
-        out.points[std::size_t(r)] = Vec3f{float(sum_p[0] / count), float(sum_p[1] / count), float(sum_p[2] / count)};
-        if (cloud.hasNormals()) out.normals[std::size_t(r)] = normalize(Vec3f{float(sum_n[0]), float(sum_n[1]), float(sum_n[2])});
-        if (cloud.hasColors())
-            out.colors[std::size_t(r)] = Vec3u8{std::uint8_t(std::lround(sum_c[0] / count)), std::uint8_t(std::lround(sum_c[1] / count)),
-                                                std::uint8_t(std::lround(sum_c[2] / count))};
-        // Last: it reorders the run (the sums above needed input order).
-        if (cloud.hasLabels()) out.labels[std::size_t(r)] = majorityLabel(binned.data() + begin, binned.data() + end, cloud.labels);
-    }
+    });
     return out;
 }
 

@@ -2,13 +2,13 @@
 // the same checks in tests/cuda/CudaDeviceTest.cu.
 
 #include <gtest/gtest.h>
-#include <omp.h>
 
 #include <random>
 #include <vector>
 
 #include "DevicePrimitiveChecks.h"
 #include "core/CpuDevice.h"
+#include "voxfuse/core/CpuThreads.h"
 
 namespace voxfuse {
 namespace {
@@ -26,13 +26,12 @@ TEST(CpuDeviceTest, NormalEquationsDoNotDependOnTheThreadCount) {
     std::vector<float> values(307200);
     for (float& v : values) v = u(rng);
     DeviceScratch scratch(Device::CPU);
-    const int threads_before = omp_get_max_threads();
     std::vector<NormalEquations<double>> sums;
     for (int threads : {1, 2, 3}) {
-        omp_set_num_threads(threads);
+        setCpuThreadCount(threads);
         sums.push_back(CpuDevice::sumNormalEquations(int(values.size()), test::PolynomialTerms{values.data()}, RobustKernel::Huber, 0.2f, scratch));
     }
-    omp_set_num_threads(threads_before);
+    setCpuThreadCount(0);
     for (std::size_t t = 1; t < sums.size(); ++t) {
         EXPECT_EQ(sums[t].count, sums[0].count);
         for (int k = 0; k < 21; ++k) EXPECT_EQ(sums[t].hessian[k], sums[0].hessian[k]) << "entry " << k << ", run " << t;

@@ -12,7 +12,6 @@
 #include <tuple>
 #include <vector>
 
-#include <omp.h>
 
 #include "DeviceTestSupport.h"
 #include "SyntheticViews.h"
@@ -20,6 +19,7 @@
 #include "voxfuse/engines/IntegrationEngine.h"
 #include "voxfuse/objects/Voxel.h"
 #include "core/CpuDevice.h"
+#include "voxfuse/core/CpuThreads.h"
 #include "voxfuse/shared/Allocation.h"
 #include "voxfuse/shared/HashAccess.h"
 
@@ -350,8 +350,7 @@ TEST_P(AllocationEngineTest, TheTableDoesNotDependOnTheNumberOfThreads) {
     small.bucket_count = 4096;  // many collisions and chains
     small.excess_entry_count = 4096;
     auto run = [&](int threads) {
-        const int saved = omp_get_max_threads();
-        omp_set_num_threads(threads);
+        setCpuThreadCount(threads);
         HashScene scene = makeScene(params, Device::CPU, small);
         auto allocation = makeAllocationEngine<VoxelS, VoxelBlockHash>(Device::CPU);
         auto integration = makeIntegrationEngine<VoxelS, VoxelBlockHash>(Device::CPU);
@@ -361,7 +360,7 @@ TEST_P(AllocationEngineTest, TheTableDoesNotDependOnTheNumberOfThreads) {
             integration->integrate(scene, view, pose);
         }
         allocation->removeEmptyBlocks(scene);
-        omp_set_num_threads(saved);
+        setCpuThreadCount(0);
         return scene;
     };
     const HashScene one = run(1), four = run(4);
@@ -407,7 +406,7 @@ TEST(AllocationStage1Test, TheCountOfMissingBlocksSaturatesAndTheListIsNeverOver
     mark.max_counted_appends = kCountStop;
     CpuDevice::parallelFor(mark.elementCount(), mark);
     EXPECT_GE(count, kCountStop);
-    EXPECT_LE(count, kCountStop + omp_get_max_threads());
+    EXPECT_LE(count, kCountStop + cpuThreadCount());
     for (int i = kCapacity; i < int(list.size()); ++i) EXPECT_EQ(list[std::size_t(i)], 0xfeedull) << "slot " << i;
 }
 

@@ -3,7 +3,6 @@
 // dense and the hash index.
 
 #include <gtest/gtest.h>
-#include <omp.h>
 
 #include <algorithm>
 #include <array>
@@ -17,6 +16,7 @@
 #include <vector>
 
 #include "SyntheticViews.h"
+#include "voxfuse/core/CpuThreads.h"
 #include "voxfuse/engines/AllocationEngine.h"
 #include "voxfuse/engines/IntegrationEngine.h"
 #include "voxfuse/engines/MeshingEngine.h"
@@ -685,12 +685,11 @@ TEST(MeshingEngine, NoSurfaceBetweenObservedAndUnobservedSpace) {
 TEST(MeshingEngine, ResultDoesNotDependOnTheThreadCount) {
     Scene<VoxelSRgbLabel, VoxelBlockHash> hash(testParams(), VoxelBlockHash(smallHash()), Device::CPU);
     fillHash(hash, {-30, -30, -30}, {30, 30, 30}, sphereWithClassGaps);
-    const int threads = omp_get_max_threads();
-    omp_set_num_threads(1);
+    setCpuThreadCount(1);
     const Mesh one = meshOf(hash);
-    omp_set_num_threads(std::max(threads, 2));
+    setCpuThreadCount(std::max(cpuThreadCount(), 3));
     const Mesh many = meshOf(hash);
-    omp_set_num_threads(threads);
+    setCpuThreadCount(0);
     ASSERT_EQ(one.vertices.size(), many.vertices.size());
     ASSERT_EQ(one.triangles.size(), many.triangles.size());
     for (std::size_t i = 0; i < one.vertices.size(); ++i) {
