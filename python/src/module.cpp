@@ -1,6 +1,7 @@
 // The _voxfuse extension module; `voxfuse/__init__.py` re-exports it as the voxfuse package.
 
 #include "Bindings.h"
+#include "voxfuse/core/CpuThreads.h"
 #include "voxfuse/core/DeviceMemory.h"
 
 PYBIND11_MODULE(_voxfuse, m) {
@@ -15,4 +16,10 @@ PYBIND11_MODULE(_voxfuse, m) {
     m.def("cuda_available", &voxfuse::device_memory::cudaAvailable,
           "True when this build has CUDA and a GPU is usable, so that Pipeline(device='cuda') can run.");
     m.def("built_with_cuda", &voxfuse::device_memory::builtWithCuda, "True when this build has the CUDA engines.");
+    m.def("cpu_threads", &voxfuse::cpuThreadCount,
+          "How many threads the library's CPU loops run on: set_cpu_threads(n), else the environment's\n"
+          "VOXFUSE_NUM_THREADS or OMP_NUM_THREADS, else the CPUs this process may use.");
+    m.def("set_cpu_threads", &voxfuse::setCpuThreadCount, pybind11::arg("threads"),
+          "Sets how many threads the library's CPU loops run on, from the next loop on; 0 returns to the\n"
+          "default (see cpu_threads). Results do not depend on it.");
 }

@@ -79,3 +79,23 @@ def test_teddy_first_frames_track_within_a_centimetre():
             break
     err = voxfuse.evaluate_trajectory(*p.trajectory, *source.ground_truth)
     assert err["pairs"] >= 30 and err["ate_rmse_m"] < 0.01  # TUM's ground truth misses some frames' times
+
+
+def test_the_map_does_not_depend_on_the_cpu_thread_count(room_frames, tmp_path):
+    source, frames = room_frames
+    meshes = []
+    try:
+        for threads in (1, 3):
+            voxfuse.set_cpu_threads(threads)
+            assert voxfuse.cpu_threads() == threads
+            p = voxfuse.Pipeline(source.calib, voxel_size=0.01)
+            for f in frames[:6]:
+                p.process_frame(f)
+            path = tmp_path / f"mesh_{threads}.ply"
+            p.extract_mesh().save(str(path))
+            meshes.append((path.read_bytes(), p.trajectory[1]))
+    finally:
+        voxfuse.set_cpu_threads(0)
+    assert voxfuse.cpu_threads() >= 1
+    assert meshes[0][0] == meshes[1][0]
+    np.testing.assert_array_equal(meshes[0][1], meshes[1][1])

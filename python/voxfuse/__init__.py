@@ -27,10 +27,12 @@ from ._voxfuse import (
     Settings,
     Source,
     built_with_cuda,
+    cpu_threads,
     cuda_available,
     evaluate_trajectory,
     open_source,
     read_tum_trajectory,
+    set_cpu_threads,
     write_tum_trajectory,
 )
 
@@ -50,9 +52,11 @@ __all__ = [
     "Settings",
     "Source",
     "built_with_cuda",
+    "cpu_threads",
     "cuda_available",
     "evaluate_trajectory",
     "open_source",
     "read_tum_trajectory",
+    "set_cpu_threads",
     "write_tum_trajectory",
 ]
