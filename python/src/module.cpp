@@ -20,6 +20,6 @@ PYBIND11_MODULE(_voxfuse, m) {
           "How many threads the library's CPU loops run on: set_cpu_threads(n), else the environment's\n"
           "VOXFUSE_NUM_THREADS or OMP_NUM_THREADS, else the CPUs this process may use.");
     m.def("set_cpu_threads", &voxfuse::setCpuThreadCount, pybind11::arg("threads"),
-          "Sets how many threads the library's CPU loops run on, from the next loop on; 0 returns to the\n"
-          "default (see cpu_threads). Results do not depend on it.");
+          "Sets how many threads (1 to 4096) the library's CPU loops run on, from the next loop on; 0 returns\n"
+          "to the default (see cpu_threads); any other number raises ConfigError. Results do not depend on it.");
 }

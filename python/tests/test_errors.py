@@ -123,3 +123,9 @@ def test_a_pipeline_busy_in_another_thread_says_so(room_frames):
     t.join()
     assert refused > 0, "calls while a frame is processed are refused, not run alongside it"
     assert p.frames_processed == 4
+
+
+def test_a_thread_count_out_of_range_is_refused():
+    with pytest.raises(voxfuse.ConfigError, match="thread count"):
+        voxfuse.set_cpu_threads(-1)
+    assert voxfuse.cpu_threads() >= 1

@@ -16,7 +16,6 @@
 #include <condition_variable>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -28,10 +27,14 @@
 #include <sched.h>
 #endif
 
+#include "voxfuse/core/Error.h"
+
 namespace voxfuse {
 namespace {
 
 using cpu_threads_detail::TaskFunction;
+
+constexpr int kMostThreads = 4096;
 
 inline void cpuRelax() {
 #if defined(__x86_64__) || defined(__i386__)
@@ -159,8 +162,8 @@ int positiveFromEnvironment(const char* name) {
     if (text == nullptr || *text == '\0') return 0;
     char* end = nullptr;
     const long value = std::strtol(text, &end, 10);
-    if (end != text && (*end == '\0' || *end == ',') && value > 0 && value <= 4096) return int(value);
-    std::fprintf(stderr, "voxfuse: ignoring %s=\"%s\": not a thread count from 1 to 4096\n", name, text);
+    if (end != text && (*end == '\0' || *end == ',') && value > 0 && value <= kMostThreads) return int(value);
+    std::fprintf(stderr, "voxfuse: ignoring %s=\"%s\": not a thread count from 1 to %d\n", name, text, kMostThreads);
     return 0;
 }
 
@@ -222,7 +225,11 @@ int cpuThreadCount() {
     return requested > 0 ? requested : t.default_count;
 }
 
-void setCpuThreadCount(int count) { threads().requested.store(count > 0 ? count : 0, std::memory_order_relaxed); }
+void setCpuThreadCount(int count) {
+    if (count < 0 || count > kMostThreads)
+        throw ConfigError("setCpuThreadCount: " + std::to_string(count) + " is not a thread count from 1 to " + std::to_string(kMostThreads) + " (or 0, the default)");
+    threads().requested.store(count, std::memory_order_relaxed);
+}
 
 namespace cpu_threads_detail {
 

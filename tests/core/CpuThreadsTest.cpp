@@ -13,9 +13,10 @@
 #include <chrono>
 #include <csignal>
 #include <mutex>
-#include <set>
 #include <thread>
 #include <vector>
+
+#include "voxfuse/core/Error.h"
 
 namespace voxfuse {
 namespace {
@@ -30,7 +31,10 @@ TEST(CpuThreads, TheCountFollowsTheSetting) {
     EXPECT_GE(cpuThreadCount(), 1);
     setCpuThreadCount(3);
     EXPECT_EQ(cpuThreadCount(), 3);
-    setCpuThreadCount(-2);  // not a count: the default
+    EXPECT_THROW(setCpuThreadCount(-2), ConfigError);
+    EXPECT_THROW(setCpuThreadCount(5000), ConfigError);
+    EXPECT_EQ(cpuThreadCount(), 3);  // unchanged by the refused counts
+    setCpuThreadCount(0);
     EXPECT_GE(cpuThreadCount(), 1);
 }
 

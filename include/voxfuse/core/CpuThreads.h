@@ -22,7 +22,8 @@ namespace voxfuse {
 // How many threads a CPU loop runs on (at least 1).
 int cpuThreadCount();
 
-// Sets that count for the whole process; 0 returns to the default above. Takes effect at the next loop.
+// Sets that count for the whole process, from 1 to 4096; 0 returns to the default above. Takes effect
+// at the next loop. Throws ConfigError for any other number.
 void setCpuThreadCount(int threads);
 
 namespace cpu_threads_detail {
