@@ -24,6 +24,7 @@
 #include <atomic>
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <vector>
 
 #include "core/DeviceScratch.h"
@@ -113,24 +114,6 @@ VF_CPU_CLONES NormalEquations<double> sumTermShare(const Terms& terms, RobustKer
     return sums;
 }
 
-// Folds [0, n) in equal shares of at least 4096 elements, each share from `init` (add_share(begin, end,
-// value)), and combines the shares' values with `init` in share order; `init` must be what `combine`
-// leaves unchanged or absorbs (0 for a sum, the start for a maximum).
-template <class T, class AddShare, class Combine>
-T reduceShares(int n, T init, const AddShare& add_share, const Combine& combine) {
-    if (n <= 0) return init;
-    const int shares = std::max(1, std::min(4 * cpuThreadCount(), n / 4096));
-    std::vector<T> values(static_cast<std::size_t>(shares), init);
-    forEachCpuTask(shares, [&](int s) {
-        T value = init;
-        add_share(int((long long)n * s / shares), int((long long)n * (s + 1) / shares), value);
-        values[std::size_t(s)] = value;
-    });
-    T total = init;
-    for (const T& v : values) total = combine(total, v);
-    return total;
-}
-
 }  // namespace cpu_detail
 
 struct CpuDevice {
@@ -210,18 +193,30 @@ struct CpuDevice {
         return int(std::unique(keys, keys + n) - keys);
     }
 
+    // Counted per share of the elements (forEachCpuShare), the shares' counts added as they finish.
     template <class Pred>
     static int countIf(int n, const Pred& pred, DeviceScratch&) {
-        return cpu_detail::reduceShares(n, 0, [&](int begin, int end, int& count) {
-            for (int i = begin; i < end; ++i) count += pred(i) ? 1 : 0;
-        }, [](int a, int b) { return a + b; });
+        std::atomic<int> count{0};
+        forEachCpuShare(std::size_t(std::max(n, 0)), 4096, [&](std::size_t begin, std::size_t end) {
+            int c = 0;
+            for (int i = int(begin); i < int(end); ++i) c += pred(i) ? 1 : 0;
+            count.fetch_add(c, std::memory_order_relaxed);
+        });
+        return count.load();
     }
 
+    // The same for the largest value: the maximum does not depend on the order it is taken in.
     template <class Value>
     static float maxOf(int n, const Value& value, float init, DeviceScratch&) {
-        return cpu_detail::reduceShares(n, init, [&](int begin, int end, float& best) {
-            for (int i = begin; i < end; ++i) best = std::max(best, value(i));
-        }, [](float a, float b) { return std::max(a, b); });
+        std::mutex m;
+        float best = init;
+        forEachCpuShare(std::size_t(std::max(n, 0)), 4096, [&](std::size_t begin, std::size_t end) {
+            float share_best = init;
+            for (int i = int(begin); i < int(end); ++i) share_best = std::max(share_best, value(i));
+            const std::lock_guard<std::mutex> lock(m);
+            best = std::max(best, share_best);
+        });
+        return best;
     }
 
     // Partial sums over fixed shares of the terms, taken by whichever thread is free and added in share

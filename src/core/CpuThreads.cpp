@@ -155,21 +155,22 @@ private:
     std::condition_variable wake_;
 };
 
-// A positive whole number from the environment variable `name` (the first of a comma-separated list, as
-// OMP_NUM_THREADS allows), or 0 when it is unset; a value that is not one is reported once and ignored.
-int positiveFromEnvironment(const char* name) {
+// The whole number in the environment variable `name`, from `least` to `most`, or -1 when it is unset;
+// a value that is not one is reported (once: the state that reads it is made once) and ignored. With
+// `list`, the first of a comma-separated list, as OMP_NUM_THREADS allows.
+long numberFromEnvironment(const char* name, long least, long most, const char* what, bool list = false) {
     const char* text = std::getenv(name);
-    if (text == nullptr || *text == '\0') return 0;
+    if (text == nullptr || *text == '\0') return -1;
     char* end = nullptr;
     const long value = std::strtol(text, &end, 10);
-    if (end != text && (*end == '\0' || *end == ',') && value > 0 && value <= kMostThreads) return int(value);
-    std::fprintf(stderr, "voxfuse: ignoring %s=\"%s\": not a thread count from 1 to %d\n", name, text, kMostThreads);
-    return 0;
+    if (end != text && (*end == '\0' || (list && *end == ',')) && value >= least && value <= most) return value;
+    std::fprintf(stderr, "voxfuse: ignoring %s=\"%s\": not %s from %ld to %ld\n", name, text, what, least, most);
+    return -1;
 }
 
 int defaultThreadCount() {
-    if (const int n = positiveFromEnvironment("VOXFUSE_NUM_THREADS")) return n;
-    if (const int n = positiveFromEnvironment("OMP_NUM_THREADS")) return n;
+    for (const char* name : {"VOXFUSE_NUM_THREADS", "OMP_NUM_THREADS"})
+        if (const long n = numberFromEnvironment(name, 1, kMostThreads, "a thread count", true); n > 0) return int(n);
 #if defined(__linux__)
     cpu_set_t allowed;
     if (sched_getaffinity(0, sizeof(allowed), &allowed) == 0 && CPU_COUNT(&allowed) > 0) return CPU_COUNT(&allowed);
@@ -177,17 +178,11 @@ int defaultThreadCount() {
     return std::max(1u, std::thread::hardware_concurrency());
 }
 
-// How long idle workers spin before they sleep. Measured on teddy (2 cores): see DESIGN_NOTES,
-// "CPU threads that sleep".
+// How long idle workers spin before they sleep: 50 us unless VOXFUSE_SPIN_US says otherwise. Measured
+// on teddy (2 cores): see DESIGN_NOTES, "CPU threads that sleep".
 std::chrono::microseconds spinTime() {
-    const char* text = std::getenv("VOXFUSE_SPIN_US");
-    if (text != nullptr && *text != '\0') {
-        char* end = nullptr;
-        const long us = std::strtol(text, &end, 10);
-        if (end != text && *end == '\0' && us >= 0 && us <= 1000000) return std::chrono::microseconds(us);
-        std::fprintf(stderr, "voxfuse: ignoring VOXFUSE_SPIN_US=\"%s\": not a number of microseconds from 0 to 1000000\n", text);
-    }
-    return std::chrono::microseconds(50);
+    const long us = numberFromEnvironment("VOXFUSE_SPIN_US", 0, 1000000, "a number of microseconds");
+    return std::chrono::microseconds(us >= 0 ? us : 50);
 }
 
 struct Threads {
