@@ -159,7 +159,7 @@ def cases():
         "--skip": ["-1"],
         "--render-every": ["-1", "99999999999"],
         "--active-blocks": ["0", "-5"],
-        "--max-blocks": ["0", "999999999"],
+        "--max-blocks": ["-1", "999999999"],
         "--hash-buckets": ["0", "-1"],
         "--hash-excess": ["-1"],
         "--tracker-iterations": ["0", "100000", "x"],
@@ -204,6 +204,9 @@ def cases():
     combo("labels with a voxel type without classes", ["--voxel", "s", "--labels", "{tum}/labels.txt"], "--labels")
     combo("swapping with the dense index", ["--swap", "--index", "dense"], "hash index")
     combo("the GPU on a machine without one", ["--device", "cuda"], "CUDA")
+    # A map that fills up runs on, and says so when it happens (not only in the summary at the end).
+    c.append(Case("combination", "a map too small for the scene", base + ["--max-blocks", "50"],
+                  ["warning: frame", "the map holds 50 voxel blocks", "--swap"], ok_exit=True))
     c.append(Case("combination", "--frames 0 without a map", [TUM, "--frames", "0", "--out", OUT], ["--frames 0", "--load-map"]))
     c.append(Case("combination", "a map with another voxel type asked for", ["--load-map", "{map}", "--voxel", "f", "--frames", "0",
                                                                                "--out", OUT], ["--voxel", "'s' voxels"]))

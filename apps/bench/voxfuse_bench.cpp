@@ -189,7 +189,7 @@ int main(int argc, char** argv) {
         if (occupancy_settings.resolution_m > 0.f) occupancy = std::make_unique<OccupancyMapper>(occupancy_settings);
         app::RunRecord record;
         record.source = source->description();
-        record.settings = s;
+        record.settings = engine->settings();
         record.tracked = poses == "track";
         app::SequenceRunner runner(*source, *engine, record.tracked ? app::PoseSource::Tracker : app::PoseSource::GroundTruth, record);
         // Per pyramid level of the tracker, coarse to fine: "track L0 160x120", ...

@@ -54,10 +54,32 @@ bool SequenceRunner::step() {
         fr.index = frame_.index;
         fr.timestamp_s = frame_.timestamp_s;
         fr.result = engine_.processFrame(frame_, given);
+        reportFullMap(fr.result);
         record_.frames.push_back(fr);
         // A lost frame has no pose (it holds the last good one): the trajectory leaves it out.
         if (fr.result.status != TrackingStatus::Lost) record_.trajectory.push_back({frame_.timestamp_s, fr.result.T_world_camera});
         return true;
+    }
+}
+
+// Said when it happens: from then on the parts of the scene the map has no room for are not fused,
+// and tracking against a model with holes may fail. Each cause once.
+void SequenceRunner::reportFullMap(const FrameResult& result) {
+    const AllocationStats& a = result.allocation;
+    const std::string frame = "voxfuse: warning: frame " + std::to_string(frame_.index) + ": ";
+    const std::string effect = " of the blocks this frame's depth needs could not be allocated; what they hold is not fused (nor, from "
+                               "now on, anything else the map has no room for) and tracking may fail. ";
+    if (a.failures_blocks_full_this_frame > 0 && !reported_blocks_full_) {
+        reported_blocks_full_ = true;
+        std::cerr << "\n" << frame << "the map holds " << engine_.settings().hash.max_block_count << " voxel blocks, its most: "
+                  << a.failures_blocks_full_this_frame << effect
+                  << (engine_.settings().swap.enabled ? "Give swapping more active blocks (--active-blocks) or use larger voxels (--voxel-size).\n"
+                                                      : "Use swapping (--swap), a larger --max-blocks or larger voxels (--voxel-size).\n");
+    }
+    if (a.failures_hash_full_this_frame > 0 && !reported_hash_full_) {
+        reported_hash_full_ = true;
+        std::cerr << "\n" << frame << "the hash table is full: " << a.failures_hash_full_this_frame << effect
+                  << "Use more --hash-buckets and --hash-excess, or larger voxels (--voxel-size).\n";
     }
 }
 

@@ -2,7 +2,8 @@
 // Drives a MainEngine over an ImageSource one frame at a time, the way every front-end needs it:
 // unreadable frames are reported and skipped, ground-truth poses are re-expressed relative to the
 // first one (the first camera defines the world, as with tracking; a map the engine loaded keeps its
-// own world), and each frame's result is recorded.
+// own world), and each frame's result is recorded. The first frame that finds the hash map full is
+// reported on stderr (the summary only counts the blocks that could not be allocated, at the end).
 
 #include <functional>
 #include <string>
@@ -31,6 +32,8 @@ public:
     const FrameRecord& lastRecord() const { return record_.frames.back(); }
 
 private:
+    void reportFullMap(const FrameResult& result);
+
     ImageSource& source_;
     MainEngine& engine_;
     PoseSource poses_;
@@ -38,6 +41,7 @@ private:
     RGBDFrame frame_;
     bool have_origin_ = false;
     Mat4f T_origin_world_ = Mat4f::identity();
+    bool reported_blocks_full_ = false, reported_hash_full_ = false;
 };
 
 }  // namespace voxfuse::app

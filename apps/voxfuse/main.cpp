@@ -265,7 +265,7 @@ int runOnMapAlone(CliOptions& o, const MapFileInfo& map) {
     engine->loadMap(o.load_map);
     app::RunRecord record;
     record.source = "map " + o.load_map + " (no frames)";
-    record.settings = s;
+    record.settings = engine->settings();
     record.map_loaded = o.load_map;
     saveRenders(*engine, out, "map");
     writeMapOutputs(*engine, o, out);
@@ -328,7 +328,7 @@ int run(CliOptions& o) {
 
     record.source = source->description();
     record.has_labels = labels != nullptr;
-    record.settings = s;
+    record.settings = engine->settings();
     record.tracked = o.poses == "track";
     app::SequenceRunner runner(*source, *engine, record.tracked ? app::PoseSource::Tracker : app::PoseSource::GroundTruth, record);
     const int total = o.max_frames >= 0 && (source->frameCount() < 0 || o.max_frames < source->frameCount()) ? o.max_frames
@@ -437,8 +437,10 @@ int main(int argc, char** argv) {
         ->capture_default_str()->check(app::floatIn(0.0, 0.5));
     app::addVoxelAndLabelOptions(cli, o.labels, "s_rgb");
     cli.add_option("--index", o.index, "voxel index")->capture_default_str()->check(CLI::IsMember({"dense", "hash"}));
-    cli.add_option("--max-blocks", o.engine.hash.max_block_count, "hash: most 8^3 voxel blocks (memory grows on demand up to this)")
-        ->capture_default_str()->check(app::intIn(1, 1 << 22));
+    cli.add_option("--max-blocks", o.engine.hash.max_block_count,
+                   "hash: most 8^3 voxel blocks (memory grows on demand up to this); 0 = automatic: on the CPU as many as the hash has "
+                   "entries and 3/4 of the free memory holds, on the GPU 262144")
+        ->capture_default_str()->check(app::intIn(0, 1 << 22));
     cli.add_option("--hash-buckets", o.engine.hash.bucket_count, "hash: number of ordered buckets")->capture_default_str()->check(app::positiveInt());
     cli.add_option("--hash-excess", o.engine.hash.excess_entry_count, "hash: entries in the excess list")->capture_default_str()->check(app::nonNegativeInt());
     cli.add_option("--volume-size", o.dense_size, "dense volume size in voxels (x y z)")->expected(3)->capture_default_str()->check(app::intIn(1, 1 << 16));

@@ -24,7 +24,7 @@ struct PipelineSettings {
     float min_depth = SceneParams{}.view_frustum_min_m;
     float max_depth = SceneParams{}.view_frustum_max_m;
     float depth_gap_tolerance = MainEngineSettings{}.depth_gap_tolerance;
-    int max_blocks = VoxelBlockHashSettings{}.max_block_count;
+    int max_blocks = kAutomaticBlockCount;  // 0: the engine chooses (automaticMaxBlockCount)
     int hash_buckets = VoxelBlockHashSettings{}.bucket_count;
     int hash_excess = VoxelBlockHashSettings{}.excess_entry_count;
     std::vector<int> volume_size{512, 512, 512};

@@ -550,15 +550,15 @@ std::string gib(double bytes) {
     return text;
 }
 
-// What the kernel says it could give this process now, in bytes: MemAvailable plus free swap
-// (Linux); 0 when unknown.
-double availableHostBytes() {
+// What the kernel says it could give this process now, in bytes: MemAvailable, plus free swap with
+// `with_swap` (Linux); 0 when unknown.
+double availableHostBytes(bool with_swap) {
     std::ifstream meminfo("/proc/meminfo");
     std::string key;
     double kb = 0.0, total_kb = 0.0;
     int found = 0;
     while (meminfo >> key >> kb) {
-        if (key == "MemAvailable:" || key == "SwapFree:") {
+        if (key == "MemAvailable:" || (with_swap && key == "SwapFree:")) {
             total_kb += kb;
             ++found;
         }
@@ -612,7 +612,27 @@ void validateDenseVolume(const MainEngineSettings& s) {
 
 }  // namespace
 
-std::unique_ptr<MainEngine> MainEngine::create(const MainEngineSettings& s, const RGBDCalib& calib) {
+int automaticMaxBlockCount(Device device, std::size_t voxel_bytes, const VoxelBlockHashSettings& hash, double available_ram_bytes) {
+    constexpr int kDesignBlocks = 1 << 18, kMostBlocks = 1 << 22;
+    if (device != Device::CPU || !(available_ram_bytes > 0.0)) return kDesignBlocks;
+    const long long entries = (long long)hash.bucket_count * hash.entries_per_bucket + hash.excess_entry_count;
+    // Per block: its voxels, and its places in the free stack and the visible list.
+    const double block_bytes = double(voxel_bytes) * kBlockVoxelCount + 2.0 * sizeof(int);
+    VoxelBlockHashSettings tables = hash;
+    tables.max_block_count = 0;
+    const double for_blocks = 0.75 * available_ram_bytes - double(VoxelBlockHash::tableBytesFor(tables));
+    // In steps of 2^16 blocks, so that runs on one machine choose the same ceiling (map headers hold it)
+    // while the free memory drifts a little between them.
+    constexpr long long kStep = 1 << 16;
+    const long long by_memory = for_blocks > 0.0 ? (long long)(for_blocks / block_bytes) : 0;
+    const long long stepped = by_memory >= kStep ? by_memory / kStep * kStep : by_memory;
+    return int(std::max<long long>(1, std::min<long long>({entries, kMostBlocks, stepped})));
+}
+
+std::unique_ptr<MainEngine> MainEngine::create(const MainEngineSettings& requested, const RGBDCalib& calib) {
+    MainEngineSettings s = requested;
+    if (s.index_type == IndexType::Hash && s.hash.max_block_count == kAutomaticBlockCount)
+        s.hash.max_block_count = automaticMaxBlockCount(s.device, voxelBytes(s.voxel_type), s.hash, availableHostBytes(false));
     if (!calib.depth.valid()) throw ConfigError("the depth camera calibration is missing or invalid");
     if (!(s.scene.voxel_size_m > 0.f && std::isfinite(s.scene.voxel_size_m)) || !(s.scene.mu_m > s.scene.voxel_size_m && std::isfinite(s.scene.mu_m)))
         throw ConfigError("need voxel size > 0 and mu > voxel size, both finite (got voxel " + std::to_string(s.scene.voxel_size_m) +
@@ -631,7 +651,7 @@ std::unique_ptr<MainEngine> MainEngine::create(const MainEngineSettings& s, cons
         throw DeviceError("CUDA was requested but is not usable: " + device_memory::cudaDescription());
     // Said before the allocation, which would otherwise fail as a bare std::bad_alloc (or, with the
     // kernel's overcommit, kill the process when the memory is first touched).
-    const double needed = indexBytes(s), available = availableHostBytes();
+    const double needed = indexBytes(s), available = availableHostBytes(true);
     if (s.device == Device::CPU && available > 0.0 && needed > available)
         throw ConfigError(indexDescription(s) + " needs " + gib(needed) + " of memory; this machine has " + gib(available) +
                           " available: " + indexRemedy(s));

@@ -105,6 +105,56 @@ TEST(MainEngineCreate, AHashTableLargerThanMemorySaysWhatToChange) {
     EXPECT_NE(message.find("--hash-buckets"), std::string::npos) << message;
 }
 
+// The automatic block ceiling: the table's entries and the free memory on the CPU, DESIGN.md's 2^18 on
+// the GPU and where the free memory is unknown.
+TEST(AutomaticBlockCeiling, FollowsTheTableAndTheFreeMemoryOnTheCpu) {
+    constexpr double kGiB = double(1ull << 30);
+    const VoxelBlockHashSettings design;  // 2^20 buckets + 2^17 excess entries
+    const int entries = design.bucket_count * design.entries_per_bucket + design.excess_entry_count;
+    const std::size_t srgb = sizeof(VoxelSRgb);
+    EXPECT_EQ(automaticMaxBlockCount(Device::CPU, srgb, design, 64 * kGiB), entries);  // every entry can have its block
+    EXPECT_EQ(automaticMaxBlockCount(Device::CUDA, srgb, design, 64 * kGiB), 1 << 18);
+    EXPECT_EQ(automaticMaxBlockCount(Device::CPU, srgb, design, 0.0), 1 << 18);  // free memory unknown
+
+    VoxelBlockHashSettings small = design;
+    small.bucket_count = 4096;
+    small.excess_entry_count = 1024;
+    EXPECT_EQ(automaticMaxBlockCount(Device::CPU, srgb, small, 64 * kGiB), 5120);
+
+    VoxelBlockHashSettings huge = design;
+    huge.bucket_count = 1 << 24;
+    EXPECT_EQ(automaticMaxBlockCount(Device::CPU, sizeof(VoxelS), huge, 1024 * kGiB), 1 << 22);  // voxel offsets stay ints
+
+    // 2 GiB free: the blocks and the tables fill three quarters of it, not more.
+    const double free_bytes = 2 * kGiB;
+    const int n = automaticMaxBlockCount(Device::CPU, srgb, design, free_bytes);
+    VoxelBlockHashSettings with_n = design;
+    with_n.max_block_count = n;
+    const double used = double(VoxelBlockHash::tableBytesFor(with_n)) + double(n) * double(srgb * kBlockVoxelCount);
+    EXPECT_LE(used, 0.75 * free_bytes);
+    EXPECT_GT(used + double(1 << 16) * double(srgb * kBlockVoxelCount + 2 * sizeof(int)), 0.75 * free_bytes);
+    EXPECT_EQ(n % (1 << 16), 0) << "in steps of 2^16 blocks: the same on one machine from run to run";
+    EXPECT_LT(n, entries);
+    // Larger voxels, fewer blocks; no memory beside the tables, still one block.
+    EXPECT_LT(automaticMaxBlockCount(Device::CPU, sizeof(VoxelFRgb), design, free_bytes), n);
+    EXPECT_EQ(automaticMaxBlockCount(Device::CPU, srgb, design, 1024.0), 1);
+}
+
+TEST(MainEngineCreate, TheEngineSettingsHoldTheCeilingItChose) {
+    MainEngineSettings s;
+    ASSERT_EQ(s.hash.max_block_count, kAutomaticBlockCount);
+    s.hash.bucket_count = 4096;
+    s.hash.excess_entry_count = 1024;
+    EXPECT_EQ(MainEngine::create(s, smallCalib())->settings().hash.max_block_count, 5120);
+    s.device = Device::CPU;
+    s.hash.max_block_count = 77;  // asked for: kept
+    EXPECT_EQ(MainEngine::create(s, smallCalib())->settings().hash.max_block_count, 77);
+    s.index_type = IndexType::Dense;
+    s.hash.max_block_count = kAutomaticBlockCount;  // the dense index has no hash to size
+    s.dense_size = {16, 16, 16};
+    EXPECT_EQ(MainEngine::create(s, smallCalib())->settings().hash.max_block_count, kAutomaticBlockCount);
+}
+
 // All-zero depth: nothing to track or fuse. The tracker must not call such a frame good, neither the
 // first frame (no map yet) nor a later one.
 TEST(EmptyDepthFrame, IsNeverReportedAsWellTracked) {

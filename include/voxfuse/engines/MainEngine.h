@@ -36,6 +36,13 @@ struct SwapSettings {
     int blocks_per_frame = 4096;    // blocks moved each way per frame at most (the transfer buffers' size)
 };
 
+// DESIGN.md's hash tables with the block ceiling left to the engine (kAutomaticBlockCount).
+inline VoxelBlockHashSettings hashWithAutomaticBlockCount() {
+    VoxelBlockHashSettings s;
+    s.max_block_count = kAutomaticBlockCount;
+    return s;
+}
+
 struct MainEngineSettings {
     SceneParams scene;
     VoxelType voxel_type = VoxelType::S;
@@ -47,8 +54,9 @@ struct MainEngineSettings {
     // Dense index: the box of voxels (grid units; the first camera looks along +z from the origin).
     Vec3i dense_offset{-256, -256, 0};
     Vec3i dense_size{512, 512, 512};
-    // Hash index: table sizes and the most voxel blocks it may hold (memory grows on demand).
-    VoxelBlockHashSettings hash;
+    // Hash index: table sizes and the most voxel blocks it may hold (memory grows on demand up to
+    // it). The default ceiling, kAutomaticBlockCount, is chosen by create(): automaticMaxBlockCount().
+    VoxelBlockHashSettings hash = hashWithAutomaticBlockCount();
     // Blocks that never received an update go back to the free stack every this many frames (0 = never).
     int remove_empty_blocks_every = 10;
     // How the pose of each frame is estimated when none is given.
@@ -104,8 +112,19 @@ struct FrameResult {
     AllocationStats allocation;  // the index after this frame (all zero for the dense index)
 };
 
+// The block ceiling of a hash map whose settings ask for kAutomaticBlockCount. DESIGN.md's fixed 2^18
+// blocks (1 GiB of s_rgb voxels) ran out on long or large scans while most of a machine's memory lay
+// unused, and a map that cannot grow loses what the camera sees next, and then the camera.
+// - CPU: as many blocks as the table has entries (each block needs one), at most 2^22, and no more
+//   than three quarters of `available_ram_bytes` (free memory when the engine is made) holds beside
+//   the tables; 2^18 when the free memory is unknown (0). The array still grows only with the scene.
+// - GPU: 2^18. Its array is reallocated and copied as it grows, so a larger ceiling would need free
+//   device memory for both copies at once, and a failed device allocation ends the run.
+int automaticMaxBlockCount(Device device, std::size_t voxel_bytes, const VoxelBlockHashSettings& hash, double available_ram_bytes);
+
 class MainEngine {
 public:
+    // settings() then holds the settings as used: an automatic block ceiling is replaced by its value.
     static std::unique_ptr<MainEngine> create(const MainEngineSettings& settings, const RGBDCalib& calib);
     virtual ~MainEngine() = default;
 

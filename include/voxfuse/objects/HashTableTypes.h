@@ -43,12 +43,17 @@ constexpr std::uint8_t kEntryNotVisible = 0;
 constexpr std::uint8_t kEntrySeenThisFrame = 1;  // allocation stage 1 or 2 found the block in the depth
 constexpr std::uint8_t kEntryVisible = 2;        // in the visible list of the last allocation
 
+// MainEngineSettings::hash.max_block_count: the engine chooses the ceiling for its device and memory.
+constexpr int kAutomaticBlockCount = 0;
+
 // Sizes of the hash index. Defaults are those of DESIGN.md.
 struct VoxelBlockHashSettings {
     int bucket_count = 0x100000;       // buckets of the ordered table (any positive number; powers of two hash faster)
     int entries_per_bucket = 1;        // ordered entries per bucket: 1 or 2 (the report's buckets hold 2)
     int excess_entry_count = 0x20000;  // entries of the excess list shared by all buckets
-    int max_block_count = 1 << 18;     // voxel blocks the array may grow to (2^18 x 512 voxels), at most 2^22
+    // Voxel blocks the array may grow to (2^18 x 512 voxels), at most 2^22. MainEngineSettings starts
+    // from kAutomaticBlockCount instead: the engine then chooses (automaticMaxBlockCount in MainEngine.h).
+    int max_block_count = 1 << 18;
     // The voxel block array starts empty and grows by max(blocks_per_growth, a quarter of its size),
     // so a small scene costs little and growth copies each voxel about four times in all.
     int blocks_per_growth = 4096;      // 4096 blocks = 2M voxels
