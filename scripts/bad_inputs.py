@@ -150,6 +150,7 @@ def cases():
         "--cloud-voxel": ["nan", "0", "1e-12", "-1"],
         "--occupancy": ["nan", "0", "1e-9", "1e39"],
         "--tracker-max-distance": ["nan", "-1", "0"],
+        "--relocalise-max-speed": ["nan", "-1", "x"],
     }.items():
         for v in values:
             opt(option, v, v)

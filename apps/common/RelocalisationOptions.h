@@ -8,7 +8,8 @@
 
 namespace voxfuse::app {
 
-// --relocalise on|off and --relocalise-candidates N, written into `settings` (kept alive by the caller).
+// --relocalise on|off, --relocalise-candidates N and --relocalise-max-speed M, written into `settings`
+// (kept alive by the caller).
 inline void addRelocalisationOptions(CLI::App& cli, RelocalisationSettings& settings) {
     cli.add_option_function<std::string>(
            "--relocalise", [&settings](const std::string& mode) { settings.enabled = mode == "on"; },
@@ -16,6 +17,9 @@ inline void addRelocalisationOptions(CLI::App& cli, RelocalisationSettings& sett
         ->default_str(settings.enabled ? "on" : "off")->check(CLI::IsMember({"on", "off"}));
     cli.add_option("--relocalise-candidates", settings.candidates, "relocalisation: keyframes tried per lost frame, most alike first")
         ->capture_default_str()->check(app::intIn(1, 1000));
+    cli.add_option("--relocalise-max-speed", settings.max_speed_m_per_s,
+                   "relocalisation: m/s the camera may have moved since the last good frame; poses farther away are not taken (0: no limit)")
+        ->capture_default_str()->check(app::floatIn(0.0, 1e6));
 }
 
 }  // namespace voxfuse::app

@@ -130,6 +130,7 @@ public:
         } else {
             trackOrRelocalise(result);
         }
+        if (!lost_) last_pose_clock_ = FrameClock{view_.timestamp_s, view_.frame_index};
         result.tracking = tracking_;
         result.quality = tracking_.quality;
         result.T_world_camera = tracking_.T_world_camera;
@@ -335,22 +336,28 @@ private:
     }
 
     // Candidate poses for the frame: while lost, the last good pose first (after a short gap the camera
-    // is still near it), then those of the keyframes that look most like the frame. The first that
-    // passes acceptRelocalisation() becomes the frame's pose. Returns whether one did; if none did,
-    // tracking_ keeps the last good pose.
+    // is still near it), then those of the keyframes that look most like the frame and that the camera
+    // could have reached since (withinReach). The first that passes acceptRelocalisation() becomes the
+    // frame's pose. Returns whether one did; if none did, tracking_ keeps the last good pose.
     bool relocalise() {
         if (onGpu()) view_.depth.memory().updateHost();
         // The last good pose is tracked against the raycast from it, which the last good frame left.
-        if (lost_ && refineCandidate(tracking_.T_world_camera, &model_)) return true;
-        for (const KeyframeMatch& m : relocaliser_->lookUp(view_))
-            if (refineCandidate(relocaliser_->database().keyframe(m.keyframe).T_world_camera, nullptr)) return true;
+        const double elapsed_s = secondsBetween(last_pose_clock_, FrameClock{view_.timestamp_s, view_.frame_index});
+        if (lost_ && refineCandidate(tracking_.T_world_camera, &model_, elapsed_s)) return true;
+        for (const KeyframeMatch& m : relocaliser_->lookUp(view_)) {
+            const Mat4f& T_world_keyframe = relocaliser_->database().keyframe(m.keyframe).T_world_camera;
+            if (!withinReach(settings_.relocalisation, tracking_.T_world_camera, T_world_keyframe, elapsed_s)) continue;
+            if (refineCandidate(T_world_keyframe, nullptr, elapsed_s)) return true;
+        }
         return false;
     }
 
     // Refines a candidate by the tracker against the model raycast from it (`model`, or raycast here
     // when null), then once more against the raycast from the refined pose, and checks the result
-    // (Relocaliser.h). Takes it as the frame's tracking state when it passes.
-    bool refineCandidate(Mat4f T_world_start, const RenderState* model) {
+    // (Relocaliser.h), and that the camera could have got there from the last good pose in `elapsed_s`
+    // (the refinement may slide far from the candidate). Takes it as the frame's tracking state when
+    // it passes.
+    bool refineCandidate(Mat4f T_world_start, const RenderState* model, double elapsed_s) {
         TrackingState first;
         first.T_world_camera = T_world_start;
         if (!model) raycast_->raycast(scene_, view_.calib.depth, T_world_start, candidate_model_);
@@ -366,6 +373,7 @@ private:
         raycastDepth(candidate_model_, candidate_depth_);
         check.depth = compareDepth(view_.depth, candidate_depth_, settings_.relocalisation.agreement_tolerance_m);
         if (!acceptRelocalisation(settings_.relocalisation, check)) return false;
+        if (!withinReach(settings_.relocalisation, tracking_.T_world_camera, check.refined.T_world_camera, elapsed_s)) return false;
         tracking_ = check.refined;
         return true;
     }
@@ -387,6 +395,7 @@ private:
     void forgetKeyframes() {
         if (relocaliser_) relocaliser_->clear();
         lost_ = false;
+        last_pose_clock_ = FrameClock();
         frames_since_relocalisation_ = INT_MAX / 2;
     }
 
@@ -495,6 +504,7 @@ private:
     Mat4f T_source_world_ = Mat4f::identity();
     std::unique_ptr<Relocaliser> relocaliser_;  // with RelocalisationSettings::enabled
     bool lost_ = false;                         // the last frame had no pose; tracking_ holds the last good one
+    FrameClock last_pose_clock_;                // when the frame of that pose was taken (unknown after a reset or a loaded map)
     int frames_since_relocalisation_ = INT_MAX / 2;
     RenderState candidate_model_;               // the model raycast from a relocalisation candidate
     Image<float> candidate_depth_;

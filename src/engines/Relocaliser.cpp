@@ -32,9 +32,24 @@ bool acceptRelocalisation(const RelocalisationSettings& s, const RelocalisationC
            c.step_m <= s.max_refinement_step_m && c.step_deg <= s.max_refinement_step_deg;
 }
 
+double secondsBetween(FrameClock then, FrameClock now) {
+    constexpr double kAssumedFramesPerSecond = 30.0;
+    double seconds = -1.0;
+    if (then.timestamp_s > 0.0 && now.timestamp_s > 0.0) seconds = now.timestamp_s - then.timestamp_s;
+    else if (then.index >= 0 && now.index >= 0) seconds = double(now.index - then.index) / kAssumedFramesPerSecond;
+    return seconds > 0.0 ? seconds : -1.0;
+}
+
+bool withinReach(const RelocalisationSettings& s, const Mat4f& T_world_last, const Mat4f& T_world_candidate, double elapsed_s) {
+    if (!(s.max_speed_m_per_s > 0.f) || !(elapsed_s > 0.0)) return true;
+    const Vec3f d = T_world_candidate.translation() - T_world_last.translation();
+    return double(std::sqrt(dot(d, d))) <= double(s.max_speed_m_per_s) * elapsed_s;
+}
+
 Relocaliser::Relocaliser(const RelocalisationSettings& settings, Vec2i frame_size, Device device)
     : settings_(settings), frame_size_(frame_size), device_(device), database_(settings.max_keyframes) {
     if (settings.candidates < 1) throw ConfigError("relocalisation tries at least one keyframe per frame");
+    if (!(settings.max_speed_m_per_s >= 0.f)) throw ConfigError("the relocalisation speed limit is a speed in m/s, 0 for none");
     if (!(settings.keyframe_min_dissimilarity >= 0.f && settings.keyframe_min_dissimilarity <= 1.f))
         throw ConfigError("the keyframe dissimilarity threshold lies in [0, 1]");
     FernEncoder check(settings.ferns, frame_size, false);  // ConfigError now rather than at the first frame

@@ -20,14 +20,19 @@ class RelocalisationTest : public ::testing::TestWithParam<Device> {
 protected:
     void SetUp() override {
         VF_SKIP_IF_UNAVAILABLE(GetParam());
+        engine_ = makeEngine(RelocalisationSettings());
+    }
+
+    std::unique_ptr<MainEngine> makeEngine(const RelocalisationSettings& relocalisation) const {
         MainEngineSettings s;
         s.device = GetParam();
         s.voxel_type = VoxelType::S;
         s.scene = test::centimetreSceneParams(4.f);
+        s.relocalisation = relocalisation;
         RGBDCalib calib;
         calib.depth = calib.rgb = kCamera;
         calib.disparity = DisparityCalib::affine(0.001f);
-        engine_ = MainEngine::create(s, calib);
+        return MainEngine::create(s, calib);
     }
 
     // The room seen from the synthetic camera path at `path_frame` (30 per second, ~1 cm apart).
@@ -111,6 +116,26 @@ TEST_P(RelocalisationTest, LostAtAPlaceNeverSeenAndFoundAgainAtASeenOne) {
     EXPECT_TRUE(r.fused);
     for (std::size_t i = std::size_t(found) + 1; i < results_.size(); ++i)
         EXPECT_EQ(results_[i].status, TrackingStatus::Tracking) << "frame " << i << ": tracking goes on from the found pose";
+    expectNothingFusedWrongly(0.005f, 0.5f);
+}
+
+// The same way back, but at a speed limit the jump breaks: the frames come 1/30 s apart (no
+// timestamps), so within the five frames back the camera could have moved 0.1-0.17 m at 0.5 m/s, and
+// the seen place is 0.3-0.4 m from where tracking was lost. The keyframes there are no candidates,
+// and a nearer one that the refinement slides to the seen place is not taken either: the frames stay
+// lost and nothing is fused.
+TEST_P(RelocalisationTest, AKeyframeFartherThanTheCameraCouldHaveMovedIsNoCandidate) {
+    RelocalisationSettings slow;
+    slow.max_speed_m_per_s = 0.5f;
+    engine_ = makeEngine(slow);
+    walkTheFirstStretch();
+    for (int f = 480; f <= 492; f += 3) process(f);
+    const std::size_t back = results_.size();
+    for (int f = 22; f <= 34; f += 3) process(f);
+    for (std::size_t i = back; i < results_.size(); ++i) {
+        EXPECT_EQ(results_[i].status, TrackingStatus::Lost) << "frame " << i;
+        EXPECT_TRUE(results_[i].relocalisation_tried);
+    }
     expectNothingFusedWrongly(0.005f, 0.5f);
 }
 

@@ -85,6 +85,29 @@ TEST(RelocaliserTest, AnInlierRatioCollapseAfterGoodFramesLooksLost) {
     EXPECT_FALSE(r.looksLost(withInliers(0.3f)));
 }
 
+TEST(RelocaliserTest, TimeBetweenFramesComesFromTimestampsElseFromIndicesAt30Hz) {
+    EXPECT_DOUBLE_EQ(secondsBetween({100.0, 7}, {101.5, 8}), 1.5);  // a cut: the timestamps know, the indices do not
+    EXPECT_DOUBLE_EQ(secondsBetween({0.0, 10}, {0.0, 40}), 1.0);
+    EXPECT_DOUBLE_EQ(secondsBetween({100.0, 10}, {0.0, 40}), 1.0);  // only one timestamp: the indices
+    EXPECT_EQ(secondsBetween({}, {101.0, 3}), -1.0);                 // no earlier frame
+    EXPECT_EQ(secondsBetween({101.0, 5}, {100.0, 6}), -1.0);         // not later: unknown
+    EXPECT_EQ(secondsBetween({0.0, 6}, {0.0, 6}), -1.0);
+}
+
+TEST(RelocaliserTest, AKeyframeTheCameraCouldNotHaveReachedIsNoCandidate) {
+    RelocalisationSettings s;  // 9 m/s
+    const Mat4f last = Mat4f::identity();
+    Mat4f candidate = Mat4f::identity();
+    candidate.m[3] = 3.f;
+    candidate.m[11] = 4.f;  // 5 m away
+    EXPECT_FALSE(withinReach(s, last, candidate, 0.5));  // 4.5 m in half a second
+    EXPECT_TRUE(withinReach(s, last, candidate, 0.6));   // 5.4 m
+    EXPECT_TRUE(withinReach(s, last, last, 0.0001));
+    EXPECT_TRUE(withinReach(s, last, candidate, -1.0));  // time unknown: no limit
+    s.max_speed_m_per_s = 0.f;                           // no limit
+    EXPECT_TRUE(withinReach(s, last, candidate, 0.01));
+}
+
 TEST(RelocaliserTest, RejectsSettingsItCannotUse) {
     RelocalisationSettings s;
     s.candidates = 0;
@@ -98,6 +121,11 @@ TEST(RelocaliserTest, RejectsSettingsItCannotUse) {
     s = RelocalisationSettings();
     s.ferns.tests_per_fern = 0;
     EXPECT_THROW(Relocaliser(s, {640, 480}), ConfigError) << "checked when made, not at the first frame";
+    for (float speed : {-1.f, std::numeric_limits<float>::quiet_NaN()}) {
+        s = RelocalisationSettings();
+        s.max_speed_m_per_s = speed;
+        EXPECT_THROW(Relocaliser(s, {640, 480}), ConfigError) << speed;
+    }
 }
 
 }  // namespace

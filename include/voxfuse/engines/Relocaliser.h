@@ -28,6 +28,12 @@ struct RelocalisationSettings {
     float keyframe_min_dissimilarity = 0.2f;  // a frame this dissimilar from every keyframe becomes one
     int keyframe_pause_frames = 10;           // frames after a relocalisation that are not made keyframes (their pose is the least sure)
     int candidates = 3;                       // keyframes tried per lost frame, nearest codes first (the last good pose is tried too)
+    // A keyframe farther from the last good pose than this speed covers in the time since that frame is
+    // not a candidate, nor is a refined pose that far: the camera cannot be there, however alike the
+    // views (a corridor's repeating walls, a row of equal desks). 9 m/s is the tracker's own limit
+    // (max_motion_m, 0.3 m per frame, at 30 frames/s); hand-held and robot cameras move far slower.
+    // 0: no limit.
+    float max_speed_m_per_s = 9.f;
 
     // Acceptance (all must hold), measured after a second refinement from the refined pose against the
     // model raycast from there.
@@ -55,6 +61,18 @@ struct RelocalisationCheck {
     DepthAgreement depth;   // at the first refinement's pose, against the raycast from there
 };
 bool acceptRelocalisation(const RelocalisationSettings& settings, const RelocalisationCheck& check);
+
+// When a frame was taken: its timestamp (> 0) or, without one, its index (>= 0); neither: unknown.
+struct FrameClock {
+    double timestamp_s = 0.0;
+    int index = -1;
+};
+// Seconds from `then` to `now`: by timestamps when both have one, else by indices at 30 frames/s (the
+// rate of the cameras this field uses); -1 when unknown or not later.
+double secondsBetween(FrameClock then, FrameClock now);
+// Whether a camera at T_world_last `elapsed_s` ago (-1: unknown) may be at T_world_candidate now, at
+// settings.max_speed_m_per_s. Unknown times and a limit of 0 allow every candidate.
+bool withinReach(const RelocalisationSettings& settings, const Mat4f& T_world_last, const Mat4f& T_world_candidate, double elapsed_s);
 
 class Relocaliser {
 public:
