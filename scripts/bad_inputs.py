@@ -207,7 +207,7 @@ def cases():
     combo("the GPU on a machine without one", ["--device", "cuda"], "CUDA")
     # A map that fills up runs on, and says so when it happens (not only in the summary at the end).
     c.append(Case("combination", "a map too small for the scene", base + ["--max-blocks", "50"],
-                  ["warning: frame", "the map holds 50 voxel blocks", "--swap"], ok_exit=True))
+                  ["warning: frame", "the map is full (50 voxel blocks", "--swap"], ok_exit=True))
     c.append(Case("combination", "--frames 0 without a map", [TUM, "--frames", "0", "--out", OUT], ["--frames 0", "--load-map"]))
     c.append(Case("combination", "a map with another voxel type asked for", ["--load-map", "{map}", "--voxel", "f", "--frames", "0",
                                                                                "--out", OUT], ["--voxel", "'s' voxels"]))

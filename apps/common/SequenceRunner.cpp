@@ -71,14 +71,15 @@ void SequenceRunner::reportFullMap(const FrameResult& result) {
                                "now on, anything else the map has no room for) and tracking may fail. ";
     if (a.failures_blocks_full_this_frame > 0 && !reported_blocks_full_) {
         reported_blocks_full_ = true;
-        std::cerr << "\n" << frame << "the map holds " << engine_.settings().hash.max_block_count << " voxel blocks, its most: "
+        std::cerr << "\n" << frame << "the map is full (" << engine_.settings().hash.max_block_count << " voxel blocks, its most): "
                   << a.failures_blocks_full_this_frame << effect
                   << (engine_.settings().swap.enabled ? "Give swapping more active blocks (--active-blocks) or use larger voxels (--voxel-size).\n"
                                                       : "Use swapping (--swap), a larger --max-blocks or larger voxels (--voxel-size).\n");
     }
     if (a.failures_hash_full_this_frame > 0 && !reported_hash_full_) {
         reported_hash_full_ = true;
-        std::cerr << "\n" << frame << "the hash table is full: " << a.failures_hash_full_this_frame << effect
+        std::cerr << "\n" << frame << "the hash table is full (every bucket and excess entry taken): " << a.failures_hash_full_this_frame
+                  << effect
                   << "Use more --hash-buckets and --hash-excess, or larger voxels (--voxel-size).\n";
     }
 }
