@@ -6,24 +6,19 @@
 #include <algorithm>
 
 #include "PoseUpdate.h"
+#include "voxfuse/objects/FrameClock.h"
 
 namespace voxfuse {
 
 class MotionPredictor {
 public:
-    // When a frame was taken: its timestamp (> 0) or, without one, its index in frames (>= 0).
-    struct FrameTime {
-        double timestamp_s = 0.0;
-        int index = -1;
-    };
-
     // The pose to start from for a frame taken at `now`, the caller's pose being `T_given`: the last
     // motion, scaled to the time since the last frame, applied to `T_given`. No prediction (T_given
     // itself) unless T_given is the last recorded pose (nothing moved the camera in between: a reset, a
     // loaded map, a relocalisation), the last two recorded frames are different frames, and `now` is
     // later than the last one by at most kMaxGapRatio of their interval (after a longer gap the motion
     // is unknown; the same frame tracked again, as relocalisation does, has no motion to predict).
-    Eigen::Matrix4d predict(const Mat4f& T_given, FrameTime now) const {
+    Eigen::Matrix4d predict(const Mat4f& T_given, FrameClock now) const {
         const Eigen::Matrix4d given = pose::toEigenD(T_given);
         if (count_ < 2 || !std::equal(T_given.m, T_given.m + 16, last_f_.m)) return given;
         const double ratio = elapsedRatio(now);
@@ -38,7 +33,7 @@ public:
 
     // A frame tracked well at `now`, with the pose handed back to the caller. The same frame recorded
     // again (tracked once more from another start) replaces its pose.
-    void record(const Mat4f& T_world_camera, FrameTime now) {
+    void record(const Mat4f& T_world_camera, FrameClock now) {
         if (count_ == 0 || !sameFrame(now, last_time_)) {
             previous_ = last_;
             previous_time_ = last_time_;
@@ -55,11 +50,11 @@ public:
     static constexpr double kMaxGapRatio = 3.0;
 
 private:
-    static bool sameFrame(FrameTime a, FrameTime b) { return a.timestamp_s == b.timestamp_s && a.index == b.index; }
+    static bool sameFrame(FrameClock a, FrameClock b) { return a.timestamp_s == b.timestamp_s && a.index == b.index; }
 
     // (now - last) / (last - previous), in timestamps when all three have one, else in frame indices;
     // 0 when neither is known.
-    double elapsedRatio(FrameTime now) const {
+    double elapsedRatio(FrameClock now) const {
         if (now.timestamp_s > 0.0 && last_time_.timestamp_s > 0.0 && previous_time_.timestamp_s > 0.0) {
             const double interval = last_time_.timestamp_s - previous_time_.timestamp_s;
             return interval > 0.0 ? (now.timestamp_s - last_time_.timestamp_s) / interval : 0.0;
@@ -73,7 +68,7 @@ private:
 
     Eigen::Matrix4d previous_ = Eigen::Matrix4d::Identity(), last_ = Eigen::Matrix4d::Identity();
     Mat4f last_f_ = Mat4f::identity();
-    FrameTime previous_time_, last_time_;
+    FrameClock previous_time_, last_time_;
     int count_ = 0;
 };
 

@@ -11,6 +11,7 @@
 
 #include "voxfuse/engines/FernEncoder.h"
 #include "voxfuse/engines/KeyframeDatabase.h"
+#include "voxfuse/objects/FrameClock.h"
 #include "voxfuse/objects/TrackingState.h"
 #include "voxfuse/objects/View.h"
 
@@ -62,11 +63,6 @@ struct RelocalisationCheck {
 };
 bool acceptRelocalisation(const RelocalisationSettings& settings, const RelocalisationCheck& check);
 
-// When a frame was taken: its timestamp (> 0) or, without one, its index (>= 0); neither: unknown.
-struct FrameClock {
-    double timestamp_s = 0.0;
-    int index = -1;
-};
 // Seconds from `then` to `now`: by timestamps when both have one, else by indices at 30 frames/s (the
 // rate of the cameras this field uses); -1 when unknown or not later.
 double secondsBetween(FrameClock then, FrameClock now);
