@@ -156,6 +156,8 @@ void writeSummaryJson(const std::string& path, const RunRecord& run) {
     Json& settings = j["settings"];
     settings["voxel"] = toString(run.settings.voxel_type);
     settings["index"] = toString(run.settings.index_type);
+    // The ceiling the engine chose (or was given): the blocks this map could have grown to.
+    if (run.settings.index_type == IndexType::Hash) settings["max_blocks"] = run.settings.hash.max_block_count;
     settings["device"] = deviceName(run.settings.device);
     if (run.settings.device == Device::CUDA) settings["gpu"] = device_memory::cudaDescription();
     settings["voxel_size_m"] = double(run.settings.scene.voxel_size_m);
