@@ -66,17 +66,20 @@ bool SequenceRunner::step() {
 // and tracking against a model with holes may fail. Each cause once.
 void SequenceRunner::reportFullMap(const FrameResult& result) {
     const AllocationStats& a = result.allocation;
+    const bool blocks_full = a.failures_blocks_full_this_frame > 0 && !reported_blocks_full_;
+    const bool hash_full = a.failures_hash_full_this_frame > 0 && !reported_hash_full_;
+    if (!blocks_full && !hash_full) return;  // every frame comes here: no text made for nothing
     const std::string frame = "voxfuse: warning: frame " + std::to_string(frame_.index) + ": ";
     const std::string effect = " of the blocks this frame's depth needs could not be allocated; what they hold is not fused (nor, from "
                                "now on, anything else the map has no room for) and tracking may fail. ";
-    if (a.failures_blocks_full_this_frame > 0 && !reported_blocks_full_) {
+    if (blocks_full) {
         reported_blocks_full_ = true;
         std::cerr << "\n" << frame << "the map is full (" << engine_.settings().hash.max_block_count << " voxel blocks, its most): "
                   << a.failures_blocks_full_this_frame << effect
                   << (engine_.settings().swap.enabled ? "Give swapping more active blocks (--active-blocks) or use larger voxels (--voxel-size).\n"
                                                       : "Use swapping (--swap), a larger --max-blocks or larger voxels (--voxel-size).\n");
     }
-    if (a.failures_hash_full_this_frame > 0 && !reported_hash_full_) {
+    if (hash_full) {
         reported_hash_full_ = true;
         std::cerr << "\n" << frame << "the hash table is full (every bucket and excess entry taken): " << a.failures_hash_full_this_frame
                   << effect
