@@ -32,6 +32,9 @@ MainEngineSettings PipelineSettings::toEngineSettings() const {
     s.swap.blocks_per_frame = swap_blocks_per_frame;
     if (active_blocks < 0) throw ConfigError("active_blocks must not be negative");
     if (active_blocks > 0) s.hash.max_block_count = active_blocks;
+    s.relocalisation.enabled = relocalise;
+    s.relocalisation.candidates = relocalise_candidates;
+    s.relocalisation.max_speed_m_per_s = relocalise_max_speed;
     return s;
 }
 
@@ -57,7 +60,11 @@ FrameResult Pipeline::process(const RGBDFrame& frame, const Mat4f* T_world_camer
     fused_ += r.fused;
     failed_ += r.quality == TrackingQuality::Failed;
     poor_ += r.quality == TrackingQuality::Poor;
-    trajectory_.push_back({frame.timestamp_s, r.T_world_camera});
+    lost_ += r.status == TrackingStatus::Lost;
+    relocalisation_attempts_ += r.relocalisation_tried;
+    relocalisations_ += r.status == TrackingStatus::Relocalised;
+    // A lost frame holds the last good pose, not its own: like the CLI's trajectory, leave it out.
+    if (r.status != TrackingStatus::Lost) trajectory_.push_back({frame.timestamp_s, r.T_world_camera});
     for (const StageTime& st : r.stages) stage_times_[st.stage].ms.push_back(st.ms);
     stage_times_["total"].ms.push_back(r.total_ms);
     return r;
@@ -86,6 +93,7 @@ void Pipeline::reset() {
     trajectory_.clear();
     stage_times_.clear();
     frames_ = fused_ = failed_ = poor_ = 0;
+    lost_ = relocalisation_attempts_ = relocalisations_ = 0;
 }
 
 }  // namespace voxfuse::python

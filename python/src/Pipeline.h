@@ -39,6 +39,9 @@ struct PipelineSettings {
     int active_blocks = 0;
     std::string swap_file;
     int swap_blocks_per_frame = SwapSettings{}.blocks_per_frame;
+    bool relocalise = RelocalisationSettings{}.enabled;
+    int relocalise_candidates = RelocalisationSettings{}.candidates;
+    float relocalise_max_speed = RelocalisationSettings{}.max_speed_m_per_s;
 
     // The engine's settings; ConfigError naming the setting when one is not valid.
     MainEngineSettings toEngineSettings() const;
@@ -69,6 +72,9 @@ public:
     int framesFused() const { return fused_; }
     int framesFailed() const { return failed_; }
     int framesPoor() const { return poor_; }
+    int framesLost() const { return lost_; }
+    int relocalisationAttempts() const { return relocalisation_attempts_; }
+    int relocalisations() const { return relocalisations_; }
     RGBDFrame& frameBuffer() { return frame_; }
     void reset();
     // One call at a time: the GIL is released while the engine works, so another Python thread could
@@ -81,9 +87,10 @@ private:
     PipelineSettings settings_;
     std::unique_ptr<MainEngine> engine_;
     RGBDFrame frame_;  // reused: its images keep their memory between frames
-    std::vector<TimedPose> trajectory_;
+    std::vector<TimedPose> trajectory_;  // the frames with a pose: a lost frame has none (as the CLI's trajectory.txt)
     std::map<std::string, StageTimes> stage_times_;
     int frames_ = 0, fused_ = 0, failed_ = 0, poor_ = 0;
+    int lost_ = 0, relocalisation_attempts_ = 0, relocalisations_ = 0;
     std::mutex busy_;
     bool have_origin_ = false;
     Mat4f T_origin_world_ = Mat4f::identity();

@@ -201,6 +201,9 @@ py::dict summary(Pipeline& p) {
     d["frames_fused"] = p.framesFused();
     d["frames_failed"] = p.framesFailed();
     d["frames_poor"] = p.framesPoor();
+    d["frames_lost"] = p.framesLost();
+    d["relocalisation_attempts"] = p.relocalisationAttempts();
+    d["relocalisations"] = p.relocalisations();
     const auto total = p.stageTimes().find("total");
     const double total_median = total == p.stageTimes().end() ? std::nan("") : median(total->second.ms);
     d["median_frame_ms"] = total_median;
@@ -246,13 +249,20 @@ void bindPipeline(py::module_& m) {
         .def_readwrite("active_blocks", &PipelineSettings::active_blocks, "swapping: blocks the active voxel array holds at most (> 0 implies swap)")
         .def_readwrite("swap_file", &PipelineSettings::swap_file, "swapping: keep the swapped-out map in this file (implies swap)")
         .def_readwrite("swap_blocks_per_frame", &PipelineSettings::swap_blocks_per_frame, "swapping: blocks moved each way per frame at most")
+        .def_readwrite("relocalise", &PipelineSettings::relocalise,
+                       "once tracking is lost, find the camera again from keyframes (nothing is fused until then)")
+        .def_readwrite("relocalise_candidates", &PipelineSettings::relocalise_candidates,
+                       "relocalisation: keyframes tried per lost frame, most alike first")
+        .def_readwrite("relocalise_max_speed", &PipelineSettings::relocalise_max_speed,
+                       "relocalisation: m/s the camera may have moved since the last good frame; poses farther away are not taken (0: no limit)")
         .def("to_dict", [](const PipelineSettings& s) {
             py::dict d;
             py::object obj = py::cast(s);
             for (const char* name : {"voxel", "index", "device", "voxel_size", "mu", "max_weight", "min_depth", "max_depth",
                                      "depth_gap_tolerance", "max_blocks", "hash_buckets", "hash_excess", "volume_size", "volume_offset",
                                      "tracker", "tracker_config", "tracker_levels", "tracker_iterations", "tracker_max_distance",
-                                     "label_update", "swap", "active_blocks", "swap_file", "swap_blocks_per_frame"})
+                                     "label_update", "swap", "active_blocks", "swap_file", "swap_blocks_per_frame", "relocalise",
+                                     "relocalise_candidates", "relocalise_max_speed"})
                 d[name] = obj.attr(name);
             return d;
         }, "Every setting by name.")
@@ -264,6 +274,13 @@ void bindPipeline(py::module_& m) {
         .def_property_readonly("quality", [](const FrameOutcome& o) { return toString(o.result.quality); }, "'good', 'poor' or 'failed'.")
         .def_property_readonly("fused", [](const FrameOutcome& o) { return o.result.fused; },
                                "Whether the frame went into the map (a failed frame does not).")
+        .def_property_readonly("status", [](const FrameOutcome& o) { return toString(o.result.status); },
+                               "'tracking' (posed from the last frame, or given), 'lost' (no pose: the pose is the last good one,\n"
+                               "the frame was not fused and is not in the trajectory) or 'relocalised' (found again from keyframes).")
+        .def_property_readonly("relocalisation_tried", [](const FrameOutcome& o) { return o.result.relocalisation_tried; },
+                               "Whether the frame was looked up among the keyframes (tracking had failed or was lost).")
+        .def_property_readonly("keyframes", [](const FrameOutcome& o) { return o.result.keyframes; },
+                               "Keyframes the relocaliser holds after this frame.")
         .def_property_readonly("inlier_ratio", [](const FrameOutcome& o) { return o.result.tracking.inlier_ratio; })
         .def_property_readonly("residual", [](const FrameOutcome& o) { return o.result.tracking.residual_m; },
                                "RMS point-to-plane residual of the inliers (m; colour tracker: intensity).")
@@ -276,7 +293,8 @@ void bindPipeline(py::module_& m) {
         .def_readonly("index", &FrameOutcome::index)
         .def_readonly("timestamp", &FrameOutcome::timestamp_s)
         .def("__repr__", [](const FrameOutcome& o) {
-            return "<voxfuse.FrameResult " + std::to_string(o.index) + ": " + toString(o.result.quality) + (o.result.fused ? ", fused" : "") + ">";
+            const std::string status = o.result.status == TrackingStatus::Tracking ? "" : std::string(", ") + toString(o.result.status);
+            return "<voxfuse.FrameResult " + std::to_string(o.index) + ": " + toString(o.result.quality) + status + (o.result.fused ? ", fused" : "") + ">";
         });
 
     py::class_<Pipeline>(m, "Pipeline",
@@ -398,12 +416,13 @@ void bindPipeline(py::module_& m) {
         .def_property_readonly("pose", [](Pipeline& p) { return matrixToArray(p.engine().trackingState().T_world_camera); },
                                "The current camera-to-world pose (4, 4).")
         .def_property_readonly("trajectory", [](const Pipeline& p) { return timedPosesToArrays(p.trajectory()); },
-                               "(timestamps (N,), camera-to-world poses (N, 4, 4)) of every processed frame.")
+                               "(timestamps (N,), camera-to-world poses (N, 4, 4)) of every processed frame that has a pose (lost frames have none).")
         .def_property_readonly("settings", [](const Pipeline& p) { return p.settings(); })
         .def_property_readonly("calib", [](const Pipeline& p) { return p.calib(); })
         .def_property_readonly("frames_processed", &Pipeline::framesProcessed)
         .def("timings", &timings, "Per stage: median and mean milliseconds over the frames so far, and the frame count.")
-        .def("summary", &summary, "The run so far as a dict: device, voxel and index, frames (fused, failed), timings, memory, blocks.")
+        .def("summary", &summary, "The run so far as a dict: device, voxel and index, frames (fused, failed, lost), relocalisation\n"
+             "attempts and successes, timings, memory, blocks.")
         .def("__repr__", [](Pipeline& p) {
             const MainEngineSettings& s = p.engine().settings();
             return std::string("<voxfuse.Pipeline ") + toString(s.voxel_type) + " " + toString(s.index_type) + " on " + deviceName(s.device) + ", " +

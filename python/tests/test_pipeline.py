@@ -99,3 +99,53 @@ def test_the_map_does_not_depend_on_the_cpu_thread_count(room_frames, tmp_path):
     assert voxfuse.cpu_threads() >= 1
     assert meshes[0][0] == meshes[1][0]
     np.testing.assert_array_equal(meshes[0][1], meshes[1][1])
+
+
+def run_with_covered_lens(source, frames, **settings):
+    """Frames 0-5 as recorded, 6-8 with no depth at all (a covered lens), then 9-11 as recorded."""
+    p = voxfuse.Pipeline(source.calib, voxel_size=0.01, **settings)
+    results = []
+    for i, f in enumerate(frames):
+        if 6 <= i <= 8:
+            results.append(p.process(np.zeros_like(f.depth), f.rgb, timestamp=f.timestamp))
+        else:
+            results.append(p.process_frame(f))
+    return p, results
+
+
+def test_a_covered_lens_is_lost_then_found_again(room_frames):
+    source, frames = room_frames
+    p, results = run_with_covered_lens(source, frames)
+    assert [r.status for r in results] == ["tracking"] * 6 + ["lost"] * 3 + ["relocalised"] + ["tracking"] * 2
+    for r in results[6:9]:
+        assert r.quality == "failed" and not r.fused
+        assert not r.relocalisation_tried  # a frame without depth is not worth the candidates
+        np.testing.assert_array_equal(r.pose, results[5].pose)  # the last good pose
+    assert results[9].relocalisation_tried and results[9].fused
+    assert results[0].keyframes == 1 and results[-1].keyframes >= 1
+    assert "relocalised" in repr(results[9]) and "lost" in repr(results[6])
+    s = p.summary()
+    assert (s["frames_lost"], s["relocalisation_attempts"], s["relocalisations"]) == (3, 1, 1)
+    # Lost frames have no pose of their own: the trajectory leaves them out, as the CLI's does.
+    t, poses = p.trajectory
+    np.testing.assert_array_equal(t, [f.timestamp for i, f in enumerate(frames) if not 6 <= i <= 8])
+    err = voxfuse.evaluate_trajectory(t, poses, *source.ground_truth)
+    assert err["pairs"] == 9 and err["ate_rmse_m"] < 0.005
+
+
+def test_without_relocalisation_tracking_resumes_from_the_last_good_pose(room_frames):
+    source, frames = room_frames
+    p, results = run_with_covered_lens(source, frames, relocalise=False)
+    assert [r.status for r in results] == ["tracking"] * 6 + ["lost"] * 3 + ["tracking"] * 3
+    assert not any(r.relocalisation_tried for r in results) and results[-1].keyframes == 0
+    s = p.summary()
+    assert (s["frames_lost"], s["relocalisation_attempts"], s["relocalisations"]) == (3, 0, 0)
+    assert p.settings.to_dict()["relocalise"] is False
+
+
+def test_relocalisation_settings_are_checked():
+    calib = voxfuse.open_source(str(SYNTHETIC_ROOM)).calib
+    with pytest.raises(voxfuse.ConfigError, match="at least one keyframe"):
+        voxfuse.Pipeline(calib, relocalise_candidates=0)
+    with pytest.raises(voxfuse.ConfigError, match="speed limit"):
+        voxfuse.Pipeline(calib, relocalise_max_speed=-1.0)
