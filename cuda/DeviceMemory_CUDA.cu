@@ -67,6 +67,15 @@ std::string cudaDescription() {
            std::to_string(prop.totalGlobalMem >> 20) + " MiB)";
 }
 
+std::size_t freeDeviceBytes() {
+    std::size_t free_bytes = 0, total_bytes = 0;
+    if (cudaMemGetInfo(&free_bytes, &total_bytes) != cudaSuccess) {
+        cudaGetLastError();  // no driver or device: the caller falls back to its default
+        return 0;
+    }
+    return free_bytes;
+}
+
 void* allocate(std::size_t bytes) {
     void* p = nullptr;
     VF_CUDA_CHECK(cudaMalloc(&p, bytes));

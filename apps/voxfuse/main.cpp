@@ -438,8 +438,8 @@ int main(int argc, char** argv) {
     app::addVoxelAndLabelOptions(cli, o.labels, "s_rgb");
     cli.add_option("--index", o.index, "voxel index")->capture_default_str()->check(CLI::IsMember({"dense", "hash"}));
     cli.add_option("--max-blocks", o.engine.hash.max_block_count,
-                   "hash: most 8^3 voxel blocks (memory grows on demand up to this); 0 = automatic: on the CPU as many as the hash has "
-                   "entries and 3/4 of the free memory holds, on the GPU 262144")
+                   "hash: most 8^3 voxel blocks (memory grows on demand up to this); 0 = automatic: as many as the hash has entries "
+                   "and 3/4 of the device's free memory holds (on the GPU with room for the copy a growth makes)")
         ->capture_default_str()->check(app::intIn(0, 1 << 22));
     cli.add_option("--hash-buckets", o.engine.hash.bucket_count, "hash: number of ordered buckets")->capture_default_str()->check(app::positiveInt());
     cli.add_option("--hash-excess", o.engine.hash.excess_entry_count, "hash: entries in the excess list")->capture_default_str()->check(app::nonNegativeInt());

@@ -234,7 +234,7 @@ void bindPipeline(py::module_& m) {
         .def_readwrite("max_depth", &PipelineSettings::max_depth, "depth beyond this (m) is ignored")
         .def_readwrite("depth_gap_tolerance", &PipelineSettings::depth_gap_tolerance,
                        "a pixel without depth between two neighbours agreeing within this fraction of their depth gets their mean (0 = never)")
-        .def_readwrite("max_blocks", &PipelineSettings::max_blocks, "hash: most 8^3 voxel blocks (memory grows on demand up to this); 0 = automatic (on the CPU as many as the hash has entries and 3/4 of the free memory holds; on the GPU 262144)")
+        .def_readwrite("max_blocks", &PipelineSettings::max_blocks, "hash: most 8^3 voxel blocks (memory grows on demand up to this); 0 = automatic (as many as the hash has entries and 3/4 of the device's free memory holds; on the GPU with room for the copy a growth makes)")
         .def_readwrite("hash_buckets", &PipelineSettings::hash_buckets, "hash: ordered buckets")
         .def_readwrite("hash_excess", &PipelineSettings::hash_excess, "hash: entries of the excess list")
         .def_readwrite("volume_size", &PipelineSettings::volume_size, "dense: the box's size in voxels [x, y, z]")

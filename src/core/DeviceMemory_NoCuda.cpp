@@ -15,6 +15,7 @@ namespace {
 bool builtWithCuda() { return false; }
 bool cudaAvailable() { return false; }
 std::string cudaDescription() { return "built without CUDA"; }
+std::size_t freeDeviceBytes() { return 0; }
 void* allocate(std::size_t) { noCuda(); }
 void release(void*) noexcept {}
 std::size_t bytesInUse() { return 0; }

@@ -622,15 +622,17 @@ void validateDenseVolume(const MainEngineSettings& s) {
 
 }  // namespace
 
-int automaticMaxBlockCount(Device device, std::size_t voxel_bytes, const VoxelBlockHashSettings& hash, double available_ram_bytes) {
+int automaticMaxBlockCount(Device device, std::size_t voxel_bytes, const VoxelBlockHashSettings& hash, double available_bytes) {
     constexpr int kDesignBlocks = 1 << 18, kMostBlocks = 1 << 22;
-    if (device != Device::CPU || !(available_ram_bytes > 0.0)) return kDesignBlocks;
+    if (!(available_bytes > 0.0)) return kDesignBlocks;
     const long long entries = (long long)hash.bucket_count * hash.entries_per_bucket + hash.excess_entry_count;
-    // Per block: its voxels, and its places in the free stack and the visible list.
-    const double block_bytes = double(voxel_bytes) * kBlockVoxelCount + 2.0 * sizeof(int);
+    // Per block: its voxels (twice on the GPU, whose growth holds the old array and the new one at
+    // once; the host array grows in place), and its places in the free stack and the visible list.
+    const double voxel_copies = device == Device::CUDA ? 2.0 : 1.0;
+    const double block_bytes = voxel_copies * double(voxel_bytes) * kBlockVoxelCount + 2.0 * sizeof(int);
     VoxelBlockHashSettings tables = hash;
     tables.max_block_count = 0;
-    const double for_blocks = 0.75 * available_ram_bytes - double(VoxelBlockHash::tableBytesFor(tables));
+    const double for_blocks = 0.75 * available_bytes - double(VoxelBlockHash::tableBytesFor(tables));
     // In steps of 2^16 blocks, so that runs on one machine choose the same ceiling (map headers hold it)
     // while the free memory drifts a little between them.
     constexpr long long kStep = 1 << 16;
@@ -642,7 +644,9 @@ int automaticMaxBlockCount(Device device, std::size_t voxel_bytes, const VoxelBl
 std::unique_ptr<MainEngine> MainEngine::create(const MainEngineSettings& requested, const RGBDCalib& calib) {
     MainEngineSettings s = requested;
     if (s.index_type == IndexType::Hash && s.hash.max_block_count == kAutomaticBlockCount)
-        s.hash.max_block_count = automaticMaxBlockCount(s.device, voxelBytes(s.voxel_type), s.hash, availableHostBytes(false));
+        s.hash.max_block_count = automaticMaxBlockCount(
+            s.device, voxelBytes(s.voxel_type), s.hash,
+            s.device == Device::CUDA ? double(device_memory::freeDeviceBytes()) : availableHostBytes(false));
     if (!calib.depth.valid()) throw ConfigError("the depth camera calibration is missing or invalid");
     if (!(s.scene.voxel_size_m > 0.f && std::isfinite(s.scene.voxel_size_m)) || !(s.scene.mu_m > s.scene.voxel_size_m && std::isfinite(s.scene.mu_m)))
         throw ConfigError("need voxel size > 0 and mu > voxel size, both finite (got voxel " + std::to_string(s.scene.voxel_size_m) +

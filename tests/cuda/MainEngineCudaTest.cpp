@@ -58,6 +58,28 @@ TEST_P(MainEngineCudaTest, TrackedRunMatchesTheCpuPipeline) {
     EXPECT_NEAR(double(mg.triangles.size()), double(mc.triangles.size()), 0.005 * double(mc.triangles.size()));
 }
 
+// The automatic block ceiling on the GPU asks the device for its free memory: a small table gets a
+// block for every entry, the default table more than DESIGN.md's 2^18 on a GPU with room for them.
+TEST(MainEngineCudaCeiling, FollowsTheTableAndTheGpusFreeMemory) {
+    VF_SKIP_IF_UNAVAILABLE(Device::CUDA);
+    RGBDCalib calib;
+    calib.depth = calib.rgb = test::kinectIntrinsics(64, 48);
+    calib.disparity = DisparityCalib::affine(0.001f);
+    MainEngineSettings s;
+    s.device = Device::CUDA;
+    s.hash.bucket_count = 4096;
+    s.hash.excess_entry_count = 1024;
+    EXPECT_EQ(MainEngine::create(s, calib)->settings().hash.max_block_count, 5120);
+    s.hash = MainEngineSettings{}.hash;
+    const double free_bytes = double(device_memory::freeDeviceBytes());
+    ASSERT_GT(free_bytes, 0.0);
+    const int chosen = MainEngine::create(s, calib)->settings().hash.max_block_count;
+    // Within a step of 2^16 blocks: the free memory may move between the two queries.
+    EXPECT_NEAR(chosen, automaticMaxBlockCount(Device::CUDA, sizeof(VoxelSRgb), s.hash, free_bytes), 1 << 16)
+        << "free memory " << free_bytes / double(1 << 20) << " MiB";
+    if (free_bytes > 8.0 * double(1ull << 30)) EXPECT_GT(chosen, 1 << 18);
+}
+
 INSTANTIATE_TEST_SUITE_P(Indexes, MainEngineCudaTest, ::testing::Values(IndexType::Hash, IndexType::Dense),
                          [](const auto& info) { return std::string(toString(info.param)); });
 

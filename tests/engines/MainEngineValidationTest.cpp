@@ -105,16 +105,17 @@ TEST(MainEngineCreate, AHashTableLargerThanMemorySaysWhatToChange) {
     EXPECT_NE(message.find("--hash-buckets"), std::string::npos) << message;
 }
 
-// The automatic block ceiling: the table's entries and the free memory on the CPU, DESIGN.md's 2^18 on
-// the GPU and where the free memory is unknown.
-TEST(AutomaticBlockCeiling, FollowsTheTableAndTheFreeMemoryOnTheCpu) {
+// The automatic block ceiling: the table's entries and the free memory of the map's device (on the GPU
+// with room for the two copies a growth holds), DESIGN.md's 2^18 where the free memory is unknown.
+TEST(AutomaticBlockCeiling, FollowsTheTableAndTheFreeMemoryOfItsDevice) {
     constexpr double kGiB = double(1ull << 30);
     const VoxelBlockHashSettings design;  // 2^20 buckets + 2^17 excess entries
     const int entries = design.bucket_count * design.entries_per_bucket + design.excess_entry_count;
     const std::size_t srgb = sizeof(VoxelSRgb);
     EXPECT_EQ(automaticMaxBlockCount(Device::CPU, srgb, design, 64 * kGiB), entries);  // every entry can have its block
-    EXPECT_EQ(automaticMaxBlockCount(Device::CUDA, srgb, design, 64 * kGiB), 1 << 18);
+    EXPECT_EQ(automaticMaxBlockCount(Device::CUDA, srgb, design, 64 * kGiB), entries);
     EXPECT_EQ(automaticMaxBlockCount(Device::CPU, srgb, design, 0.0), 1 << 18);  // free memory unknown
+    EXPECT_EQ(automaticMaxBlockCount(Device::CUDA, srgb, design, 0.0), 1 << 18);  // no GPU to ask
 
     VoxelBlockHashSettings small = design;
     small.bucket_count = 4096;
@@ -135,6 +136,15 @@ TEST(AutomaticBlockCeiling, FollowsTheTableAndTheFreeMemoryOnTheCpu) {
     EXPECT_GT(used + double(1 << 16) * double(srgb * kBlockVoxelCount + 2 * sizeof(int)), 0.75 * free_bytes);
     EXPECT_EQ(n % (1 << 16), 0) << "in steps of 2^16 blocks: the same on one machine from run to run";
     EXPECT_LT(n, entries);
+    // On the GPU a growth holds the old array and the new one: both fit in three quarters of the free
+    // memory beside the tables, and each block counts twice.
+    const int on_gpu = automaticMaxBlockCount(Device::CUDA, srgb, design, free_bytes);
+    with_n.max_block_count = on_gpu;
+    const double gpu_used = double(VoxelBlockHash::tableBytesFor(with_n)) + 2.0 * double(on_gpu) * double(srgb * kBlockVoxelCount);
+    EXPECT_LE(gpu_used, 0.75 * free_bytes);
+    EXPECT_EQ(on_gpu % (1 << 16), 0);
+    EXPECT_GE(on_gpu, n / 2 - (1 << 16));
+    EXPECT_LE(on_gpu, n / 2 + (1 << 16));
     // Larger voxels, fewer blocks; no memory beside the tables, still one block.
     EXPECT_LT(automaticMaxBlockCount(Device::CPU, sizeof(VoxelFRgb), design, free_bytes), n);
     EXPECT_EQ(automaticMaxBlockCount(Device::CPU, srgb, design, 1024.0), 1);

@@ -19,6 +19,8 @@ bool builtWithCuda();
 bool cudaAvailable();
 // A one-line description of the GPU (or why there is none), for logs and test skips.
 std::string cudaDescription();
+// Free memory of the current GPU now (cudaMemGetInfo), in bytes; 0 without a usable GPU. Never throws.
+std::size_t freeDeviceBytes();
 void* allocate(std::size_t bytes);
 void release(void* ptr) noexcept;
 // GPU memory VoxFuse holds through allocate(), now and at most since the last resetPeakBytes() (for

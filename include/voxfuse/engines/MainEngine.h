@@ -115,12 +115,13 @@ struct FrameResult {
 // The block ceiling of a hash map whose settings ask for kAutomaticBlockCount. DESIGN.md's fixed 2^18
 // blocks (1 GiB of s_rgb voxels) ran out on long or large scans while most of a machine's memory lay
 // unused, and a map that cannot grow loses what the camera sees next, and then the camera.
-// - CPU: as many blocks as the table has entries (each block needs one), at most 2^22, and no more
-//   than three quarters of `available_ram_bytes` (free memory when the engine is made) holds beside
-//   the tables; 2^18 when the free memory is unknown (0). The array still grows only with the scene.
-// - GPU: 2^18. Its array is reallocated and copied as it grows, so a larger ceiling would need free
-//   device memory for both copies at once, and a failed device allocation ends the run.
-int automaticMaxBlockCount(Device device, std::size_t voxel_bytes, const VoxelBlockHashSettings& hash, double available_ram_bytes);
+// As many blocks as the table has entries (each block needs one), at most 2^22, and no more than
+// three quarters of `available_bytes` (the free memory of the device the map lives on when the engine
+// is made: MemAvailable on the CPU, cudaMemGetInfo on the GPU) holds beside the tables, in steps of
+// 2^16 blocks; 2^18 when the free memory is unknown (0). The array still grows only with the scene.
+// On the GPU a growth reallocates the array and copies it, so both copies must fit at once: there
+// each block counts twice.
+int automaticMaxBlockCount(Device device, std::size_t voxel_bytes, const VoxelBlockHashSettings& hash, double available_bytes);
 
 class MainEngine {
 public:
