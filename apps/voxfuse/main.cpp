@@ -210,10 +210,13 @@ void checkOutputPaths(const CliOptions& o) {
     if (!o.save_map.empty()) requireWritable(o.save_map);
 }
 
-// With --load-map the map decides the voxel type, the index and its settings, the voxel size and mu;
-// giving another on the command line is an error rather than silently ignored.
+// With --load-map the map decides the voxel type, the index and its table, the voxel size and mu;
+// giving another on the command line is an error rather than silently ignored. The block ceiling is
+// the map's unless --max-blocks gives one: it bounds how far the map may grow on this machine, and a
+// map that filled its ceiling elsewhere must be able to go on (the full-map warning says so).
 void adoptMapSettings(CliOptions& o, const MapFileInfo& map) {
-    const MainEngineSettings adopted = settingsForMap(map, o.engine);
+    MainEngineSettings adopted = settingsForMap(map, o.engine);
+    if (given(o, "--max-blocks")) adopted.hash.max_block_count = o.engine.hash.max_block_count;
     auto conflict = [&](const char* option, const std::string& what) {
         throw ConfigError(o.load_map + ": the map has " + what + "; " + option + " cannot change it (leave the option out)");
     };
@@ -222,7 +225,8 @@ void adoptMapSettings(CliOptions& o, const MapFileInfo& map) {
     if (given(o, "--voxel-size") && o.engine.scene.voxel_size_m != map.scene.voxel_size_m)
         conflict("--voxel-size", std::to_string(map.scene.voxel_size_m) + " m voxels");
     if (given(o, "--mu") && o.engine.scene.mu_m != map.scene.mu_m) conflict("--mu", "mu " + std::to_string(map.scene.mu_m) + " m");
-    for (const char* option : {"--max-blocks", "--hash-buckets", "--hash-excess", "--volume-size", "--volume-offset"})
+    if (given(o, "--max-blocks") && !map.hash) conflict("--max-blocks", "the dense index");
+    for (const char* option : {"--hash-buckets", "--hash-excess", "--volume-size", "--volume-offset"})
         if (given(o, option)) conflict(option, "its own index settings");
     o.labels.voxel = map.voxel_type;
     o.index = map.hash ? "hash" : "dense";

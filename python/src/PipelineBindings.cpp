@@ -314,12 +314,14 @@ void bindPipeline(py::module_& m) {
         .def_static(
             "from_map",
             [](const std::string& path, const std::optional<RGBDCalib>& calib, const std::optional<PipelineSettings>& s, const py::kwargs& kwargs) {
-                for (const char* fixed : {"voxel", "index", "voxel_size", "mu", "max_blocks", "hash_buckets", "hash_excess", "volume_size", "volume_offset"})
+                for (const char* fixed : {"voxel", "index", "voxel_size", "mu", "hash_buckets", "hash_excess", "volume_size", "volume_offset"})
                     if (kwargs.contains(fixed))
                         throw ConfigError(path + ": the map decides '" + fixed + "'; leave it out (or create a Pipeline and load_map)");
                 const MapFileInfo info = readMapFileInfo(path);
                 PipelineSettings settings = withOverrides(s ? *s : PipelineSettings{}, kwargs);
                 settings.adopt(info);
+                // The block ceiling bounds how far the map may grow here: the map's, unless given.
+                if (kwargs.contains("max_blocks")) settings.max_blocks = kwargs["max_blocks"].cast<int>();
                 RGBDCalib c;
                 if (calib) c = *calib;
                 else {
@@ -332,7 +334,8 @@ void bindPipeline(py::module_& m) {
                 return p;
             },
             py::arg("path"), py::arg("calib") = py::none(), py::arg("settings") = py::none(),
-            "A pipeline continuing the map in a .vfm file (its voxel type, index, voxel size and mu; tracking resumes\n"
+            "A pipeline continuing the map in a .vfm file (its voxel type, index, voxel size and mu, and its block ceiling\n"
+            "unless max_blocks is given; tracking resumes\n"
             "from the pose it was saved at). Without calib: the camera the map was saved with, and raw depth in\n"
             "millimetres (depth given in metres is exact either way); give the source's calib to fuse its raw frames.")
         .def(

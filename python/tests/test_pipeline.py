@@ -51,6 +51,10 @@ def test_saved_map_continues_and_meshes_as_the_original(room_frames, tmp_path):
             assert np.linalg.norm(pipeline.process_frame(f).pose[:3, 3] - truth) < 0.003
     with pytest.raises(voxfuse.ConfigError, match="the map decides"):
         voxfuse.Pipeline.from_map(path, voxel_size=0.02)
+    # The block ceiling bounds how far the map grows here: given, it replaces the map's.
+    assert voxfuse.Pipeline.from_map(path, source.calib, max_blocks=300000).settings.max_blocks == 300000
+    with pytest.raises(voxfuse.Error, match="larger --max-blocks"):
+        voxfuse.Pipeline.from_map(path, source.calib, max_blocks=16)
 
 
 def test_same_mesh_as_the_command_line(room_frames, tmp_path):

@@ -1,6 +1,7 @@
 # Map files from the command line on the bundled data: a run saves its map; the map alone (--frames 0)
 # gives a mesh, a render and the same map bytes again; a run continues the map after the frames it
-# holds (--skip); options the map fixes cannot be changed; --frames 0 without a map is refused.
+# holds (--skip); options the map fixes cannot be changed, its block ceiling can; --frames 0 without a
+# map is refused.
 file(REMOVE_RECURSE ${WORK_DIR})
 file(MAKE_DIRECTORY ${WORK_DIR})
 
@@ -45,6 +46,18 @@ endif()
 run_voxfuse(2 --load-map first/room.vfm --voxel f --frames 0 --out refused)
 if(NOT last_output MATCHES "the map has 's' voxels; --voxel cannot change it")
   message(FATAL_ERROR "a conflicting --voxel was not refused by name:\n${last_output}")
+endif()
+# The block ceiling is not part of the map: --max-blocks sets it for the continued run, and one too
+# small for the map's blocks is refused by name.
+run_voxfuse(0 --load-map first/room.vfm --skip 10 --frames 2 --max-blocks 300000 --render-every 0 --out larger)
+file(READ ${WORK_DIR}/larger/summary.json summary)
+string(JSON ceiling GET "${summary}" settings max_blocks)
+if(NOT ceiling EQUAL 300000)
+  message(FATAL_ERROR "--max-blocks with --load-map gave a ceiling of ${ceiling}, not 300000")
+endif()
+run_voxfuse(2 --load-map first/room.vfm --max-blocks 64 --frames 0 --out refused)
+if(NOT last_output MATCHES "more than the voxel array's maximum of 64 \\(continue it with swapping, or a larger --max-blocks\\)")
+  message(FATAL_ERROR "a map larger than --max-blocks was not refused by name:\n${last_output}")
 endif()
 run_voxfuse(2 --frames 0 --out refused)
 if(NOT last_output MATCHES "--frames 0 processes no frame: it needs --load-map")
