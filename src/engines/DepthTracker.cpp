@@ -55,7 +55,7 @@ public:
         }
         seen_model_ = seen_model_ || model_ok;
         if (state.quality == TrackingQuality::Failed) motion_.forget();
-        else motion_.record(state.T_world_camera, {view.timestamp_s, view.frame_index});
+        else motion_.record(state.T_world_camera, view.clock());
         if (photometric_) {
             if (state.quality == TrackingQuality::Failed)
                 photometric_->forget();  // its pose is unknown: it must not colour the next model
@@ -106,7 +106,7 @@ private:
 
     void estimatePose(TrackingState& state, const View& view, const RenderState& model, bool use_color) {
         const Eigen::Matrix4d T_start = pose::toEigenD(state.T_world_camera);
-        Eigen::Matrix4d T = settings_.predict_motion ? motion_.predict(state.T_world_camera, {view.timestamp_s, view.frame_index}) : T_start;
+        Eigen::Matrix4d T = settings_.predict_motion ? motion_.predict(state.T_world_camera, view.clock()) : T_start;
         NormalEquations<double> finest = NormalEquations<double>::zero();
         bool robust = false;  // ren and rgbd: least squares has handed over to the kernel
         for (int li = 0; li < levelCount(); ++li) finest = refineOnLevel(li, model, use_color, T, robust);

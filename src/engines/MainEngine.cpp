@@ -130,7 +130,7 @@ public:
         } else {
             trackOrRelocalise(result);
         }
-        if (!lost_) last_pose_clock_ = FrameClock{view_.timestamp_s, view_.frame_index};
+        if (!lost_) last_pose_clock_ = view_.clock();
         result.tracking = tracking_;
         result.quality = tracking_.quality;
         result.T_world_camera = tracking_.T_world_camera;
@@ -342,7 +342,7 @@ private:
     bool relocalise() {
         if (onGpu()) view_.depth.memory().updateHost();
         // The last good pose is tracked against the raycast from it, which the last good frame left.
-        const double elapsed_s = secondsBetween(last_pose_clock_, FrameClock{view_.timestamp_s, view_.frame_index});
+        const double elapsed_s = secondsBetween(last_pose_clock_, view_.clock());
         if (lost_ && refineCandidate(tracking_.T_world_camera, &model_, elapsed_s)) return true;
         for (const KeyframeMatch& m : relocaliser_->lookUp(view_)) {
             const Mat4f& T_world_keyframe = relocaliser_->database().keyframe(m.keyframe).T_world_camera;

@@ -52,18 +52,11 @@ public:
 private:
     static bool sameFrame(FrameClock a, FrameClock b) { return a.timestamp_s == b.timestamp_s && a.index == b.index; }
 
-    // (now - last) / (last - previous), in timestamps when all three have one, else in frame indices;
-    // 0 when neither is known.
+    // (now - last) / (last - previous) (secondsBetween: timestamps, else frame indices); 0 when either
+    // span is unknown or not forward in time.
     double elapsedRatio(FrameClock now) const {
-        if (now.timestamp_s > 0.0 && last_time_.timestamp_s > 0.0 && previous_time_.timestamp_s > 0.0) {
-            const double interval = last_time_.timestamp_s - previous_time_.timestamp_s;
-            return interval > 0.0 ? (now.timestamp_s - last_time_.timestamp_s) / interval : 0.0;
-        }
-        if (now.index >= 0 && last_time_.index >= 0 && previous_time_.index >= 0) {
-            const int interval = last_time_.index - previous_time_.index;
-            return interval > 0 ? double(now.index - last_time_.index) / double(interval) : 0.0;
-        }
-        return 0.0;
+        const double interval = secondsBetween(previous_time_, last_time_), elapsed = secondsBetween(last_time_, now);
+        return interval > 0.0 && elapsed > 0.0 ? elapsed / interval : 0.0;
     }
 
     Eigen::Matrix4d previous_ = Eigen::Matrix4d::Identity(), last_ = Eigen::Matrix4d::Identity();

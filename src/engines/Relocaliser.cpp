@@ -32,14 +32,6 @@ bool acceptRelocalisation(const RelocalisationSettings& s, const RelocalisationC
            c.step_m <= s.max_refinement_step_m && c.step_deg <= s.max_refinement_step_deg;
 }
 
-double secondsBetween(FrameClock then, FrameClock now) {
-    constexpr double kAssumedFramesPerSecond = 30.0;
-    double seconds = -1.0;
-    if (then.timestamp_s > 0.0 && now.timestamp_s > 0.0) seconds = now.timestamp_s - then.timestamp_s;
-    else if (then.index >= 0 && now.index >= 0) seconds = double(now.index - then.index) / kAssumedFramesPerSecond;
-    return seconds > 0.0 ? seconds : -1.0;
-}
-
 bool withinReach(const RelocalisationSettings& s, const Mat4f& T_world_last, const Mat4f& T_world_candidate, double elapsed_s) {
     if (!(s.max_speed_m_per_s > 0.f) || !(elapsed_s > 0.0)) return true;
     const Vec3f d = T_world_candidate.translation() - T_world_last.translation();

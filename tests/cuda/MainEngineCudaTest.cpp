@@ -77,7 +77,9 @@ TEST(MainEngineCudaCeiling, FollowsTheTableAndTheGpusFreeMemory) {
     // Within a step of 2^16 blocks: the free memory may move between the two queries.
     EXPECT_NEAR(chosen, automaticMaxBlockCount(Device::CUDA, sizeof(VoxelSRgb), s.hash, free_bytes), 1 << 16)
         << "free memory " << free_bytes / double(1 << 20) << " MiB";
-    if (free_bytes > 8.0 * double(1ull << 30)) EXPECT_GT(chosen, 1 << 18);
+    if (free_bytes > 8.0 * double(1ull << 30)) {
+        EXPECT_GT(chosen, 1 << 18);
+    }
 }
 
 INSTANTIATE_TEST_SUITE_P(Indexes, MainEngineCudaTest, ::testing::Values(IndexType::Hash, IndexType::Dense),

@@ -63,9 +63,6 @@ struct RelocalisationCheck {
 };
 bool acceptRelocalisation(const RelocalisationSettings& settings, const RelocalisationCheck& check);
 
-// Seconds from `then` to `now`: by timestamps when both have one, else by indices at 30 frames/s (the
-// rate of the cameras this field uses); -1 when unknown or not later.
-double secondsBetween(FrameClock then, FrameClock now);
 // Whether a camera at T_world_last `elapsed_s` ago (-1: unknown) may be at T_world_candidate now, at
 // settings.max_speed_m_per_s. Unknown times and a limit of 0 allow every candidate.
 bool withinReach(const RelocalisationSettings& settings, const Mat4f& T_world_last, const Mat4f& T_world_candidate, double elapsed_s);

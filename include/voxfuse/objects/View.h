@@ -5,6 +5,7 @@
 
 #include "voxfuse/core/Image.h"
 #include "voxfuse/objects/ClassLabel.h"
+#include "voxfuse/objects/FrameClock.h"
 #include "voxfuse/objects/RGBDCalib.h"
 
 namespace voxfuse {
@@ -17,6 +18,8 @@ struct View {
                                   // resolution; empty when the frame has no labels
     int frame_index = -1;
     double timestamp_s = 0.0;
+
+    FrameClock clock() const { return {timestamp_s, frame_index}; }
 };
 
 }  // namespace voxfuse
