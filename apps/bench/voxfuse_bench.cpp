@@ -140,7 +140,7 @@ int main(int argc, char** argv) {
     cli.add_flag("--swap", s.swap.enabled, "swapping: only the map near the view stays in the voxel array, the rest in memory or --swap-file");
     cli.add_option("--active-blocks", active_blocks, "swapping: blocks the active voxel array holds at most (implies --swap)")
         ->check(app::intIn(1, 1 << 22));
-    cli.add_option("--swap-file", s.swap.swap_file, "swapping: keep the swapped-out map in this file (implies --swap)");
+    cli.add_option("--swap-file", s.swap.swap_file, "swapping: keep the swapped-out map in this new file (an existing path is refused; implies --swap)");
     cli.add_option("--swap-blocks-per-frame", s.swap.blocks_per_frame, "swapping: blocks moved each way per frame at most")
         ->capture_default_str()->check(app::intIn(1, 1 << 20));
     cli.add_option("--json", json_path, "where to write the JSON report")->capture_default_str();

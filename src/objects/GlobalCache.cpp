@@ -15,7 +15,11 @@ namespace voxfuse {
 GlobalCache::GlobalCache(std::size_t block_bytes, const std::string& swap_file) : block_bytes_(block_bytes), path_(swap_file) {
     if (block_bytes_ == 0) throw ConfigError("global cache: blocks of 0 bytes");
     if (path_.empty()) return;
-    fd_ = ::open(path_.c_str(), O_RDWR | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
+    // A new file only: the swap file is deleted at once, so an existing path (a map, a user's file)
+    // would be lost.
+    fd_ = ::open(path_.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+    if (fd_ < 0 && errno == EEXIST)
+        throw IoError(path_, "the swap file must be a new path: it is deleted as soon as it is opened, and this one exists");
     if (fd_ < 0) throw IoError(path_, std::string("cannot create the swap file: ") + std::strerror(errno));
     // Unlinked at once: the open file keeps its blocks, the space comes back however the run ends, and
     // a later cache on the same path makes a file of its own.

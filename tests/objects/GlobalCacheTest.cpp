@@ -1,10 +1,15 @@
 // The global cache: blocks come back as they went in, from memory or from a swap file; slots are
-// reused; on disk no block is held in memory; a swap file that cannot be made is an error naming it.
+// reused; on disk no block is held in memory; a swap file that cannot be made, or whose path exists,
+// is an error naming it.
 
 #include <gtest/gtest.h>
 
-#include <filesystem>
+#include <unistd.h>
+
 #include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <string>
 #include <vector>
 
 #include "voxfuse/core/Error.h"
@@ -67,6 +72,26 @@ TEST(GlobalCacheTest, ASwapFileThatCannotBeMadeIsNamed) {
     GlobalCache cache(64);
     char block[64];
     EXPECT_THROW(cache.read(0, block), Error) << "a slot never stored";
+}
+
+TEST(GlobalCacheTest, AnExistingFileIsNeverTakenForTheSwapFile) {
+    // The swap file is unlinked as soon as it is open: a path that names a user's file or a map would
+    // lose it.
+    const std::string path = (std::filesystem::temp_directory_path() / ("voxfuse_cache_precious_" + std::to_string(::getpid()))).string();
+    {
+        std::ofstream(path) << "keep me\n";
+    }
+    try {
+        GlobalCache cache(512, path);
+        ADD_FAILURE() << "an existing file became the swap file";
+    } catch (const IoError& e) {
+        EXPECT_EQ(e.file(), path);
+        EXPECT_NE(std::string(e.what()).find("must be a new path"), std::string::npos) << e.what();
+    }
+    std::ifstream in(path);
+    std::string line;
+    EXPECT_TRUE(std::getline(in, line) && line == "keep me") << "the file was touched";
+    std::filesystem::remove(path);
 }
 
 }  // namespace

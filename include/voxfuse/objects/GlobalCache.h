@@ -17,7 +17,7 @@ namespace voxfuse {
 class GlobalCache {
 public:
     // A cache of blocks of `block_bytes` bytes: in host memory, or in `swap_file` when the path is not
-    // empty (created, replacing what is there, and unlinked at once: the space it takes comes back when
+    // empty (a new file, never an existing one, unlinked at once: the space it takes comes back when
     // the cache goes, however the process ends).
     explicit GlobalCache(std::size_t block_bytes, const std::string& swap_file = "");
     ~GlobalCache();
