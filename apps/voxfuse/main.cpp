@@ -80,7 +80,7 @@ struct CliOptions {
     std::vector<int> dense_offset{-256, -256, 0};
     std::string save_map;                 // write the map here at the end
     std::string load_map;                 // continue this map (its voxel type, index and voxel size)
-    std::vector<std::string> given;       // options given on the command line (those checked against others)
+    std::vector<std::string> given;       // options given on the command line, by their long names
     MainEngineSettings engine;
 };
 
@@ -197,16 +197,28 @@ void checkCombinations(const CliOptions& o) {
         refuse("--rgb/--depth name files: they cannot be used with a synthetic source");
     if (given(o, "--min-confidence") && !StrayScannerSource::isCapture(o.source))
         refuse("--min-confidence filters iPhone LiDAR depth: '" + o.source + "' is not a Stray Scanner capture");
+    if (given(o, "--calib") && app::SyntheticSource::isSyntheticName(o.source))
+        refuse("--calib replaces a recording's calibration: the synthetic source renders with its own");
+    if (!o.mesh_path.empty() && fs::is_directory(o.mesh_path)) refuse("--mesh-file " + o.mesh_path + " is a folder, not a file");
+    if (!o.mesh_path.empty() && !isMeshFileName(o.mesh_path))
+        refuse("--mesh-file " + o.mesh_path + ": unknown mesh format '" + fs::path(o.mesh_path).extension().string() + "' (expected .ply, .obj or .stl)");
+    if (!o.load_map.empty() && o.max_frames == 0) {
+        // Only the map is read: whatever reads, tracks or fuses frames would be ignored.
+        for (const char* option : {"source", "--live", "--device-uri", "--threaded", "--min-confidence", "--rgb", "--depth", "--calib", "--skip",
+                                   "--render-every", "--min-depth", "--max-depth", "--depth-gap-tolerance", "--occupancy", "--poses", "--tracker",
+                                   "--tracker-config", "--tracker-levels", "--tracker-iterations", "--tracker-max-distance", "--labels",
+                                   "--label-match", "--label-ignore", "--label-update", "--relocalise", "--relocalise-candidates",
+                                   "--relocalise-max-speed"})
+            if (given(o, option))
+                refuse(std::string(option == std::string("source") ? "a SOURCE" : option) +
+                       " concerns frames, and --load-map with --frames 0 reads none (leave it out, or give frames)");
+    }
 }
 
 // Explicitly named output files are checked before the run, not when they are due after it.
+// Called once the output folder exists: the paths may be in it.
 void checkOutputPaths(const CliOptions& o) {
-    if (!o.mesh_path.empty()) {
-        requireWritable(o.mesh_path);
-        if (!isMeshFileName(o.mesh_path))
-            throw ConfigError("--mesh-file " + o.mesh_path + ": unknown mesh format '" + fs::path(o.mesh_path).extension().string() +
-                              "' (expected .ply, .obj or .stl)");
-    }
+    if (!o.mesh_path.empty()) requireWritable(o.mesh_path);
     if (!o.save_map.empty()) requireWritable(o.save_map);
 }
 
@@ -263,10 +275,10 @@ int runOnMapAlone(CliOptions& o, const MapFileInfo& map) {
     RGBDCalib calib;
     calib.depth = calib.rgb = map.camera;
     std::unique_ptr<MainEngine> engine = MainEngine::create(s, calib);
-    app::OutputFolder out(o.out_dir, o.overwrite, "voxfuse");
-    checkOutputPaths(o);  // after the folder exists: they may be in it
     const Timer wall;
     engine->loadMap(o.load_map);
+    app::OutputFolder out(o.out_dir, o.overwrite, "voxfuse");
+    checkOutputPaths(o);
     app::RunRecord record;
     record.source = "map " + o.load_map + " (no frames)";
     record.settings = engine->settings();
@@ -327,9 +339,6 @@ int run(CliOptions& o) {
         engine->loadMap(o.load_map);
         record.map_loaded = o.load_map;
     }
-    app::OutputFolder out(o.out_dir, o.overwrite, "voxfuse");
-    checkOutputPaths(o);  // after the folder exists: they may be in it
-
     record.source = source->description();
     record.has_labels = labels != nullptr;
     record.settings = engine->settings();
@@ -344,6 +353,10 @@ int run(CliOptions& o) {
         os.resolution_m = o.occupancy_res_m;
         occupancy = std::make_unique<OccupancyMapper>(os);
     }
+    // Last: with --overwrite the folder loses the earlier run's outputs here, so everything that can
+    // still refuse the run has run.
+    app::OutputFolder out(o.out_dir, o.overwrite, "voxfuse");
+    checkOutputPaths(o);
     if (o.skip_frames > 0) std::cerr << "voxfuse: skipped the first " << runner.skip(o.skip_frames) << " frames\n";
     ProgressLine progress(total);
     const Timer wall;
@@ -419,7 +432,9 @@ int main(int argc, char** argv) {
                  "or --swap-file");
     cli.add_option("--active-blocks", o.active_blocks, "swapping: blocks the active voxel array holds at most (implies --swap)")
         ->check(app::positiveInt());
-    cli.add_option("--swap-file", o.engine.swap.swap_file, "swapping: keep the swapped-out map in this file instead of memory (implies --swap)");
+    cli.add_option("--swap-file", o.engine.swap.swap_file,
+                   "swapping: keep the swapped-out map in this new file (an existing path is refused; deleted as it opens) "
+                   "instead of memory (implies --swap)");
     cli.add_option("--swap-blocks-per-frame", o.engine.swap.blocks_per_frame, "swapping: blocks moved each way per frame at most")
         ->capture_default_str()->check(app::intIn(1, 1 << 20));
     cli.add_option("--skip", o.skip_frames, "drop the first N frames of the source (e.g. those a --load-map map already holds)")
@@ -479,10 +494,8 @@ int main(int argc, char** argv) {
         ->check(app::floatIn(0.0, 10.0, true));
     app::addRelocalisationOptions(cli, o.engine.relocalisation);
     CLI11_PARSE(cli, argc, argv);
-    for (const char* option : {"--index", "--voxel-size", "--mu", "--max-blocks", "--hash-buckets", "--hash-excess", "--volume-size", "--volume-offset",
-                               "--swap-blocks-per-frame", "--min-confidence", "--tracker", "--tracker-config", "--tracker-levels",
-                               "--tracker-iterations", "--tracker-max-distance"})
-        if (cli.count(option) > 0) o.given.push_back(option);
+    for (const CLI::Option* option : cli.get_options())
+        if (option->count() > 0) o.given.push_back(option->get_name());  // "--index", or "source" for the positional
 
     app::interrupt::install("voxfuse");
     return app::runReportingErrors("voxfuse", [&] { return run(o); });

@@ -1,7 +1,8 @@
 # Map files from the command line on the bundled data: a run saves its map; the map alone (--frames 0)
 # gives a mesh, a render and the same map bytes again; a run continues the map after the frames it
 # holds (--skip); options the map fixes cannot be changed, its block ceiling can; --frames 0 without a
-# map is refused.
+# map is refused; options the map alone cannot use are refused; a refused run keeps the earlier
+# outputs; an existing file is never taken for the swap file.
 file(REMOVE_RECURSE ${WORK_DIR})
 file(MAKE_DIRECTORY ${WORK_DIR})
 
@@ -62,4 +63,21 @@ endif()
 run_voxfuse(2 --frames 0 --out refused)
 if(NOT last_output MATCHES "--frames 0 processes no frame: it needs --load-map")
   message(FATAL_ERROR "--frames 0 without a map was not refused:\n${last_output}")
+endif()
+# The map alone reads no frames: options that concern frames are refused, not ignored.
+run_voxfuse(2 --load-map first/room.vfm --frames 0 --occupancy 0.05 --out refused)
+if(NOT last_output MATCHES "--occupancy concerns frames, and --load-map with --frames 0 reads none")
+  message(FATAL_ERROR "--occupancy with the map alone was not refused:\n${last_output}")
+endif()
+# A run refused before it starts leaves the earlier run's outputs in place, --overwrite or not.
+run_voxfuse(2 --load-map first/room.vfm --frames 0 --mesh-file alone/mesh.xyz --out alone --overwrite)
+if(NOT last_output MATCHES "unknown mesh format '.xyz'" OR NOT EXISTS ${WORK_DIR}/alone/summary.json)
+  message(FATAL_ERROR "a refused run removed the earlier outputs:\n${last_output}")
+endif()
+# The swap file is unlinked as it opens: an existing path, here the map itself, is refused and kept.
+file(SHA256 ${WORK_DIR}/first/room.vfm before_hash)
+run_voxfuse(2 --load-map first/room.vfm --skip 10 --frames 1 --swap-file first/room.vfm --render-every 0 --out swapped)
+file(SHA256 ${WORK_DIR}/first/room.vfm after_hash)
+if(NOT last_output MATCHES "the swap file must be a new path" OR NOT before_hash STREQUAL after_hash)
+  message(FATAL_ERROR "an existing file was taken for the swap file:\n${last_output}")
 endif()
