@@ -132,6 +132,12 @@ void writeFileAtomically(const std::string& path, const std::function<void(const
     }
     std::error_code ec;
     if (!fs::is_regular_file(temporary, ec)) throw IoError(path, "cannot write: " + writeFailureReason(path, errno));
+    // Writers with files of their own may not check their last flush: a disk left full may have cut
+    // the file short, and an incomplete file must not take the target's place.
+    if (diskFull(folderOf(path))) {
+        std::remove(temporary.c_str());
+        throw IoError(path, "cannot write: disk full (no space left on the device; the file may be incomplete)");
+    }
     moveIntoPlace(temporary, path);
 }
 

@@ -234,18 +234,22 @@ cv::Mat readWithOpenCV(const std::string& path) {
     return m;
 }
 
-// The codec writes a temporary file that replaces `path` once complete (io/AtomicFile.h).
+// Encoded in memory and written through AtomicFile, which checks the flush and the close: the codecs'
+// own file writers do not, so a disk that fills during the last flush left a short image under its
+// final name.
 void writeWithOpenCV(const std::string& path, const cv::Mat& m) {
-    writeFileAtomically(path, [&](const std::string& temporary) {
-        bool ok = false;
-        std::string detail;
-        try {
-            ok = cv::imwrite(temporary, m);
-        } catch (const cv::Exception& e) {
-            detail = " (" + e.msg + ")";
-        }
-        if (!ok) throw IoError(path, "cannot write the image: " + (detail.empty() ? writeFailureReason(path, errno) : "unknown format" + detail));
-    });
+    std::vector<unsigned char> bytes;
+    bool ok = false;
+    std::string detail;
+    try {
+        ok = cv::imencode(std::filesystem::path(path).extension().string(), m, bytes);
+    } catch (const cv::Exception& e) {
+        detail = " (" + e.msg + ")";
+    }
+    if (!ok) throw IoError(path, "cannot encode the image: unknown format" + detail);
+    AtomicFile file(path);
+    file.stream().write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
+    file.commit();
 }
 
 template <typename T>

@@ -37,10 +37,11 @@ private:
     bool committed_ = false;
 };
 
-// For writers that insist on a file name of their own (image codecs, OctoMap): `write` writes to the
+// For writers that insist on a file name of their own (OctoMap): `write` writes to the
 // temporary path it is given (beside `path`, with the same extension, so that format-by-extension
 // writers still work); the file is renamed into place when `write` returns. If `write` throws or
-// leaves no file, the target is untouched and the IoError says why.
+// leaves no file, or the disk is full after it (the writer may not have checked its last flush), the
+// target is untouched and the IoError says why.
 void writeFileAtomically(const std::string& path, const std::function<void(const std::string& temporary_path)>& write);
 
 // Throws the IoError that writing `path` would end with (a folder where the file should be, a
