@@ -97,7 +97,16 @@ public:
         const std::uint8_t* p = buffer_.data() + pos_;
         crc_ = crc32(crc_, p, unsigned(n));
         pos_ += n;
+        taken_ += n;
         return p;
+    }
+    // Bytes taken so far, from the start of the file.
+    std::uint64_t taken() const { return taken_; }
+    // The file's size, or -1 when it has none (a pipe).
+    std::int64_t fileBytes() const {
+        std::error_code ec;
+        const std::uintmax_t size = std::filesystem::file_size(path_, ec);
+        return ec ? -1 : std::int64_t(size);
     }
     std::uint32_t crc() const { return std::uint32_t(crc_); }
     void resetCrc() { crc_ = crc32(0L, Z_NULL, 0); }
@@ -120,13 +129,13 @@ private:
         buffer_.resize(want);
         in_.read(reinterpret_cast<char*>(buffer_.data() + have), std::streamsize(want - have));
         buffer_.resize(have + std::size_t(in_.gcount()));
-        if (buffer_.size() < n) fail("truncated: the file ends inside the map (" + std::to_string(offset()) + " bytes read)");
+        if (buffer_.size() < n) fail("truncated: the file ends inside the map (" + std::to_string(taken_ + buffer_.size()) + " bytes read)");
     }
-    std::uint64_t offset() const { return std::uint64_t(in_.tellg() < 0 ? 0 : std::uint64_t(in_.tellg())); }
     std::ifstream& in_;
     std::string path_;
     std::vector<std::uint8_t> buffer_;
     std::size_t pos_ = 0;
+    std::uint64_t taken_ = 0;
     uLong crc_ = crc32(0L, Z_NULL, 0);
 };
 
@@ -304,6 +313,16 @@ MapFileInfo readHeader(FieldReader& r) {
     if (!info.hash && info.record_count != std::uint64_t(info.dense_size.x) * std::uint64_t(info.dense_size.y) * std::uint64_t(info.dense_size.z))
         r.fail("corrupt: " + std::to_string(info.record_count) + " voxels for a " + std::to_string(info.dense_size.x) + "x" +
                std::to_string(info.dense_size.y) + "x" + std::to_string(info.dense_size.z) + " volume");
+    if (info.hash && info.record_count > std::uint64_t(1) << 22)
+        r.fail("corrupt: " + std::to_string(info.record_count) + " blocks, more than a map can hold (" + std::to_string(1 << 22) + ")");
+    // The file must hold what the header lists before memory is reserved for it: a short or damaged
+    // file is refused here, not after gigabytes were allocated for blocks that are not there.
+    const std::uint64_t record_bytes = info.hash ? 6 + std::uint64_t(kBlockVoxelCount) * voxel_bytes : voxel_bytes;
+    const std::uint64_t expected = r.taken() + info.record_count * record_bytes + 4 + 8;  // records, checksum, end marker
+    const std::int64_t actual = r.fileBytes();
+    if (actual >= 0 && std::uint64_t(actual) < expected)
+        r.fail("truncated: the header lists " + std::to_string(info.record_count) + (info.hash ? " blocks" : " voxels") + " (" +
+               std::to_string(expected) + " bytes in all), the file has " + std::to_string(actual) + " bytes");
     return info;
 }
 

@@ -3,7 +3,11 @@
 
 #include <gtest/gtest.h>
 
+#include <zlib.h>
+
+#include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -179,6 +183,34 @@ TEST(MapFileTest, BadFilesAreRefusedWithTheReason) {
     EXPECT_NE(loadError(bad).find("truncated"), std::string::npos);
     EXPECT_NE(loadError(fs::temp_directory_path().string()).find("is a folder"), std::string::npos);
     EXPECT_NE(loadError(scratch.file("missing.vfm")).find("cannot open"), std::string::npos);
+}
+
+// A header that lists more blocks than the file holds (its checksum made to match) is refused before
+// memory is reserved for them: a few hundred bytes must not make the reader allocate gigabytes.
+TEST(MapFileTest, AHeaderListingMoreBlocksThanTheFileHoldsIsRefusedAtOnce) {
+    const test::ScratchDir scratch;
+    const auto scene = fusedScene<VoxelS>(VoxelBlockHash());
+    const std::string good = scratch.file("good.vfm"), bad = scratch.file("bad.vfm");
+    writeMapFile(good, scene, somePose());
+    std::vector<char> b = bytesOf(good);
+    // magic (8), version (4), header size (4), then the header: its fields, the last of them the record
+    // count, and their CRC (4).
+    std::uint32_t header_bytes;
+    std::memcpy(&header_bytes, b.data() + 12, 4);
+    const std::size_t crc_at = 16 + header_bytes - 4, count_at = crc_at - 8;
+    const std::uint64_t blocks = std::uint64_t(1) << 20;
+    std::memcpy(b.data() + count_at, &blocks, 8);
+    const auto crc = std::uint32_t(crc32(crc32(0L, Z_NULL, 0), reinterpret_cast<const Bytef*>(b.data() + 16), uInt(crc_at - 16)));
+    std::memcpy(b.data() + crc_at, &crc, 4);
+    writeBytes(bad, b);
+    const std::string error = loadError(bad);
+    EXPECT_NE(error.find("truncated: the header lists 1048576 blocks"), std::string::npos) << error;
+    try {
+        readMapFileInfo(bad);
+        ADD_FAILURE() << "the header alone was accepted";
+    } catch (const IoError& e) {
+        EXPECT_NE(std::string(e.what()).find("the header lists"), std::string::npos) << e.what();
+    }
 }
 
 TEST(MapFileTest, AMapOfOtherSettingsIsRefusedByName) {
