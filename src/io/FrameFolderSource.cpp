@@ -138,6 +138,7 @@ bool FrameFolderSource::next(RGBDFrame& frame) {
     if (!f.colour_path.empty()) frame_reading::readColour(f.colour_path, index, calib_.rgb, read_.rgb);
     read_.handOver(frame, !f.colour_path.empty());
     frame.index = index;
+    frame.file_number = f.number;
     frame.timestamp_s = f.number / kFramesPerSecond;
     frame.depth_path = f.depth_path;
     frame.has_ground_truth = f.has_pose;

@@ -195,6 +195,7 @@ void LabelledImageSource::readFolder() {
     for (const Found& f : found) stems.push_back(f.stem);
     if (match_ == LabelStreamOptions::Match::Index && frameNumbers(stems, numbers)) {
         images_.resize(std::size_t(numbers.back() - numbers.front() + 1));
+        first_number_ = numbers.front();
         for (std::size_t i = 0; i < found.size(); ++i)
             images_[std::size_t(numbers[i] - numbers.front())] = {found[i].time_s, std::move(found[i].path)};
         return;
@@ -225,8 +226,11 @@ void LabelledImageSource::readList() {
 
 const LabelledImageSource::LabelImage* LabelledImageSource::find(const RGBDFrame& frame) const {
     if (match_ == LabelStreamOptions::Match::Index) {
-        if (frame.index < 0 || std::size_t(frame.index) >= images_.size()) return nullptr;
-        const LabelImage& image = images_[std::size_t(frame.index)];
+        // Numbered labels meet frames numbered by their files by number: frame-000017 takes 17, however
+        // the numbers skip. Otherwise the frame's place in the source is the image's place.
+        const long long at = first_number_ >= 0 && frame.file_number >= 0 ? frame.file_number - first_number_ : frame.index;
+        if (at < 0 || std::size_t(at) >= images_.size()) return nullptr;
+        const LabelImage& image = images_[std::size_t(at)];
         return image.path.empty() ? nullptr : &image;
     }
     const double t = frame.rgb_timestamp_s >= 0.0 ? frame.rgb_timestamp_s : frame.timestamp_s;

@@ -176,6 +176,7 @@ bool StrayScannerSource::next(RGBDFrame& frame) {
                                        f.depth_path + ")", index);
     read_.handOver(frame, true);
     frame.index = index;
+    frame.file_number = f.number;
     frame.timestamp_s = f.timestamp_s;
     frame.depth_path = f.depth_path;
     frame.has_ground_truth = f.has_pose;

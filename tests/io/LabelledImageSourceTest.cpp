@@ -23,6 +23,7 @@ struct FakeFrame {
     int index;
     double timestamp_s;
     double rgb_timestamp_s = -1.0;
+    long long file_number = -1;
 };
 
 // Frames with the given indices and timestamps, an 8x6 depth image each; the colour camera is 8x6 too
@@ -48,6 +49,7 @@ public:
         frame.index = f.index;
         frame.timestamp_s = f.timestamp_s;
         frame.rgb_timestamp_s = f.rgb_timestamp_s;
+        frame.file_number = f.file_number;
         frame.depth_raw.resize(calib_.depth.size());
         for (std::size_t i = 0; i < frame.depth_raw.pixelCount(); ++i) frame.depth_raw.host()[i] = 1000;
         return true;
@@ -144,6 +146,25 @@ TEST(LabelledImageSource, NumberedImagesKeepTheirFramesAcrossGaps) {
     for (int i : {1, 2, 4}) writeLabels(dir.file("one/frame-" + std::to_string(i) + ".png"), 20 + i);
     LabelledImageSource from_one(FakeSource::sequence(4), optionsFor(dir.file("one")));
     EXPECT_EQ(readIds(from_one), (std::vector<int>{21, 22, -1, 24}));
+}
+
+TEST(LabelledImageSource, NumberedImagesMeetFramesNumberedByTheirFilesByNumber) {
+    // A frame folder whose files skip numbers (frame-000015, -17, ..., -25) and labels named after
+    // them: frame 17 takes 17's image, not the second image or the one at 15 + its index.
+    ScratchDir dir;
+    std::vector<FakeFrame> frames;
+    for (int i = 0; i < 6; ++i) {
+        const int number = 15 + 2 * i;
+        frames.push_back({i, number / 30.0, -1.0, number});
+        if (number != 21) writeLabels(dir.file("labels/frame-0000" + std::to_string(number) + ".png"), number);  // 21 left out
+    }
+    LabelledImageSource source(std::make_unique<FakeSource>(frames), optionsFor(dir.file("labels")));
+    EXPECT_EQ(source.match(), Match::Index);
+    EXPECT_EQ(readIds(source), (std::vector<int>{15, 17, 19, -1, 23, 25}));
+    // Labels numbered otherwise than the frames' files meet none of them, rather than the wrong ones.
+    for (int i = 0; i < 6; ++i) writeLabels(dir.file("other/" + std::to_string(i) + ".png"), 40 + i);
+    LabelledImageSource other(std::make_unique<FakeSource>(frames), optionsFor(dir.file("other")));
+    EXPECT_EQ(readIds(other), (std::vector<int>{-1, -1, -1, -1, -1, -1}));
 }
 
 TEST(LabelledImageSource, EightAndSixteenBitIdsWithIgnoreIdAndNoLabel) {

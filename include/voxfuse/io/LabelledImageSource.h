@@ -26,10 +26,12 @@ struct LabelStreamOptions {
         // The k-th label image belongs to the frame with RGBDFrame::index k (sources number frames from
         // 0 in reading order). A list file's k-th line is the k-th image, also when that file is missing
         // (then frame k has no labels). A folder whose names all carry a number (its last digit run:
-        // "000042.png", "frame-42.png") places each image by its number minus the smallest, so a gap
-        // in the numbers is a frame without labels; other folders (or numbers so sparse that they
-        // cannot be frame numbers) take their images in natural order of their names ("2.png" before
-        // "10.png"). Frames past the last image get no labels.
+        // "000042.png", "frame-42.png") matches it to the number in the frame's own file names where
+        // the source has them (RGBDFrame::file_number: frame folders, Stray Scanner captures, whose
+        // numbers may skip), else places each image by its number minus the smallest, as the frame
+        // index; either way a gap in the numbers is a frame without labels. Other folders (or numbers
+        // so sparse that they cannot be frame numbers) take their images in natural order of their
+        // names ("2.png" before "10.png"). Frames past the last image get no labels.
         Index,
         // A frame takes the label image whose timestamp (the list's first column, or the file name as a
         // number of seconds) is nearest to the frame's colour image (RGBDFrame::rgb_timestamp_s where
@@ -95,7 +97,8 @@ private:
     LabelStreamOptions options_;
     LabelStreamOptions::Match match_ = LabelStreamOptions::Match::Index;
     bool is_list_ = false;
-    std::vector<LabelImage> images_;  // Index: one per frame index, from 0; Timestamp: sorted by time
+    std::vector<LabelImage> images_;  // Index: one per frame index, from 0 (or per number, from first_number_); Timestamp: sorted by time
+    long long first_number_ = -1;     // Index, a numbered folder: the smallest label number; -1 otherwise
     int image_count_ = 0;             // entries of images_ with a file
     int missing_listed_files_ = 0;
     std::atomic<long> with_labels_{0};

@@ -14,6 +14,9 @@ namespace voxfuse {
 
 struct RGBDFrame {
     int index = -1;                   // 0-based position in the source
+    long long file_number = -1;       // the number in the frame's file names where the source names them
+                                      // so (frame folders, Stray Scanner captures: frame-000015 -> 15;
+                                      // numbers may skip), -1 otherwise
     double timestamp_s = 0.0;         // source timestamp (frame index / 30 when the source has none)
     double rgb_timestamp_s = -1.0;    // the colour image's own time where the source pairs images taken
                                       // apart (TUM: timestamp_s is the depth image's); < 0 otherwise
