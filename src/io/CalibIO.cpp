@@ -86,6 +86,8 @@ Intrinsics readCamera(CalibLineReader& reader, const std::string& camera) {
         k.fx = float(f[0]);
         k.fy = float(f[1]);
         if (!(k.fx > 0.f) || !(k.fy > 0.f)) reader.fail(camera + " focal lengths must be positive, got " + text::excerpt(reader.line()));
+        const std::string problem = focalLengthProblem(k);
+        if (!problem.empty()) reader.fail(camera + " " + problem);
     }
     {
         const auto c = readNumbers(reader, 2, camera + " principal point: cx cy");
@@ -187,6 +189,15 @@ std::string cameraBlock(const Intrinsics& k) {
 }
 
 }  // namespace
+
+std::string focalLengthProblem(const Intrinsics& k) {
+    // A side of s pixels seen at focal length f spans 2 atan(s / 2f): 170 degrees at f = 0.0437 s,
+    // 1 degree at f = 57.3 s.
+    const auto implausible = [](float f, int side) { return !(f >= 0.0437f * float(side) && f <= 57.3f * float(side)); };
+    if (!implausible(k.fx, k.width) && !implausible(k.fy, k.height)) return "";
+    return "focal lengths (" + text::formatFloat(k.fx) + ", " + text::formatFloat(k.fy) + " pixels) give no field of view between 1 and " +
+           "170 degrees across the " + std::to_string(k.width) + "x" + std::to_string(k.height) + " image (a typo, or units other than pixels?)";
+}
 
 RGBDCalib readCalib(const std::string& path) {
     CalibLineReader reader(path);

@@ -110,6 +110,8 @@ void FrameFolderSource::calibrateFromK() {
     // The files do not say the image size; the first depth image does.
     const Image<std::uint16_t> first_depth = readDepthPNG(frames_.front().depth_path);
     Intrinsics depth{first_depth.width(), first_depth.height(), float(K[0]), float(K[4]), float(K[2]), float(K[5])};
+    const std::string focal_problem = focalLengthProblem(depth);
+    if (!focal_problem.empty()) throw IoError(k_path, focal_problem + " (" + frames_.front().depth_path + ")");
     if (!(depth.cx >= -0.5f && depth.cx <= float(depth.width) - 0.5f && depth.cy >= -0.5f && depth.cy <= float(depth.height) - 0.5f))
         throw IoError(k_path, "the principal point (" + text::formatFloat(depth.cx) + ", " + text::formatFloat(depth.cy) +
                                   ") lies outside the " + std::to_string(depth.width) + "x" + std::to_string(depth.height) +

@@ -120,6 +120,8 @@ void StrayScannerSource::calibrate(const std::string& calib_path, int max_colour
     const stray_scanner::CameraMatrix K = stray_scanner::readCameraMatrix(k_path);
     const Vec2i video_size = video_->size();
     const Intrinsics full{video_size.x, video_size.y, float(K.fx), float(K.fy), float(K.cx), float(K.cy)};
+    const std::string focal_problem = focalLengthProblem(full);
+    if (!focal_problem.empty()) throw IoError(k_path, focal_problem + " (the video's frames)");
     if (K.cx <= 0.0 || K.cx >= video_size.x || K.cy <= 0.0 || K.cy >= video_size.y)
         throw IoError(k_path, "the principal point (" + std::to_string(K.cx) + ", " + std::to_string(K.cy) +
                                   ") lies outside the " + sizeText(video_size) +

@@ -170,6 +170,8 @@ TEST(CalibIO, MalformedFilesNameFileLineAndReason) {
         {"zero height", replaceLine(good, 1, "640 0"), 1, "must be positive"},
         {"negative focal length", replaceLine(good, 2, "-504.261 503.905"), 2, "focal lengths must be positive"},
         {"zero focal length", replaceLine(good, 6, "573.71 0"), 6, "focal lengths must be positive"},
+        {"focal length of no real camera", replaceLine(good, 2, "1e-20 503.905"), 2, "give no field of view between 1 and 170 degrees"},
+        {"focal length in metres", replaceLine(good, 6, "0.0035 0.0035"), 6, "give no field of view between 1 and 170 degrees"},
         {"non-number focal length", replaceLine(good, 6, "573.71 x"), 6, "not a number: 'x'"},
         {"number with garbage suffix", replaceLine(good, 3, "352.457 272.202abc"), 3, "not a number: '272.202abc'"},
         {"trailing garbage", replaceLine(good, 7, "346.471 249.031 junk"), 7, "expected 2 numbers"},
