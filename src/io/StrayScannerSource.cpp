@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <iterator>
 #include <map>
 
 #include <opencv2/core.hpp>
@@ -150,7 +151,15 @@ void StrayScannerSource::loadPoses() {
     for (FrameFiles& f : frames_) {
         const auto it = by_frame.find(f.number);
         if (it == by_frame.end()) {
+            // No row: the time follows from the nearest row's at the video's rate, on the same clock as
+            // its neighbours (number / fps alone would put it thousands of seconds from them).
             f.timestamp_s = f.number / fps;
+            if (!by_frame.empty()) {
+                auto nearest = by_frame.lower_bound(f.number);  // the first row after the frame
+                if (nearest == by_frame.end() || (nearest != by_frame.begin() && f.number - std::prev(nearest)->first < nearest->first - f.number))
+                    nearest = std::prev(nearest);
+                f.timestamp_s = nearest->second.timestamp_s + (f.number - nearest->first) / fps;
+            }
             continue;
         }
         f.timestamp_s = it->second.timestamp_s;

@@ -342,10 +342,15 @@ TEST(StrayScannerSource, FramesWithoutOdometryHaveNoGroundTruth) {
     RGBDFrame frame;
     ASSERT_TRUE(source.next(frame));
     EXPECT_FALSE(frame.has_ground_truth);
-    EXPECT_NEAR(frame.timestamp_s, 0.0, 1e-9);  // frame 0 / 60 Hz
+    // On the odometry's clock: a frame before its nearest row at the video's 60 Hz, not frame 0 / 60 Hz
+    // (thousands of seconds from its neighbours in a real capture).
+    EXPECT_NEAR(frame.timestamp_s, 2.0 - 1.0 / 60.0, 1e-9);
     ASSERT_TRUE(source.next(frame));
     EXPECT_TRUE(frame.has_ground_truth);
     EXPECT_DOUBLE_EQ(frame.timestamp_s, 2.0);
+    ASSERT_TRUE(source.next(frame));
+    EXPECT_FALSE(frame.has_ground_truth);
+    EXPECT_NEAR(frame.timestamp_s, 2.0 + 1.0 / 60.0, 1e-9);
 }
 
 TEST(StrayScannerSource, OpenImageSourceRecognisesACaptureAndTheInputThreadReadsIt) {
