@@ -77,14 +77,20 @@ void TumSource::chooseCalibration(const std::string& calib_path) {
 void TumSource::associate(const std::string& rgb_list, const std::string& depth_list) {
     const fs::path folder(folder_);
     using frame_reading::ListedImage;
-    // Only the images on disk take part (the others are counted in missing_listed_files_).
-    auto listedOnDisk = [&](const std::string& list) {
+    // Listed images missing on disk (counted in missing_listed_files_): before the first and after the
+    // last image on disk they are left out (a trimmed copy keeps the benchmark's full lists); between
+    // them they take part as listed, so that a frame that needs one is an unreadable frame at its own
+    // place, named when it is read, not left out silently with the frames after it moved up.
+    auto listed = [&](const std::string& list) {
         std::vector<ListedImage> images = frame_reading::readTimestampedImageList((folder / list).string(), missing_listed_files_);
-        images.erase(std::remove_if(images.begin(), images.end(), [](const ListedImage& i) { return !i.on_disk; }), images.end());
-        return images;
+        const auto on_disk = [](const ListedImage& i) { return i.on_disk; };
+        const auto first = std::find_if(images.begin(), images.end(), on_disk);
+        if (first == images.end()) return std::vector<ListedImage>();
+        const auto last = std::find_if(images.rbegin(), images.rend(), on_disk).base();
+        return std::vector<ListedImage>(first, last);
     };
-    std::vector<ListedImage> rgb = listedOnDisk(rgb_list);
-    const std::vector<ListedImage> depth = listedOnDisk(depth_list);
+    std::vector<ListedImage> rgb = listed(rgb_list);
+    const std::vector<ListedImage> depth = listed(depth_list);
     std::stable_sort(rgb.begin(), rgb.end(), [](const ListedImage& a, const ListedImage& b) { return a.time_s < b.time_s; });
 
     struct Candidate {
@@ -140,7 +146,7 @@ std::string TumSource::description() const {
     if (dropped_depth_frames_ > 0)
         d += "; " + std::to_string(dropped_depth_frames_) + " depth frames without an rgb image within 0.02 s dropped";
     if (missing_listed_files_ > 0)
-        d += "; " + std::to_string(missing_listed_files_) + " listed images not on disk skipped";
+        d += "; " + std::to_string(missing_listed_files_) + " listed images not on disk (left out, or unreadable frames between ones on disk)";
     d += "; calibration: " + calib_origin_;
     d += ground_truth_.empty() ? "; no ground truth)" : "; ground truth: " + std::to_string(ground_truth_.size()) + " poses)";
     return d;

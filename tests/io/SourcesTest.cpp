@@ -101,6 +101,32 @@ TEST(TumSource, AssociatesByNearestTimestampOnHandMadeFolder) {
     EXPECT_FALSE(source.next(frame));
 }
 
+// A listed depth image missing between ones on disk is an unreadable frame at its own place, named,
+// and the frames after it keep their indices; the rgb line after the last image on disk (a trimmed
+// copy's longer list) is left out.
+TEST(TumSource, AListedImageMissingBetweenOnesOnDiskIsAnUnreadableFrameInItsPlace) {
+    HandMadeTumFolder folder;
+    const std::string missing = folder.dir.file("depth/1.040000.png");
+    std::filesystem::remove(missing);
+    TumSource source(folder.dir.path());
+    EXPECT_EQ(source.frameCount(), 3);
+    EXPECT_EQ(source.missingListedFiles(), 2);
+    RGBDFrame frame;
+    ASSERT_TRUE(source.next(frame));
+    EXPECT_EQ(frame.index, 0);
+    try {
+        source.next(frame);
+        ADD_FAILURE() << "the missing depth image was not reported";
+    } catch (const IoError& e) {
+        EXPECT_EQ(e.file(), missing);
+        EXPECT_EQ(e.frame(), 1);
+    }
+    ASSERT_TRUE(source.next(frame));
+    EXPECT_EQ(frame.index, 2);
+    EXPECT_DOUBLE_EQ(frame.timestamp_s, 1.072);
+    EXPECT_FALSE(source.next(frame));
+}
+
 // Frames read into one RGBDFrame trade images with the source: from the third frame on, each is
 // decoded into memory an earlier frame had, so a sequence allocates no image memory per frame.
 TEST(TumSource, FramesAreDecodedIntoTheMemoryOfEarlierFrames) {

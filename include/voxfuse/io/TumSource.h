@@ -16,8 +16,9 @@ public:
     // Pairs depth and rgb images by timestamp: candidate pairs closer than kMaxTimeDifference_s are
     // taken greedily, closest first, each rgb image at most once (TUM's associate.py rule); frames
     // keep depth.txt's order and a depth image without a partner is dropped and counted. Listed
-    // images missing on disk are skipped and counted (the benchmark's lists often cover more than a
-    // trimmed copy holds). Each frame's timestamp is its depth timestamp; it has ground truth when
+    // images missing on disk are counted; those before the first or after the last image on disk are
+    // left out (the benchmark's lists often cover more than a trimmed copy holds), those between take
+    // part, and their frames throw IoError naming them when read. Each frame's timestamp is its depth timestamp; it has ground truth when
     // groundtruth.txt has a pose within kMaxTimeDifference_s (interpolated between samples).
     //
     // Calibration: calib_path if given, else calib.txt in the folder, else TUM fr1/fr2/fr3 guessed
