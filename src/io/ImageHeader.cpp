@@ -25,22 +25,28 @@ void readPng(const std::vector<unsigned char>& b, Header& h) {
 }
 
 // JPEG: the first start-of-frame marker (SOF0..SOF15 but DHT, JPG and DAC) holds height and width.
-void readJpeg(const std::vector<unsigned char>& b, Header& h) {
-    std::size_t i = 2;
-    while (i + 9 <= b.size() && b[i] == 0xff) {
-        const unsigned char marker = b[i + 1];
+// Segments are followed through the whole file, not only its head: metadata (EXIF, comments, up to
+// 64 KB each) may come first, and a size not found would let any size through to the decoder.
+void readJpeg(std::ifstream& in, Header& h) {
+    std::uint64_t at = 2;
+    unsigned char m[9];
+    for (int segments = 0; segments < (1 << 16); ++segments) {
+        in.clear();
+        if (!in.seekg(std::streamoff(at)) || !in.read(reinterpret_cast<char*>(m), 9) || m[0] != 0xff) return;
+        const unsigned char marker = m[1];
         if (marker == 0xff) {  // fill byte
-            ++i;
+            ++at;
             continue;
         }
-        const std::size_t length = be16(b.data() + i + 2);
         if (marker >= 0xc0 && marker <= 0xcf && marker != 0xc4 && marker != 0xc8 && marker != 0xcc) {
-            h.height = be16(b.data() + i + 5);
-            h.width = be16(b.data() + i + 7);
+            h.height = be16(m + 5);
+            h.width = be16(m + 7);
             return;
         }
+        if (marker == 0xda) return;  // start of scan: no frame header before the image data
+        const std::uint16_t length = be16(m + 2);
         if (length < 2) return;
-        i += 2 + length;
+        at += 2 + length;
     }
 }
 
@@ -112,7 +118,7 @@ Header read(const std::string& path) {
         readPng(b, h);
     } else if (b.size() >= 3 && b[0] == 0xff && b[1] == 0xd8 && b[2] == 0xff) {
         h.format = Format::Jpeg;
-        readJpeg(b, h);
+        readJpeg(in, h);
     } else if (b.size() >= 3 && b[0] == 'P' && b[1] >= '1' && b[1] <= '6' && std::isspace(b[2])) {
         h.format = Format::Netpbm;
         readNetpbm(b, h);

@@ -308,6 +308,15 @@ TEST(ImageIO, OnlyKnownFormatsOfAPlausibleSizeReachTheDecoders) {
     t += std::string("\x01\x01\x04\x00\x01\x00\x00\x00\x70\x11\x01\x00", 12);
     writeBytes(tiff, t);
     expectIoError([](const std::string& p) { readLabelImage(p, -1); }, tiff, "the TIFF says it is 70000x70000 pixels");
+    // A JPEG whose frame header (20000x20000) comes after 6 KB of comment: its size is found past the
+    // head the other formats are read from.
+    const std::string jpeg = dir.file("depth.png");
+    std::string j = "\xff\xd8";
+    const std::string comment(6000, 'c');
+    j += std::string("\xff\xfe", 2) + char((comment.size() + 2) >> 8) + char((comment.size() + 2) & 0xff) + comment;
+    j += std::string("\xff\xc0\x00\x0b\x08\x4e\x20\x4e\x20\x01\x01\x11\x00", 13);
+    writeBytes(jpeg, j);
+    expectIoError([](const std::string& p) { readLabelImage(p, -1); }, jpeg, "the JPEG says it is 20000x20000 pixels");
 }
 
 TEST(ImageIO, AFolderForAnImageSaysSo) {
