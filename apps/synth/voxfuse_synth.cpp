@@ -10,6 +10,8 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -41,6 +43,7 @@ struct Options {
     bool noNoise = false;
     bool noLabels = false;
     int colourSamples = 2;
+    bool overwrite = false;
 };
 
 constexpr double kFirstTimestamp = 1000.0;
@@ -84,6 +87,14 @@ std::ofstream openText(const fs::path& path) {
     return out;
 }
 
+// Streams are checked when closed: the last flush is where a full disk shows.
+void closeChecked(std::ofstream& out, const fs::path& path) {
+    if (!out.is_open()) return;
+    out.flush();
+    out.close();
+    if (!out) throw std::runtime_error("cannot write " + path.string() + " (disk full?)");
+}
+
 void writeCalib(const fs::path& path, const PinholeCamera& cam, const std::string& disparityLine) {
     std::ofstream out = openText(path);
     for (int camera = 0; camera < 2; ++camera)  // rgb, then depth: the same sensor
@@ -91,6 +102,7 @@ void writeCalib(const fs::path& path, const PinholeCamera& cam, const std::strin
             << cam.fx << " " << cam.fy << "\n"
             << cam.cx << " " << cam.cy << "\n\n";
     out << "1 0 0 0\n0 1 0 0\n0 0 1 0\n\n" << disparityLine << "\n";
+    closeChecked(out, path);
 }
 
 // 8-bit interleaved colour with a little Gaussian sensor noise; OpenCV wants BGR.
@@ -106,16 +118,21 @@ std::vector<std::uint8_t> toBytes(const std::vector<Eigen::Vector3f>& rgb, std::
     return bytes;
 }
 
+// Encoded in memory and written through a checked stream (the codec's own file writer does not check
+// its last flush).
 void writeImage(const fs::path& path, const cv::Mat& image, const std::vector<int>& params) {
-    if (!cv::imwrite(path.string(), image, params))
-        throw std::runtime_error("cannot write " + path.string());
+    std::vector<std::uint8_t> bytes;
+    if (!cv::imencode(path.extension().string(), image, bytes, params)) throw std::runtime_error("cannot encode " + path.string());
+    std::ofstream out(path, std::ios::binary);
+    out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+    closeChecked(out, path);
 }
 
 void writePpm(const fs::path& path, int width, int height, const std::vector<std::uint8_t>& rgb) {
     std::ofstream out(path, std::ios::binary);
     out << "P6\n" << width << " " << height << "\n255\n";
     out.write(reinterpret_cast<const char*>(rgb.data()), static_cast<std::streamsize>(rgb.size()));
-    if (!out) throw std::runtime_error("cannot write " + path.string());
+    closeChecked(out, path);
 }
 
 // 16-bit binary PGM; the format stores samples big-endian.
@@ -128,7 +145,7 @@ void writePgm16(const fs::path& path, int width, int height, const std::vector<s
         bytes[2 * i + 1] = static_cast<char>(values[i] & 0xFF);
     }
     out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-    if (!out) throw std::runtime_error("cannot write " + path.string());
+    closeChecked(out, path);
 }
 
 // `source` names the rendered sequence in every header ("synthetic_room", "synthetic_corridor").
@@ -143,6 +160,7 @@ void writeClasses(const fs::path& path, const std::string& source, const Synthet
            "# file: 'voxfuse " << source << " (voxfuse_synth)'\n"
            "# id name   (0 = unlabelled: no surface)\n";
     for (const SemanticClass& c : scene.classes()) out << c.id << " " << c.name << "\n";
+    closeChecked(out, path);
 }
 
 // Label PNGs are 8-bit: every class a primitive uses must fit.
@@ -153,8 +171,8 @@ void checkClassesFitLabelImages(const SyntheticScene& scene) {
                                      " does not fit the 8-bit label images (--no-labels skips them)");
 }
 
-int run(const Options& opt) {
-    const fs::path out(opt.outDir);
+// Renders the sequence into `out` (a new, empty folder).
+void render(const Options& opt, const fs::path& out) {
     const bool tum = opt.format == "tum";
     const bool labels = tum && !opt.noLabels;
     fs::create_directories(out);
@@ -259,7 +277,37 @@ int run(const Options& opt) {
         }
         std::cout << "\rframe " << (i + 1) << "/" << opt.frames << std::flush;
     }
-    std::cout << "\nwrote " << opt.frames << " frames to " << out.string() << "\n";
+    closeChecked(groundTruth, out / "groundtruth.txt");
+    closeChecked(rgbList, out / "rgb.txt");
+    closeChecked(depthList, out / "depth.txt");
+    closeChecked(associations, out / "associations.txt");
+    closeChecked(labelList, out / "labels.txt");
+}
+
+// The sequence is rendered into a hidden folder beside the target and renamed into place once every
+// file is written: an interrupted or failed run leaves no folder that looks like a complete sequence,
+// and an existing one is replaced only with --overwrite.
+int run(const Options& opt) {
+    fs::path target = fs::path(opt.outDir).lexically_normal();
+    if (target.filename().empty()) target = target.parent_path();  // "dir/"
+    std::error_code ec;
+    if (fs::exists(target, ec)) {
+        if (!fs::is_directory(target, ec)) throw std::runtime_error(target.string() + " exists and is not a folder");
+        if (!fs::is_empty(target, ec) && !opt.overwrite)
+            throw std::runtime_error(target.string() + " exists and is not empty (give --overwrite to replace it)");
+    }
+    const fs::path staging = target.parent_path() / ("." + target.filename().string() + ".partial-" + std::to_string(::getpid()));
+    fs::remove_all(staging, ec);
+    fs::create_directories(staging);
+    try {
+        render(opt, staging);
+        fs::remove_all(target);
+        fs::rename(staging, target);
+    } catch (...) {
+        fs::remove_all(staging, ec);
+        throw;
+    }
+    std::cout << "\nwrote " << opt.frames << " frames to " << target.string() << "\n";
     return 0;
 }
 
@@ -269,7 +317,8 @@ int main(int argc, char** argv) {
     CLI::App app{"Render the VoxFuse synthetic room, or a walk down a corridor and back, as an RGB-D sequence with exact ground truth"};
     app.option_defaults()->always_capture_default();  // show defaults in --help
     Options opt;
-    app.add_option("--out", opt.outDir, "Output directory")->required();
+    app.add_option("--out", opt.outDir, "Output directory (made whole at the end; an existing one that is not empty needs --overwrite)")->required();
+    app.add_flag("--overwrite", opt.overwrite, "Replace the output directory if it exists");
     app.add_option("--scene", opt.scene,
                    "room: the orbit of the bundled room; corridor: a walk down a corridor and back in --frames "
                    "frames, a map several times a bounded active memory (swapping benchmark: --frames 1200)")
@@ -294,7 +343,7 @@ int main(int argc, char** argv) {
     try {
         return run(opt);
     } catch (const std::exception& e) {
-        std::cerr << "voxfuse_synth: " << e.what() << "\n";
-        return 1;
+        std::cerr << "\nvoxfuse_synth: " << e.what() << "\n";
+        return 2;
     }
 }

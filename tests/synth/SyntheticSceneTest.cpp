@@ -652,6 +652,22 @@ TEST(VoxfuseSynthTool, TumLabelImagesAreTheExactClasses) {
     EXPECT_FALSE(fs::exists(dir / "labels"));
     EXPECT_FALSE(fs::exists(dir / "labels.txt"));
     EXPECT_FALSE(fs::exists(dir / "classes.txt"));
+
+    // An existing sequence is never written into: refused without --overwrite, replaced whole with it.
+    auto frameLines = [&] {
+        std::ifstream list(dir / "depth.txt");
+        int count = 0;
+        for (std::string line; std::getline(list, line);) count += !line.empty() && line[0] != '#';
+        return count;
+    };
+    const std::string twoFrames = std::string("\"") + VOXFUSE_SYNTH_EXE + "\" --out \"" + dir.string() +
+                                  "\" --frames 2 --width 80 --height 60 --colour-samples 1 --no-labels";
+    EXPECT_NE(std::system((twoFrames + " > /dev/null 2>&1").c_str()), 0);
+    EXPECT_EQ(frameLines(), 1);
+    EXPECT_EQ(std::system((twoFrames + " --overwrite > /dev/null").c_str()), 0);
+    EXPECT_EQ(frameLines(), 2);
+    for (const auto& entry : fs::directory_iterator(dir.parent_path()))
+        EXPECT_EQ(entry.path().filename().string().find(".voxfuse_synth_tum_labels.partial-"), std::string::npos) << "a staging folder was left";
     fs::remove_all(dir);
 }
 #else
