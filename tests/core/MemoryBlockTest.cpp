@@ -90,6 +90,20 @@ TEST(MemoryBlockTest, ReallocationKeepsCopiesThatWereNotAskedForWhenTheSizeMatch
     EXPECT_EQ(m.size(), 17u);
 }
 
+// A failed allocation leaves the block empty, not claiming a size without memory behind it: buffers
+// grown on demand (size() < needed) then try again instead of handing a null pointer to a kernel.
+TEST(MemoryBlockTest, AFailedAllocationLeavesTheBlockEmpty) {
+    if (device_memory::cudaAvailable()) GTEST_SKIP() << "needs a device allocation that fails: a machine without a GPU";
+    MemoryBlock<int> m(8, true, false);
+    EXPECT_THROW(m.allocate(16, true, true), Error);  // the host copy is made, then the device copy fails
+    EXPECT_EQ(m.size(), 0u);
+    EXPECT_FALSE(m.onHost());
+    EXPECT_FALSE(m.onDevice());
+    m.allocate(16, true, false);  // and the block is usable again
+    EXPECT_EQ(m.size(), 16u);
+    EXPECT_TRUE(m.onHost());
+}
+
 TEST(MemoryBlockTest, ImagesKeepTheirMemoryAcrossFramesOfOneSize) {
     Image<float> image({64, 48});
     const float* before = image.host();

@@ -54,7 +54,9 @@ public:
 
     // Reallocates (contents are lost) unless the size matches and the copies asked for exist (copies
     // not asked for are then kept too: a buffer reused every frame keeps both). The new copies count as
-    // current: their contents are undefined until written.
+    // current: their contents are undefined until written. When an allocation fails the block is left
+    // empty (size 0), never claiming a size it has no memory for: callers that grow buffers on demand
+    // then allocate again on the next call instead of handing out a null pointer.
     void allocate(std::size_t count, bool on_host, bool on_device, HostMemory host_kind = HostMemory::Pageable) {
         // A pinned host copy serves where pageable memory was asked for, not the other way round.
         const bool host_ok = !on_host || (host_ && (host_kind == HostMemory::Pageable || host_kind_ == HostMemory::Pinned));
@@ -64,8 +66,13 @@ public:
         host_kind_ = host_kind;
         host_current_ = device_current_ = true;
         if (count == 0) return;
-        if (on_host) allocateHost();
-        if (on_device) device_ = static_cast<T*>(device_memory::allocate(bytes()));
+        try {
+            if (on_host) allocateHost();
+            if (on_device) device_ = static_cast<T*>(device_memory::allocate(bytes()));
+        } catch (...) {
+            release();
+            throw;
+        }
     }
 
     std::size_t size() const { return count_; }
