@@ -129,12 +129,16 @@ void VoxelBlockHash::clearBlocks() {
     stats_ = AllocationStats();
 }
 
-bool VoxelBlockHash::growBlockCapacity(int blocks) {
-    if (blocks <= block_capacity_ || !canGrow()) return false;
+int VoxelBlockHash::grownBlockCapacity(int blocks) const {
+    if (blocks <= block_capacity_ || !canGrow()) return block_capacity_;
     const int step = std::max(settings_.blocks_per_growth, block_capacity_ / 4);
     const long long wanted = std::max<long long>(blocks, (long long)block_capacity_ + step);
     const long long rounded = (wanted + settings_.blocks_per_growth - 1) / settings_.blocks_per_growth * settings_.blocks_per_growth;
-    const int capacity = int(std::min<long long>(rounded, settings_.max_block_count));
+    return int(std::min<long long>(rounded, settings_.max_block_count));
+}
+
+void VoxelBlockHash::setBlockCapacity(int capacity) {
+    if (capacity <= block_capacity_) return;
     // The new blocks go on top of the stack, highest first, so that they are taken in ascending order.
     const int added = capacity - block_capacity_;
     std::vector<int> fresh(static_cast<std::size_t>(added));
@@ -143,7 +147,6 @@ bool VoxelBlockHash::growBlockCapacity(int blocks) {
     free_block_count_ += added;
     block_capacity_ = capacity;
     stats_.block_capacity = capacity;
-    return true;
 }
 
 void VoxelBlockHash::popFreeStacks(int blocks, int excess_entries) {

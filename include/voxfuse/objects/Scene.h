@@ -66,8 +66,13 @@ public:
     // address space could be reserved): every pointer into voxels() taken before this call is invalid.
     // Engines take their voxel pointers at the start of a stage and never keep them, and only the
     // allocation engine calls this, between its stages, before it takes any.
+    // The voxels grow first: if their allocation fails (a GPU holds the old and the new array at
+    // once), the index still has its old capacity, and the scene is as it was.
     void reserveVoxelBlocks(int blocks) {
-        if (index_.growBlockCapacity(blocks)) resizeVoxelStorage(index_.voxelCount());
+        const int capacity = index_.grownBlockCapacity(blocks);
+        if (capacity == index_.blockCapacity()) return;
+        resizeVoxelStorage(index_.voxelCountFor(capacity));
+        index_.setBlockCapacity(capacity);
     }
     // Empties the map and returns the voxel storage to the size of a new scene.
     void clearVoxelBlocks() {

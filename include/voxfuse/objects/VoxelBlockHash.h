@@ -58,7 +58,8 @@ public:
     int freeExcessEntries() const { return free_excess_count_; }
     bool canGrow() const { return block_capacity_ < settings_.max_block_count; }
     // Voxels the scene must store: blockCapacity() blocks of 512.
-    std::size_t voxelCount() const { return std::size_t(block_capacity_) * kBlockVoxelCount; }
+    std::size_t voxelCount() const { return voxelCountFor(block_capacity_); }
+    static std::size_t voxelCountFor(int blocks) { return std::size_t(blocks) * kBlockVoxelCount; }
     // Voxels it may come to store: settings().max_block_count blocks of 512.
     std::size_t maxVoxelCount() const { return std::size_t(settings_.max_block_count) * kBlockVoxelCount; }
     // Memory of the index itself (entry table, free stacks, visibility, visible list); fixed by the settings.
@@ -117,8 +118,12 @@ private:
     // Growth changes how many voxels the scene stores, so only Scene calls these (it reallocates the voxels).
     template <class, class>
     friend class Scene;
-    // Raises the capacity to at least `blocks` (capped at the maximum). True when it changed.
-    bool growBlockCapacity(int blocks);
+    // The capacity a growth to at least `blocks` would give (capped at the maximum; in steps of
+    // blocks_per_growth, or a quarter more): blockCapacity() when it cannot or need not grow.
+    int grownBlockCapacity(int blocks) const;
+    // Raises the capacity to `capacity` (from grownBlockCapacity), once the voxels for it exist: a
+    // failed voxel allocation must not leave the free stack handing out blocks past the array's end.
+    void setBlockCapacity(int capacity);
     // Empties the table and returns the capacity to zero.
     void clearBlocks();
 
