@@ -62,7 +62,10 @@ std::string cudaDescription() {
     if (count == 0) return "no CUDA device";
     cudaDeviceProp prop{};
     int device = 0;
-    if (cudaGetDevice(&device) != cudaSuccess || cudaGetDeviceProperties(&prop, device) != cudaSuccess) return "CUDA device (unknown)";
+    if (cudaGetDevice(&device) != cudaSuccess || cudaGetDeviceProperties(&prop, device) != cudaSuccess) {
+        cudaGetLastError();
+        return "CUDA device (unknown)";
+    }
     return std::string(prop.name) + " (sm_" + std::to_string(prop.major) + std::to_string(prop.minor) + ", " +
            std::to_string(prop.totalGlobalMem >> 20) + " MiB)";
 }
@@ -81,7 +84,12 @@ void* allocate(std::size_t bytes) {
     VF_CUDA_CHECK(cudaMalloc(&p, bytes));
     AllocationLedger& l = ledger();
     const std::lock_guard<std::mutex> lock(l.mutex);
-    l.sizes[p] = bytes;
+    try {
+        l.sizes[p] = bytes;
+    } catch (...) {
+        cudaFree(p);
+        throw;
+    }
     l.in_use += bytes;
     if (l.in_use > l.peak) l.peak = l.in_use;
     return p;
@@ -89,7 +97,7 @@ void* allocate(std::size_t bytes) {
 
 void release(void* ptr) noexcept {
     if (!ptr) return;
-    cudaFree(ptr);
+    if (cudaFree(ptr) != cudaSuccess) cudaGetLastError();  // nothing to do about it here; keep it off the next check
     AllocationLedger& l = ledger();
     const std::lock_guard<std::mutex> lock(l.mutex);
     const auto it = l.sizes.find(ptr);
@@ -125,7 +133,7 @@ void* allocatePinned(std::size_t bytes) noexcept {
 }
 
 void releasePinned(void* ptr) noexcept {
-    if (ptr) cudaFreeHost(ptr);
+    if (ptr && cudaFreeHost(ptr) != cudaSuccess) cudaGetLastError();
 }
 
 void copyHostToDevice(void* dst, const void* src, std::size_t bytes) { VF_CUDA_CHECK(cudaMemcpy(dst, src, bytes, cudaMemcpyHostToDevice)); }
@@ -152,7 +160,7 @@ void* createEvent() {
     return e;
 }
 void destroyEvent(void* event) noexcept {
-    if (event) cudaEventDestroy(static_cast<cudaEvent_t>(event));
+    if (event && cudaEventDestroy(static_cast<cudaEvent_t>(event)) != cudaSuccess) cudaGetLastError();
 }
 void recordEvent(void* event) { VF_CUDA_CHECK(cudaEventRecord(static_cast<cudaEvent_t>(event))); }
 float eventElapsedMs(void* start, void* end) {

@@ -10,9 +10,13 @@
 
 namespace voxfuse::cuda {
 
+// The runtime also keeps a failure as its "last error", which the next launch check would report
+// against an innocent kernel: a failure is taken off it here (errors that break the context stay).
 inline void check(cudaError_t status, const char* call, const char* file, int line) {
-    if (status != cudaSuccess)
+    if (status != cudaSuccess) {
+        cudaGetLastError();
         throw DeviceError(std::string(call) + " failed at " + file + ":" + std::to_string(line) + ": " + cudaGetErrorString(status));
+    }
 }
 
 // Ceiling division for grid sizes.
