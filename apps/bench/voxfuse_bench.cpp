@@ -19,6 +19,8 @@
 #include "RelocalisationOptions.h"
 #include "OptionChecks.h"
 #include "HeapPolicy.h"
+#include "CommandLine.h"
+#include "DefaultData.h"
 #include "ProgramMain.h"
 #include "ResourceUsage.h"
 #include "RunRecord.h"
@@ -70,7 +72,7 @@ std::string defaultSource() {
 #if VOXFUSE_WITH_IO
     const std::string teddy = std::string(VOXFUSE_SHARED_DATA_DIR) + "/tum_fr3_teddy_200";
     if (fs::exists(teddy + "/rgb.txt")) return teddy;
-    return VOXFUSE_DEFAULT_DATA_DIR;
+    return app::bundledSequence("voxfuse_bench");
 #else
     return "synthetic";
 #endif
@@ -153,7 +155,8 @@ int main(int argc, char** argv) {
         ->check(CLI::Validator(
             [](std::string& path) { return isMeshFileName(path) ? std::string() : "expected a .ply, .obj or .stl file, got '" + path + "'"; },
             "MESH FILE"));
-    CLI11_PARSE(cli, argc, argv);
+    app::addVersionFlag(cli, "voxfuse_bench");
+    if (const auto status = app::parseCommandLine(cli, argc, argv, "voxfuse_bench")) return *status;
 
     app::interrupt::install("voxfuse_bench");
     return app::runReportingErrors("voxfuse_bench", [&] {

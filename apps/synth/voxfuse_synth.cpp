@@ -5,6 +5,7 @@
 #include "CameraPath.h"
 #include "KinectDepthModel.h"
 #include "SyntheticScene.h"
+#include "CommandLine.h"
 
 #include <CLI/CLI.hpp>
 #include <opencv2/core.hpp>
@@ -339,7 +340,8 @@ int main(int argc, char** argv) {
                  "Exact depth (only the file's own quantisation) and noise-free colour");
     app.add_flag("--no-labels", opt.noLabels,
                  "No semantic label images (TUM layout: labels/*.png, labels.txt, classes.txt)");
-    CLI11_PARSE(app, argc, argv);
+    voxfuse::app::addVersionFlag(app, "voxfuse_synth");
+    if (const auto status = voxfuse::app::parseCommandLine(app, argc, argv, "voxfuse_synth")) return *status;
     try {
         return run(opt);
     } catch (const std::exception& e) {

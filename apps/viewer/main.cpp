@@ -10,14 +10,13 @@
 #include "RelocalisationOptions.h"
 #include "OptionChecks.h"
 #include "HeapPolicy.h"
+#include "CommandLine.h"
+#include "DefaultData.h"
 #include "ProgramMain.h"
 #include "ViewerApp.h"
 #include "voxfuse/core/Error.h"
 #include "voxfuse/io/UndistortedImageSource.h"
 
-#ifndef VOXFUSE_DEFAULT_DATA_DIR
-#define VOXFUSE_DEFAULT_DATA_DIR "data/synthetic_room"
-#endif
 
 namespace fs = std::filesystem;
 using namespace voxfuse;
@@ -42,13 +41,6 @@ struct Options {
     viewer::ViewerOptions viewer;
 };
 
-// Default data: the same rule as the CLI (next to the sources in a build tree, else where `cmake --install` put it).
-std::string defaultSource() {
-    for (const std::string& candidate : {std::string(VOXFUSE_DEFAULT_DATA_DIR), std::string("data/synthetic_room")})
-        if (fs::exists(fs::path(candidate) / "rgb.txt")) return candidate;
-    throw IoError(VOXFUSE_DEFAULT_DATA_DIR, "the default data set is missing: give a SOURCE (see voxfuse_viewer --help)");
-}
-
 // "WxH" -> the window size; ConfigError for anything else.
 void parseWindowSize(const std::string& text, viewer::ViewerOptions& out) {
     const auto x = text.find_first_of("xX");
@@ -65,7 +57,7 @@ void parseWindowSize(const std::string& text, viewer::ViewerOptions& out) {
 }
 
 int run(Options& o) {
-    if (o.source.empty() && o.source_options.rgb_pattern.empty() && o.source_options.depth_pattern.empty()) o.source = defaultSource();
+    if (o.source.empty() && o.source_options.rgb_pattern.empty() && o.source_options.depth_pattern.empty()) o.source = app::bundledSequence("voxfuse_viewer");
     if (!o.size.empty()) parseWindowSize(o.size, o.viewer);
     std::unique_ptr<ImageSource> source = openImageSource(o.source, o.source_options);
     MainEngineSettings& s = o.engine;
@@ -119,6 +111,7 @@ int main(int argc, char** argv) {
     cli.add_option("--size", o.size, "window size WIDTHxHEIGHT (default 1200x640)");
     cli.add_option("--screenshot", o.viewer.screenshot_path, "save the window as PNG once processing stops (end of source or --frames)");
     cli.add_flag("--exit", o.viewer.exit_when_done, "quit once processing stops (after --screenshot); for scripts and tests");
-    CLI11_PARSE(cli, argc, argv);
+    app::addVersionFlag(cli, "voxfuse_viewer");
+    if (const auto status = app::parseCommandLine(cli, argc, argv, "voxfuse_viewer")) return *status;
     return app::runReportingErrors("voxfuse_viewer", [&] { return run(o); });
 }

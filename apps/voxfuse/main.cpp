@@ -16,6 +16,8 @@
 #include "OptionChecks.h"
 #include "OutputFolder.h"
 #include "HeapPolicy.h"
+#include "CommandLine.h"
+#include "DefaultData.h"
 #include "ProgramMain.h"
 #include "ResourceUsage.h"
 #include "RunRecord.h"
@@ -38,9 +40,6 @@
 #include "voxfuse/io/UndistortedImageSource.h"
 #include "voxfuse/mapping/OccupancyMapper.h"
 
-#ifndef VOXFUSE_DEFAULT_DATA_DIR
-#define VOXFUSE_DEFAULT_DATA_DIR "data/synthetic_room"
-#endif
 
 namespace fs = std::filesystem;
 using namespace voxfuse;
@@ -83,13 +82,6 @@ struct CliOptions {
     std::vector<std::string> given;       // options given on the command line, by their long names
     MainEngineSettings engine;
 };
-
-// Default data: next to the sources in a build tree, else where `cmake --install` put it.
-std::string defaultSource() {
-    for (const std::string& candidate : {std::string(VOXFUSE_DEFAULT_DATA_DIR), std::string("data/synthetic_room")})
-        if (fs::exists(fs::path(candidate) / "rgb.txt")) return candidate;
-    throw IoError(VOXFUSE_DEFAULT_DATA_DIR, "the default data set is missing: give a SOURCE (see voxfuse --help)");
-}
 
 class ProgressLine {
 public:
@@ -315,7 +307,7 @@ int run(CliOptions& o) {
     if (o.live) {
         source = OpenNISource::openDevice(o.device_uri, o.source_options);
     } else {
-        if (o.source.empty() && o.source_options.rgb_pattern.empty() && o.source_options.depth_pattern.empty()) o.source = defaultSource();
+        if (o.source.empty() && o.source_options.rgb_pattern.empty() && o.source_options.depth_pattern.empty()) o.source = app::bundledSequence("voxfuse");
         if (app::SyntheticSource::isSyntheticName(o.source)) source = app::SyntheticSource::open(o.source);
         else source = openImageSource(o.source, o.source_options);
     }
@@ -493,7 +485,8 @@ int main(int argc, char** argv) {
     cli.add_option("--tracker-max-distance", o.tracker_max_distance, "ICP outlier distance per level (m), coarse to fine")
         ->check(app::floatIn(0.0, 10.0, true));
     app::addRelocalisationOptions(cli, o.engine.relocalisation);
-    CLI11_PARSE(cli, argc, argv);
+    app::addVersionFlag(cli, "voxfuse");
+    if (const auto status = app::parseCommandLine(cli, argc, argv, "voxfuse")) return *status;
     for (const CLI::Option* option : cli.get_options())
         if (option->count() > 0) o.given.push_back(option->get_name());  // "--index", or "source" for the positional
 

@@ -3,9 +3,11 @@
 #include "Bindings.h"
 #include "voxfuse/core/CpuThreads.h"
 #include "voxfuse/core/DeviceMemory.h"
+#include "voxfuse/Version.h"
 
 PYBIND11_MODULE(_voxfuse, m) {
     m.doc() = "VoxFuse: dense 3D reconstruction from RGB-D frames (the C++ library's bindings).";
+    m.attr("__version__") = VOXFUSE_VERSION_STRING;
     using namespace voxfuse::python;
     bindErrors(m);
     bindCalibration(m);

@@ -48,3 +48,13 @@ def test_public_names_are_documented():
         assert inspect.getdoc(obj), name
     for name in ("process", "process_frame", "render", "extract_mesh", "from_map", "summary"):
         assert len(inspect.getdoc(getattr(voxfuse.Pipeline, name))) > 40, name
+
+
+def test_the_version_is_the_projects():
+    # pyproject.toml and CMakeLists.txt agree (CMake checks it); the module reports the same.
+    pyproject = pathlib.Path(__file__).resolve().parents[2] / "pyproject.toml"
+    if not pyproject.exists():  # an installed copy of the tests
+        assert voxfuse.__version__.count(".") == 2
+        return
+    line = next(l for l in pyproject.read_text().splitlines() if l.startswith("version = "))
+    assert voxfuse.__version__ == line.split('"')[1]

@@ -35,6 +35,7 @@ from ._voxfuse import (
     set_cpu_threads,
     write_tum_trajectory,
 )
+from ._voxfuse import __version__  # the library's, from CMakeLists.txt project(VERSION)
 
 __all__ = [
     "Calibration",
