@@ -57,6 +57,10 @@ std::string cudaDescription() {
     const cudaError_t status = cudaGetDeviceCount(&count);
     if (status != cudaSuccess) {
         cudaGetLastError();
+        // Without any driver the runtime says its version is "insufficient": say both causes.
+        if (status == cudaErrorInsufficientDriver)
+            return "no usable CUDA device (no NVIDIA driver found, or one older than this build's CUDA " +
+                   std::to_string(CUDART_VERSION / 1000) + "." + std::to_string(CUDART_VERSION % 1000 / 10) + " runtime)";
         return std::string("no usable CUDA device (") + cudaGetErrorString(status) + ")";
     }
     if (count == 0) return "no CUDA device";
