@@ -153,3 +153,14 @@ def test_relocalisation_settings_are_checked():
         voxfuse.Pipeline(calib, relocalise_candidates=0)
     with pytest.raises(voxfuse.ConfigError, match="speed limit"):
         voxfuse.Pipeline(calib, relocalise_max_speed=-1.0)
+
+
+def test_reset_forgets_the_ground_truth_origin(room_frames):
+    # After a reset the next ground-truth frame defines the world again, as the first frame did.
+    source, frames = room_frames
+    p = voxfuse.Pipeline(source.calib, voxel_size=0.02, mu=0.08)
+    for f in frames[:3]:
+        p.process_frame(f, ground_truth=True)
+    p.reset()
+    p.process_frame(frames[6], ground_truth=True)
+    assert np.allclose(p.pose, np.eye(4), atol=1e-6), p.pose

@@ -11,6 +11,7 @@
 #include <type_traits>
 
 #include "PoseUpdate.h"
+#include "io/TextParsing.h"
 #include "voxfuse/core/Error.h"
 #include "voxfuse/core/Timer.h"
 #include "voxfuse/engines/AllocationEngine.h"
@@ -26,6 +27,13 @@
 
 namespace voxfuse {
 namespace {
+
+// A pose given from outside must be a camera's (a rotation and a plausible position): a scaled or
+// sheared matrix would be fused as if it were one, into an empty or garbled map.
+void requireCameraPose(const Mat4f& T_world_camera, const char* call) {
+    const std::string problem = text::rigidPoseProblem(T_world_camera.m);
+    if (!problem.empty()) throw ConfigError(std::string(call) + ": the given pose is no camera pose: " + problem);
+}
 
 // The frame's stage times: wall clock on the CPU; on the GPU, CUDA events recorded at the stage
 // boundaries, read once the frame's work has finished (no synchronisation between stages).
@@ -101,6 +109,7 @@ public:
 
     // On the GPU only the frame's images go up (raw depth, colour, classes); everything else stays there.
     FrameResult processFrame(const RGBDFrame& frame, const Mat4f* T_world_camera_given) override {
+        if (T_world_camera_given) requireCameraPose(*T_world_camera_given, "processFrame");
         FrameResult result;
         const Timer total;
         clock_.start(result);
@@ -126,6 +135,7 @@ public:
             tracking_ = TrackingState();
             tracking_.T_world_camera = *T_world_camera_given;
             lost_ = false;
+            result.keyframes = relocaliser_ ? relocaliser_->database().size() : 0;
             clock_.stageDone("track");
         } else {
             trackOrRelocalise(result);
@@ -202,6 +212,7 @@ public:
     void renderLast(RenderMode mode, Image<Vec4u8>& image) override { raycast_->render(scene_, displayRaycast(), mode, image); }
 
     void renderFromPose(const Mat4f& T_world_camera, const Intrinsics& intrinsics, RenderMode mode, Image<Vec4u8>& image) override {
+        requireCameraPose(T_world_camera, "renderFromPose");
         raycast_->raycast(scene_, intrinsics, T_world_camera, free_view_);
         raycast_->render(scene_, free_view_, mode, image);
     }
@@ -253,6 +264,9 @@ public:
         tracking_ = TrackingState();
         model_ = RenderState();
         ++model_version_;
+        // A new map has a new world: the next ground-truth frame defines it again.
+        has_source_origin_ = false;
+        T_source_world_ = Mat4f::identity();
     }
 
     std::size_t sceneBytes() const override {
@@ -554,6 +568,9 @@ namespace {
 // integer coordinate exactly, and offset + size never overflows an int.
 constexpr int kMaxDenseCoordinate = 1 << 24;
 
+// The widest truncation band accepted, in voxels (see validation in create()).
+constexpr float kMaxMuInVoxels = 64.f;
+
 std::string gib(double bytes) {
     char text[32];
     std::snprintf(text, sizeof text, "%.1f GiB", bytes / double(1ull << 30));
@@ -651,6 +668,11 @@ std::unique_ptr<MainEngine> MainEngine::create(const MainEngineSettings& request
     if (!(s.scene.voxel_size_m > 0.f && std::isfinite(s.scene.voxel_size_m)) || !(s.scene.mu_m > s.scene.voxel_size_m && std::isfinite(s.scene.mu_m)))
         throw ConfigError("need voxel size > 0 and mu > voxel size, both finite (got voxel " + std::to_string(s.scene.voxel_size_m) +
                           " m, mu " + std::to_string(s.scene.mu_m) + " m)");
+    // Every pixel allocates and integrates the blocks within mu of its depth: a band of hundreds of
+    // voxels (mu = 8 m at 1 cm) made a frame take seconds to minutes. Usual bands are 2-8 voxels.
+    if (s.scene.mu_m > kMaxMuInVoxels * s.scene.voxel_size_m)
+        throw ConfigError("mu " + std::to_string(s.scene.mu_m) + " m is more than " + std::to_string(int(kMaxMuInVoxels)) + " voxels of " +
+                          std::to_string(s.scene.voxel_size_m) + " m (a truncation band is usually 2-8 voxels)");
     if (s.scene.max_weight < 1 || s.scene.max_weight > 255) throw ConfigError("max weight must be in 1..255");
     validateDepthRange(s.scene);
     if (!(s.depth_gap_tolerance >= 0.f && s.depth_gap_tolerance <= 0.5f))

@@ -129,6 +129,13 @@ TEST(MainEngineTest, RejectsBadSettingsWithClearErrors) {
     s.dense_size = {16, 16, 16};
     s.scene.mu_m = s.scene.voxel_size_m / 2;
     EXPECT_THROW(MainEngine::create(s, calib), ConfigError);
+    s.scene.mu_m = 65 * s.scene.voxel_size_m;  // every pixel would allocate a band of 130 voxels
+    try {
+        MainEngine::create(s, calib);
+        ADD_FAILURE() << "a truncation band of 65 voxels was accepted";
+    } catch (const ConfigError& e) {
+        EXPECT_NE(std::string(e.what()).find("is more than 64 voxels"), std::string::npos) << e.what();
+    }
     s.scene.mu_m = 0.02f;
     EXPECT_THROW(MainEngine::create(s, RGBDCalib{}), ConfigError);
     EXPECT_THROW(parseVoxelType("double"), ConfigError);
@@ -137,6 +144,18 @@ TEST(MainEngineTest, RejectsBadSettingsWithClearErrors) {
     frame.depth_raw.resize({10, 10});
     const Mat4f pose = Mat4f::identity();
     EXPECT_THROW(engine->processFrame(frame, &pose), IoError) << "depth size disagrees with the calibration";
+    // A given pose must be a camera's: a scale or a shear is refused before anything is fused.
+    frame.depth_raw.resize({160, 120});
+    Mat4f scaled = Mat4f::identity();
+    scaled(0, 0) = scaled(1, 1) = scaled(2, 2) = 3.f;
+    try {
+        engine->processFrame(frame, &scaled);
+        ADD_FAILURE() << "a scaled pose was fused";
+    } catch (const ConfigError& e) {
+        EXPECT_NE(std::string(e.what()).find("no camera pose"), std::string::npos) << e.what();
+    }
+    Image<Vec4u8> image;
+    EXPECT_THROW(engine->renderFromPose(scaled, calib.depth, RenderMode::Shaded, image), ConfigError);
 }
 
 }  // namespace

@@ -148,7 +148,8 @@ public:
     // Raycasts and renders the model from any viewpoint (does not disturb the tracking raycast).
     virtual void renderFromPose(const Mat4f& T_world_camera, const Intrinsics& intrinsics, RenderMode mode,
                                 Image<Vec4u8>& image) = 0;
-    // Clears the map and the pose.
+    // Clears the map, the pose, the keyframes and the source origin (the next map's world is defined
+    // anew, by its first frame).
     virtual void reset() = 0;
     // Bytes held by the voxel storage and the index's tables.
     virtual std::size_t sceneBytes() const = 0;
