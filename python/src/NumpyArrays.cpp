@@ -34,11 +34,12 @@ Mat4f arrayToMatrix(const py::handle& value, const char* what) {
 }
 
 py::tuple timedPosesToArrays(const std::vector<TimedPose>& poses) {
-    py::array_t<double> t(std::vector<py::ssize_t>{py::ssize_t(poses.size())});
-    py::array_t<double> p({py::ssize_t(poses.size()), py::ssize_t(4), py::ssize_t(4)});
+    const std::size_t n = poses.size();
+    py::array_t<double> t(std::vector<py::ssize_t>{py::ssize_t(n)});
+    py::array_t<double> p({py::ssize_t(n), py::ssize_t(4), py::ssize_t(4)});
     auto ta = t.mutable_unchecked<1>();
     auto pa = p.mutable_unchecked<3>();
-    for (std::size_t i = 0; i < poses.size(); ++i) {
+    for (std::size_t i = 0; i < n; ++i) {
         ta(py::ssize_t(i)) = poses[i].timestamp_s;
         for (int r = 0; r < 4; ++r)
             for (int c = 0; c < 4; ++c) pa(py::ssize_t(i), r, c) = double(poses[i].T_world_camera(r, c));

@@ -100,9 +100,14 @@ void copyRgb(const py::handle& value, const RGBDCalib& calib, Image<Vec4u8>& out
         const std::uint8_t* row = base + y * sy;
         Vec4u8* out_row = dst + y * w;
         if (sc == 1 && sx == 4) {  // 4-byte pixels (RGBA, or RGB viewed through RGBA): whole rows
-            std::memcpy(static_cast<void*>(out_row), row, std::size_t(4 * w));
-            if (c == 3)
-                for (py::ssize_t x = 0; x < w; ++x) out_row[x].w = 255;
+            // An RGB view ends 3 bytes into its last pixel: that pixel is copied alone, never its 4th byte
+            // (which may lie past the end of the buffer).
+            std::memcpy(static_cast<void*>(out_row), row, std::size_t(4 * (c == 4 ? w : w - 1)));
+            if (c == 3) {
+                for (py::ssize_t x = 0; x + 1 < w; ++x) out_row[x].w = 255;
+                const std::uint8_t* last = row + 4 * (w - 1);
+                out_row[w - 1] = {last[0], last[1], last[2], 255};
+            }
         } else {
             for (py::ssize_t x = 0; x < w; ++x) {
                 const std::uint8_t* px = row + x * sx;
@@ -414,17 +419,30 @@ void bindPipeline(py::module_& m) {
              }, py::arg("path"), "Replaces the map with a .vfm file's (which must match the settings; see Pipeline.from_map).")
         .def("reset", [](Pipeline& p) {
                  const auto busy = p.claim("reset");
+                 py::gil_scoped_release no_gil;  // a large dense volume takes a while to clear
                  p.reset();
              }, "Clears the map, the pose, the trajectory and the timings.")
-        .def_property_readonly("pose", [](Pipeline& p) { return matrixToArray(p.engine().trackingState().T_world_camera); },
-                               "The current camera-to-world pose (4, 4).")
-        .def_property_readonly("trajectory", [](const Pipeline& p) { return timedPosesToArrays(p.trajectory()); },
-                               "(timestamps (N,), camera-to-world poses (N, 4, 4)) of every processed frame that has a pose (lost frames have none).")
+        // The readers claim the pipeline too: a frame being processed on another thread appends to
+        // what they copy (the trajectory, the stage times), and the engine's state is mid-update.
+        .def_property_readonly("pose", [](Pipeline& p) {
+                                   const auto busy = p.claim("pose");
+                                   return matrixToArray(p.engine().trackingState().T_world_camera);
+                               }, "The current camera-to-world pose (4, 4).")
+        .def_property_readonly("trajectory", [](Pipeline& p) {
+                                   const auto busy = p.claim("trajectory");
+                                   return timedPosesToArrays(p.trajectory());
+                               }, "(timestamps (N,), camera-to-world poses (N, 4, 4)) of every processed frame that has a pose (lost frames have none).")
         .def_property_readonly("settings", [](const Pipeline& p) { return p.settings(); })
         .def_property_readonly("calib", [](const Pipeline& p) { return p.calib(); })
         .def_property_readonly("frames_processed", &Pipeline::framesProcessed)
-        .def("timings", &timings, "Per stage: median and mean milliseconds over the frames so far, and the frame count.")
-        .def("summary", &summary, "The run so far as a dict: device, voxel and index, frames (fused, failed, lost), relocalisation\n"
+        .def("timings", [](Pipeline& p) {
+                 const auto busy = p.claim("timings");
+                 return timings(p);
+             }, "Per stage: median and mean milliseconds over the frames so far, and the frame count.")
+        .def("summary", [](Pipeline& p) {
+                 const auto busy = p.claim("summary");
+                 return summary(p);
+             }, "The run so far as a dict: device, voxel and index, frames (fused, failed, lost), relocalisation\n"
              "attempts and successes, timings, memory, blocks.")
         .def("__repr__", [](Pipeline& p) {
             const MainEngineSettings& s = p.engine().settings();

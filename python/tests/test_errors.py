@@ -125,6 +125,78 @@ def test_a_pipeline_busy_in_another_thread_says_so(room_frames):
     assert p.frames_processed == 4
 
 
+def test_readers_on_another_thread_get_the_data_or_a_refusal(room_frames):
+    # The trajectory, summary and pose are copied from what process_frame appends to: read while a
+    # frame is processed, they are refused (the heap was corrupted before), never torn.
+    source, frames = room_frames
+    p = voxfuse.Pipeline(source.calib, voxel="s", voxel_size=0.05, mu=0.2)
+    done = threading.Event()
+    reads = {"served": 0, "refused": 0}
+
+    def reader():
+        while not done.is_set():
+            for read in (lambda: p.trajectory, p.summary, lambda: p.pose, p.timings):
+                try:
+                    read()
+                    reads["served"] += 1
+                except voxfuse.Error as e:
+                    assert "in use by another thread" in str(e)
+                    reads["refused"] += 1
+
+    t = threading.Thread(target=reader)
+    t.start()
+    for _ in range(3):
+        for f in frames:
+            p.process_frame(f)
+    done.set()
+    t.join()
+    assert p.frames_processed == 3 * len(frames)
+    assert len(p.trajectory[0]) == 3 * len(frames)
+    assert reads["refused"] > 0, reads
+
+
+def test_a_pose_that_is_no_camera_pose_is_refused(room_frames):
+    source, frames = room_frames
+    p = voxfuse.Pipeline(source.calib, voxel_size=0.02, mu=0.08)
+    scaled = np.diag([3.0, 3.0, 3.0, 1.0])
+    sheared = np.eye(4)
+    sheared[0, 1] = 0.5
+    for pose in (scaled, sheared):
+        with pytest.raises(voxfuse.ConfigError, match="no camera pose: the pose's rotation is not a rotation"):
+            p.process_frame(frames[0], pose=pose)
+        with pytest.raises(voxfuse.ConfigError, match="no camera pose"):
+            p.render("shaded", pose=pose)
+    assert p.frames_processed == 0
+
+
+def test_an_rgb_view_of_rgba_pixels_is_not_read_past_its_end(tmp_path):
+    # The view's last pixel ends 1 byte before its RGBA pixel does: with the buffer's end against a
+    # page that may not be read, copying whole 4-byte pixels crashed. Run apart: a crash is a failure here.
+    script = tmp_path / "guard.py"
+    script.write_text(
+        "import ctypes, mmap\n"
+        "import numpy as np\n"
+        "import voxfuse\n"
+        "H, W = 48, 64\n"
+        "page = mmap.PAGESIZE\n"
+        "n = -(-H * W * 4 // page) * page\n"
+        "buf = mmap.mmap(-1, n + page)\n"
+        "libc = ctypes.CDLL(None)\n"
+        "libc.mprotect.argtypes = [ctypes.c_void_p, ctypes.c_size_t, ctypes.c_int]\n"
+        "addr = ctypes.addressof(ctypes.c_char.from_buffer(buf))\n"
+        "assert libc.mprotect(addr + n, page, 0) == 0\n"
+        "pixels = np.frombuffer(buf, dtype=np.uint8, count=n)[n - H * W * 4:].reshape(H, W, 4)\n"
+        "pixels[:] = 100\n"
+        "calib = voxfuse.Calibration.pinhole(W, H, 52.5, 52.5, 31.5, 23.5)\n"
+        "p = voxfuse.Pipeline(calib, voxel_size=0.05, mu=0.2)\n"
+        "p.process(np.full((H, W), 1000, np.uint16), pixels[:, :, 1:4])\n"
+        "print('ok')\n")
+    import subprocess
+    import sys
+    run = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0 and run.stdout.strip() == "ok", (run.returncode, run.stderr[-2000:])
+
+
 def test_a_thread_count_out_of_range_is_refused():
     with pytest.raises(voxfuse.ConfigError, match="thread count"):
         voxfuse.set_cpu_threads(-1)
