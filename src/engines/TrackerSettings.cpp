@@ -3,6 +3,7 @@
 #include "voxfuse/engines/TrackerSettings.h"
 
 #include <algorithm>
+#include <climits>
 #include <cmath>
 #include <functional>
 #include <map>
@@ -118,7 +119,18 @@ void validateTrackerSettings(const TrackerSettings& settings) {
     if (findInvalidSetting(settings, keys, reason)) throw ConfigError("tracker setting " + keys.front() + ": " + reason);
 }
 
-TrackerSettings parseTrackerSettings(const std::string& text, const std::string& name) {
+namespace {
+
+// "rbb": the level types, coarse to fine, as a settings file writes them.
+std::string levelsText(const std::vector<TrackerLevel>& levels) {
+    std::string text;
+    for (const TrackerLevel& l : levels) text += char(l.motion);
+    return text;
+}
+
+// Lines from `first_override_line` on are a front-end's single values (trackerSettingsWith): they may
+// set a key the file set too; within the file a key set twice is an error (which one was meant?).
+TrackerSettings parseTrackerSettingsText(const std::string& text, const std::string& name, int first_override_line) {
     TrackerSettings s;
     std::map<std::string, int> line_of;  // key -> line where it was set
     // Per-level lists are applied once the number of levels is known (after the last line).
@@ -226,6 +238,8 @@ TrackerSettings parseTrackerSettings(const std::string& text, const std::string&
         const auto setter = setters.find(key);
         if (setter == setters.end()) throw ParseError(name, line_number, "unknown tracker setting '" + key + "'");
         if (value.empty()) throw ParseError(name, line_number, "no value for '" + key + "'");
+        if (line_number < first_override_line && line_of.count(key))
+            throw ParseError(name, line_number, "'" + key + "' is set twice (first on line " + std::to_string(line_of[key]) + ")");
         const std::string error = setter->second(value);
         if (!error.empty()) throw ParseError(name, line_number, key + ": " + error);
         line_of[key] = line_number;
@@ -235,8 +249,8 @@ TrackerSettings parseTrackerSettings(const std::string& text, const std::string&
     auto applyList = [&](const char* key, const std::vector<double>& list, auto apply) {
         if (!line_of.count(key)) return;
         if (list.size() != 1 && list.size() != n)
-            throw ParseError(name, line_of[key], std::string(key) + ": expected 1 or " + std::to_string(n) + " values (one per level), got " +
-                                                     std::to_string(list.size()));
+            throw ParseError(name, line_of[key], std::string(key) + ": expected 1 or " + std::to_string(n) + " values (one per level of levels = " +
+                                                     levelsText(s.levels) + "), got " + std::to_string(list.size()));
         for (std::size_t i = 0; i < n; ++i) apply(s.levels[i], list.size() == 1 ? list[0] : list[i]);
     };
     applyList("iterations", iterations, [&](TrackerLevel& l, double v) {
@@ -266,6 +280,12 @@ TrackerSettings parseTrackerSettings(const std::string& text, const std::string&
     return s;
 }
 
+}  // namespace
+
+TrackerSettings parseTrackerSettings(const std::string& text, const std::string& name) {
+    return parseTrackerSettingsText(text, name, INT_MAX);
+}
+
 TrackerSettings parseTrackerSettingsFile(const std::string& path) {
     return parseTrackerSettings(text::readSmallTextFile(path, "tracker settings file"), path);
 }
@@ -288,7 +308,7 @@ TrackerSettings trackerSettingsWith(const TrackerOverrides& o) {
     if (!o.iterations.empty()) text += "iterations =" + list(o.iterations) + "\n";
     if (!o.max_distance_m.empty()) text += "max_distance_m =" + list(o.max_distance_m) + "\n";
     try {
-        return parseTrackerSettings(text, name);
+        return parseTrackerSettingsText(text, name, file_lines + 1);
     } catch (const ParseError& e) {
         // A line after the file's is one of the single values: no line number to give for those.
         if (e.line() <= file_lines) throw;

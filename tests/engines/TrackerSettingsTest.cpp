@@ -90,6 +90,31 @@ TEST(TrackerSettingsTest, BadLinesNameFileLineAndReason) {
     expectParseError("good_inlier_ratio = 0.3\n\nfailed_inlier_ratio = 0.5\n", 3, "must not exceed");
     expectParseError("poor_translation_constraint = 0.34\n", 1, "must be in [0, 1/3)");
     expectParseError("max_tracking_depth_m = -1\n", 1, "must be >= 0");
+    expectParseError("tracker = icp\n# later\ntracker = ren\n", 3, "'tracker' is set twice (first on line 1)");
+}
+
+// A file's key may be overridden by a front-end's single value (the file said it once); the conflict
+// of a file's per-level list with an overridden level string names the levels it was checked against.
+TEST(TrackerSettingsTest, SingleValuesOverrideTheFileAndConflictsSayWithWhat) {
+    const std::string path = (std::filesystem::temp_directory_path() / "voxfuse_tracker_overrides_test.txt").string();
+    {
+        std::ofstream out(path);
+        out << "tracker = icp\niterations = 5 5 5\n";
+    }
+    TrackerOverrides o;
+    o.settings_file = path;
+    o.kind = "ren";
+    o.origin = "the --tracker options";
+    EXPECT_EQ(trackerSettingsWith(o).kind, TrackerKind::Ren);
+    o.levels = "bb";
+    try {
+        trackerSettingsWith(o);
+        FAIL() << "three iteration counts for two levels were accepted";
+    } catch (const ParseError& e) {
+        EXPECT_NE(std::string(e.what()).find("iterations: expected 1 or 2 values (one per level of levels = bb), got 3"), std::string::npos)
+            << e.what();
+    }
+    std::remove(path.c_str());
 }
 
 TEST(TrackerSettingsTest, ReadsAFileAndReportsAMissingOne) {
