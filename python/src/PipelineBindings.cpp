@@ -359,6 +359,10 @@ void bindPipeline(py::module_& m) {
                 else copyRgb(rgb, p.calib(), f.rgb);
                 if (labels.is_none()) f.labels = Image<ClassId>();
                 else copyLabels(labels, f.labels);
+                // Labels given explicitly to a map that cannot hold them would be dropped without a word.
+                if (!labels.is_none() && !voxelTypeHasLabels(p.engine().settings().voxel_type))
+                    throw ConfigError(std::string("process: labels need a voxel type with classes (s_label, s_rgb_label); this pipeline's is ") +
+                                      toString(p.engine().settings().voxel_type));
                 std::optional<Mat4f> given;
                 if (!pose.is_none()) given = arrayToMatrix(pose, "pose");
                 f.index = p.framesProcessed();
@@ -432,7 +436,8 @@ void bindPipeline(py::module_& m) {
                                    const auto busy = p.claim("trajectory");
                                    return timedPosesToArrays(p.trajectory());
                                }, "(timestamps (N,), camera-to-world poses (N, 4, 4)) of every processed frame that has a pose (lost frames have none).")
-        .def_property_readonly("settings", [](const Pipeline& p) { return p.settings(); })
+        .def_property_readonly("settings", [](const Pipeline& p) { return p.settings(); },
+                               "A copy of the settings the pipeline was made with: changing it changes nothing (make a new Pipeline).")
         .def_property_readonly("calib", [](const Pipeline& p) { return p.calib(); })
         .def_property_readonly("frames_processed", &Pipeline::framesProcessed)
         .def("timings", [](Pipeline& p) {

@@ -155,6 +155,13 @@ def test_readers_on_another_thread_get_the_data_or_a_refusal(room_frames):
     assert reads["refused"] > 0, reads
 
 
+def test_labels_for_a_map_without_classes_are_refused(pipeline, room_frames):
+    f = room_frames[1][0]
+    with pytest.raises(voxfuse.ConfigError, match="labels need a voxel type with classes"):
+        pipeline.process(f.depth, f.rgb, f.labels)
+    assert pipeline.frames_processed == 0
+
+
 def test_a_pose_that_is_no_camera_pose_is_refused(room_frames):
     source, frames = room_frames
     p = voxfuse.Pipeline(source.calib, voxel_size=0.02, mu=0.08)
