@@ -19,6 +19,7 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <system_error>
 #include <thread>
 #include <vector>
 
@@ -49,9 +50,18 @@ thread_local bool t_in_task = false;
 
 class Pool {
 public:
-    Pool(int threads, std::chrono::microseconds spin) : threads_(threads), spin_(spin) {
+    Pool(int threads, std::chrono::microseconds spin) : requested_(threads), threads_(threads), spin_(spin) {
         workers_.reserve(std::size_t(threads - 1));
-        for (int k = 1; k < threads; ++k) workers_.emplace_back([this] { work(); });
+        try {
+            for (int k = 1; k < threads; ++k) workers_.emplace_back([this] { work(); });
+        } catch (const std::system_error& e) {
+            // The system refused a thread (a pids, process or memory limit). Leaving the constructor now
+            // would destroy the condition variable the started workers sleep on (a hang in
+            // pthread_cond_destroy): the pool runs with the threads it got instead, and says so.
+            threads_ = int(workers_.size()) + 1;
+            std::fprintf(stderr, "voxfuse: warning: only %d of %d CPU threads could be started (%s); running with %d\n", threads_, threads,
+                         e.what(), threads_);
+        }
     }
 
     ~Pool() {
@@ -65,6 +75,7 @@ public:
     Pool& operator=(const Pool&) = delete;
 
     int threads() const { return threads_; }
+    int requested() const { return requested_; }  // the count it was made for (threads() may be fewer)
 
     // One job; only one caller at a time (the caller holds the process's run mutex).
     void run(int tasks, TaskFunction function, const void* context) {
@@ -137,7 +148,8 @@ private:
         }
     }
 
-    const int threads_;
+    const int requested_;
+    int threads_;  // those running: fewer than asked for when the system refused some
     const std::chrono::microseconds spin_;
     std::vector<std::thread> workers_;
 
@@ -239,7 +251,7 @@ void runTasks(int tasks, TaskFunction function, const void* context) {
     Threads& t = threads();
     std::unique_lock<std::mutex> lock(t.run_mutex, std::try_to_lock);
     if (!lock.owns_lock()) return run_inline();  // another thread's loop holds the workers
-    if (!t.pool || t.pool->threads() != count) {
+    if (!t.pool || t.pool->requested() != count) {
         t.pool.reset();
         t.pool = std::make_unique<Pool>(count, t.spin);
     }

@@ -5,6 +5,7 @@
 #include "voxfuse/core/CpuThreads.h"
 
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -12,6 +13,7 @@
 #include <atomic>
 #include <chrono>
 #include <csignal>
+#include <cstdio>
 #include <mutex>
 #include <thread>
 #include <vector>
@@ -165,6 +167,48 @@ TEST(CpuThreads, AForkedChildRunsLoopsOfItsOwn) {
     }
     ASSERT_TRUE(WIFEXITED(status));
     EXPECT_EQ(WEXITSTATUS(status), 0);
+}
+
+// When the system refuses some of the threads (a pids or memory limit), loops run on those that
+// started: leaving the pool's constructor with workers asleep on its condition variable hung the
+// process in pthread_cond_destroy. Run in a child whose address space leaves room for a few stacks.
+TEST(CpuThreads, ThreadsTheSystemRefusesAreDoneWithout) {
+#if defined(__SANITIZE_ADDRESS__)
+    GTEST_SKIP() << "an address-space limit and AddressSanitizer's shadow memory do not mix";
+#else
+    DefaultThreadCountAfter restore;
+    const pid_t child = fork();
+    ASSERT_GE(child, 0);
+    if (child == 0) {
+        long pages = 0;
+        if (FILE* statm = std::fopen("/proc/self/statm", "r")) {
+            if (std::fscanf(statm, "%ld", &pages) != 1) pages = 0;
+            std::fclose(statm);
+        }
+        if (pages <= 0) _exit(3);
+        // Room for about eight 8 MiB thread stacks beyond what the process has mapped.
+        const rlim_t limit = rlim_t(pages) * rlim_t(sysconf(_SC_PAGESIZE)) + (rlim_t(64) << 20);
+        const struct rlimit as{limit, limit};
+        if (setrlimit(RLIMIT_AS, &as) != 0) _exit(4);
+        setCpuThreadCount(200);
+        std::atomic<int> child_sum{0};
+        forEachCpuTask(1000, [&](int t) { child_sum += t; });
+        forEachCpuTask(1000, [&](int t) { child_sum += t; });  // the reduced pool is kept, not made again
+        _exit(child_sum.load() == 2 * 499500 ? 0 : 1);
+    }
+    int status = 0;
+    const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    pid_t done = 0;
+    while ((done = waitpid(child, &status, WNOHANG)) == 0 && std::chrono::steady_clock::now() < give_up)
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    if (done == 0) {
+        kill(child, SIGKILL);
+        waitpid(child, &status, 0);
+        FAIL() << "the loop hung when threads were refused";
+    }
+    ASSERT_TRUE(WIFEXITED(status)) << "the child died of signal " << (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
+    EXPECT_EQ(WEXITSTATUS(status), 0);
+#endif
 }
 
 }  // namespace
