@@ -4,6 +4,7 @@
 #include <pybind11/stl.h>
 
 #include <memory>
+#include <mutex>
 
 #include "Bindings.h"
 #include "NumpyArrays.h"
@@ -22,9 +23,16 @@ struct Source {
     std::unique_ptr<ImageSource> source;
     bool skip_unreadable = true;
     int unreadable = 0;
+    // A source reads from one thread at a time, and the GIL is released while it decodes: a second
+    // Python thread iterating the same source is refused (two at once corrupted the frame buffers, or
+    // with a reader thread waited forever for an end mark another had taken). Never waits: waiting
+    // while holding the GIL could deadlock.
+    std::mutex busy;
 };
 
 FramePtr nextFrame(Source& s) {
+    std::unique_lock<std::mutex> busy(s.busy, std::try_to_lock);
+    if (!busy) throw Error("Source: the source is being read by another thread (one thread at a time per source)");
     for (;;) {
         auto frame = std::make_shared<RGBDFrame>();
         try {

@@ -204,6 +204,30 @@ def test_an_rgb_view_of_rgba_pixels_is_not_read_past_its_end(tmp_path):
     assert run.returncode == 0 and run.stdout.strip() == "ok", (run.returncode, run.stderr[-2000:])
 
 
+def test_a_source_read_by_two_threads_refuses_the_second(room_source):
+    # The GIL is released while a frame decodes: a second thread reading the same source is refused
+    # (both at once corrupted the frame buffers), and every frame still arrives once.
+    indices, refused = [], []
+
+    def read():
+        while True:
+            try:
+                indices.append(next(room_source).index)
+            except StopIteration:
+                return
+            except voxfuse.Error as e:
+                assert "being read by another thread" in str(e)
+                refused.append(1)
+
+    threads = [threading.Thread(target=read) for _ in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert sorted(indices) == list(range(len(room_source)))
+    assert refused, "the two threads never overlapped"
+
+
 def test_a_thread_count_out_of_range_is_refused():
     with pytest.raises(voxfuse.ConfigError, match="thread count"):
         voxfuse.set_cpu_threads(-1)
