@@ -9,6 +9,7 @@
 #include <cmath>
 #include <condition_variable>
 #include <deque>
+#include <exception>
 #include <fstream>
 #include <mutex>
 #include <thread>
@@ -66,8 +67,10 @@ struct OccupancyMapper::Impl {
     bool finishing = false;   // insert what is queued, then stop
     bool abandoning = false;  // stop after the scan in hand
     OccupancyStats stats;
+    std::exception_ptr failure;  // what ended the worker early (OctoMap out of memory), rethrown by finish()
 
-    std::thread worker;  // last: started once everything above exists
+    std::mutex join_mutex;  // finish() may be called from several threads: one joins
+    std::thread worker;     // last: started once everything above exists
 };
 
 void OccupancyMapper::Impl::runWorker() {
@@ -82,9 +85,14 @@ void OccupancyMapper::Impl::runWorker() {
             queue.pop_front();
         }
         const auto start = std::chrono::steady_clock::now();
-        {
+        try {
             std::lock_guard<std::mutex> lock(tree_mutex);
             tree.insertPointCloud(scan.points_world, scan.sensor_origin, max_range);
+        } catch (...) {
+            // An exception leaving a std::thread ends the process: keep it for finish() instead.
+            std::lock_guard<std::mutex> lock(queue_mutex);
+            failure = std::current_exception();
+            return;
         }
         const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
         std::lock_guard<std::mutex> lock(queue_mutex);
@@ -105,6 +113,7 @@ OccupancyMapper::~OccupancyMapper() {
         impl_->queue.clear();
     }
     impl_->queue_changed.notify_all();
+    std::lock_guard<std::mutex> lock(impl_->join_mutex);
     if (impl_->worker.joinable()) impl_->worker.join();
 }
 
@@ -148,7 +157,12 @@ void OccupancyMapper::finish() {
         impl_->finishing = true;
     }
     impl_->queue_changed.notify_all();
-    if (impl_->worker.joinable()) impl_->worker.join();
+    {
+        std::lock_guard<std::mutex> lock(impl_->join_mutex);
+        if (impl_->worker.joinable()) impl_->worker.join();
+    }
+    std::lock_guard<std::mutex> lock(impl_->queue_mutex);
+    if (impl_->failure) std::rethrow_exception(impl_->failure);
 }
 
 void OccupancyMapper::write(const std::string& path) {

@@ -49,7 +49,8 @@ public:
     // non-finite = no measurement. Returns false only when the queue was full and the frame was
     // dropped; a frame skipped by frame_step returns true. Throws Error after finish().
     bool submit(const Image<float>& depth_m, const Intrinsics& intrinsics, const Mat4f& T_world_camera);
-    // Inserts every queued frame and stops the worker. Idempotent.
+    // Inserts every queued frame and stops the worker. Idempotent, from any thread. Rethrows what
+    // stopped the worker early (OctoMap's std::bad_alloc on a map too large for memory).
     void finish();
     // finish(), then writes the pruned maximum-likelihood map as a binary OctoMap (.bt).
     // Throws IoError when the file cannot be written.
