@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <cerrno>
 #include <cstring>
 #include <string>
 
@@ -23,9 +24,13 @@ void say(const char* text, std::size_t length) {
 
 // Only async-signal-safe calls here: an atomic, write() and _exit().
 void onSignal(int signal_number) {
+    // The interrupted thread may be about to read errno (a failed write it reports): write() here
+    // must not change it.
+    const int saved_errno = errno;
     int none = 0;
     if (g_signal.compare_exchange_strong(none, signal_number)) {
         say(g_first_message, g_first_length);
+        errno = saved_errno;
         return;
     }
     say(g_second_message, g_second_length);
