@@ -28,6 +28,23 @@ struct DefaultThreadCountAfter {
     ~DefaultThreadCountAfter() { setCpuThreadCount(0); }
 };
 
+// Waits up to a minute for a forked child: it must exit with status 0; one still running then is
+// killed and the test fails with `if_hung`.
+void expectChildExitsWithZero(pid_t child, const char* if_hung) {
+    int status = 0;
+    const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    pid_t done = 0;
+    while ((done = waitpid(child, &status, WNOHANG)) == 0 && std::chrono::steady_clock::now() < give_up)
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    if (done == 0) {
+        kill(child, SIGKILL);
+        waitpid(child, &status, 0);
+        FAIL() << if_hung;
+    }
+    ASSERT_TRUE(WIFEXITED(status)) << "the child died of signal " << (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
+    EXPECT_EQ(WEXITSTATUS(status), 0);
+}
+
 TEST(CpuThreads, TheCountFollowsTheSetting) {
     DefaultThreadCountAfter restore;
     EXPECT_GE(cpuThreadCount(), 1);
@@ -155,18 +172,7 @@ TEST(CpuThreads, AForkedChildRunsLoopsOfItsOwn) {
         if (cpuThreadCount() != 3) _exit(2);  // the count set before the fork holds
         _exit(child_sum.load() == 499500 ? 0 : 1);
     }
-    int status = 0;
-    const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-    pid_t done = 0;
-    while ((done = waitpid(child, &status, WNOHANG)) == 0 && std::chrono::steady_clock::now() < give_up)
-        std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    if (done == 0) {
-        kill(child, SIGKILL);
-        waitpid(child, &status, 0);
-        FAIL() << "the child's loop hung";
-    }
-    ASSERT_TRUE(WIFEXITED(status));
-    EXPECT_EQ(WEXITSTATUS(status), 0);
+    expectChildExitsWithZero(child, "the child's loop hung");
 }
 
 // When the system refuses some of the threads (a pids or memory limit), loops run on those that
@@ -196,18 +202,7 @@ TEST(CpuThreads, ThreadsTheSystemRefusesAreDoneWithout) {
         forEachCpuTask(1000, [&](int t) { child_sum += t; });  // the reduced pool is kept, not made again
         _exit(child_sum.load() == 2 * 499500 ? 0 : 1);
     }
-    int status = 0;
-    const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-    pid_t done = 0;
-    while ((done = waitpid(child, &status, WNOHANG)) == 0 && std::chrono::steady_clock::now() < give_up)
-        std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    if (done == 0) {
-        kill(child, SIGKILL);
-        waitpid(child, &status, 0);
-        FAIL() << "the loop hung when threads were refused";
-    }
-    ASSERT_TRUE(WIFEXITED(status)) << "the child died of signal " << (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
-    EXPECT_EQ(WEXITSTATUS(status), 0);
+    expectChildExitsWithZero(child, "the loop hung when threads were refused");
 #endif
 }
 
