@@ -87,6 +87,7 @@ void TumSource::associate(const std::string& rgb_list, const std::string& depth_
         const auto first = std::find_if(images.begin(), images.end(), on_disk);
         if (first == images.end()) return std::vector<ListedImage>();
         const auto last = std::find_if(images.rbegin(), images.rend(), on_disk).base();
+        missing_between_files_ += int(std::count_if(first, last, [](const ListedImage& i) { return !i.on_disk; }));
         return std::vector<ListedImage>(first, last);
     };
     std::vector<ListedImage> rgb = listed(rgb_list);
@@ -145,8 +146,10 @@ std::string TumSource::description() const {
     std::string d = "TUM folder " + folder_ + " (" + std::to_string(pairs_.size()) + " frames";
     if (dropped_depth_frames_ > 0)
         d += "; " + std::to_string(dropped_depth_frames_) + " depth frames without an rgb image within 0.02 s dropped";
-    if (missing_listed_files_ > 0)
-        d += "; " + std::to_string(missing_listed_files_) + " listed images not on disk (left out, or unreadable frames between ones on disk)";
+    if (missing_listed_files_ > missing_between_files_)
+        d += "; " + std::to_string(missing_listed_files_ - missing_between_files_) + " listed images beyond those on disk left out";
+    if (missing_between_files_ > 0)
+        d += "; " + std::to_string(missing_between_files_) + " listed images missing between those on disk (their frames are unreadable)";
     d += "; calibration: " + calib_origin_;
     d += ground_truth_.empty() ? "; no ground truth)" : "; ground truth: " + std::to_string(ground_truth_.size()) + " poses)";
     return d;

@@ -111,6 +111,9 @@ TEST(TumSource, AListedImageMissingBetweenOnesOnDiskIsAnUnreadableFrameInItsPlac
     TumSource source(folder.dir.path());
     EXPECT_EQ(source.frameCount(), 3);
     EXPECT_EQ(source.missingListedFiles(), 2);
+    EXPECT_TRUE(containsText(source.description(), "1 listed images beyond those on disk left out")) << source.description();
+    EXPECT_TRUE(containsText(source.description(), "1 listed images missing between those on disk (their frames are unreadable)"))
+        << source.description();
     RGBDFrame frame;
     ASSERT_TRUE(source.next(frame));
     EXPECT_EQ(frame.index, 0);

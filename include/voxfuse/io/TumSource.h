@@ -56,6 +56,7 @@ private:
     std::size_t position_ = 0;
     int dropped_depth_frames_ = 0;
     int missing_listed_files_ = 0;
+    int missing_between_files_ = 0;  // of those, the ones between images on disk (their frames cannot be read)
 };
 
 }  // namespace voxfuse
