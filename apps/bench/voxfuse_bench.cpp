@@ -152,9 +152,7 @@ int main(int argc, char** argv) {
     cli.add_option("--timings", timings_path, "also write every frame's stage times and visible blocks to this JSON file (as voxfuse's timings.json)");
     cli.add_option("--trajectory", trajectory_path, "also write the frames' poses to this file (TUM format, as voxfuse's trajectory.txt)");
     cli.add_option("--mesh-out", mesh_path, "after the run, also write the map's mesh to this file (.ply, .obj or .stl)")
-        ->check(CLI::Validator(
-            [](std::string& path) { return isMeshFileName(path) ? std::string() : "expected a .ply, .obj or .stl file, got '" + path + "'"; },
-            "MESH FILE"));
+        ->check(app::meshFileName());
     app::addVersionFlag(cli, "voxfuse_bench");
     if (const auto status = app::parseCommandLine(cli, argc, argv, "voxfuse_bench")) return *status;
 

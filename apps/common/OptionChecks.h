@@ -2,14 +2,18 @@
 // Checks of command-line numbers in the type they are used in, for CLI11 options: a float option
 // must be a number that is finite as a float (1e39 is finite as a double, infinite as a float) and
 // in its range; NaN is never in a range. CLI11's own PositiveNumber and Range let NaN through and
-// print their bounds as 300-digit numbers.
+// print their bounds as 300-digit numbers. File names whose form can be checked up front are too.
 
 #include <CLI/CLI.hpp>
 #include <charconv>
 #include <cmath>
+#include <filesystem>
 #include <limits>
 #include <sstream>
 #include <string>
+#include <system_error>
+
+#include "voxfuse/io/MeshIO.h"
 
 namespace voxfuse::app {
 
@@ -69,5 +73,19 @@ inline CLI::Validator intIn(long long lo, long long hi) {
 
 inline CLI::Validator positiveInt() { return intIn(1, std::numeric_limits<int>::max()); }
 inline CLI::Validator nonNegativeInt() { return intIn(0, std::numeric_limits<int>::max()); }
+
+// A mesh file to write: a name whose extension is a mesh format the writer knows, not a folder.
+// Checked while the command line is read, before a run that would only fail at its end.
+inline CLI::Validator meshFileName() {
+    return CLI::Validator(
+        [](std::string& path) -> std::string {
+            std::error_code ec;
+            if (std::filesystem::is_directory(path, ec)) return "'" + path + "' is a folder, not a file";
+            if (!isMeshFileName(path))
+                return "'" + path + "': unknown mesh format '" + std::filesystem::path(path).extension().string() + "' (expected .ply, .obj or .stl)";
+            return {};
+        },
+        "MESH FILE");
+}
 
 }  // namespace voxfuse::app

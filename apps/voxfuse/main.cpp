@@ -191,9 +191,6 @@ void checkCombinations(const CliOptions& o) {
         refuse("--min-confidence filters iPhone LiDAR depth: '" + o.source + "' is not a Stray Scanner capture");
     if (given(o, "--calib") && app::SyntheticSource::isSyntheticName(o.source))
         refuse("--calib replaces a recording's calibration: the synthetic source renders with its own");
-    if (!o.mesh_path.empty() && fs::is_directory(o.mesh_path)) refuse("--mesh-file " + o.mesh_path + " is a folder, not a file");
-    if (!o.mesh_path.empty() && !isMeshFileName(o.mesh_path))
-        refuse("--mesh-file " + o.mesh_path + ": unknown mesh format '" + fs::path(o.mesh_path).extension().string() + "' (expected .ply, .obj or .stl)");
     if (!o.load_map.empty() && o.max_frames == 0) {
         // Only the map is read: whatever reads, tracks or fuses frames would be ignored.
         for (const char* option : {"source", "--live", "--device-uri", "--threaded", "--min-confidence", "--rgb", "--depth", "--calib", "--skip",
@@ -459,7 +456,7 @@ int main(int argc, char** argv) {
         ->expected(3)->capture_default_str()->check(app::intIn(-(1 << 24), 1 << 24));
     cli.add_option("--device", o.device, "where the frame loop runs and the map lives: cpu, or cuda for the GPU (image processing, tracking, fusion, raycast, meshes)")->capture_default_str()->check(CLI::IsMember({"cpu", "cuda"}));
     cli.add_flag("--mesh", o.write_mesh, "write the map's mesh (marching cubes) to DIR/mesh.ply at the end");
-    cli.add_option("--mesh-file", o.mesh_path, "write the mesh to this file instead (.ply, .obj or .stl)");
+    cli.add_option("--mesh-file", o.mesh_path, "write the mesh to this file instead (.ply, .obj or .stl)")->check(app::meshFileName());
     cli.add_flag("--cloud", o.write_cloud, "write the surface points with normals (and colours) to DIR/cloud.ply");
     cli.add_option("--cloud-voxel", o.cloud_voxel_m, "downsample the cloud to one point (the centroid) per cell of M metres; implies --cloud")
         ->check(app::floatIn(1e-4, 1000.0));
