@@ -45,18 +45,13 @@ bool builtWithCuda() { return true; }
 
 bool cudaAvailable() {
     int count = 0;
-    if (cudaGetDeviceCount(&count) != cudaSuccess) {
-        cudaGetLastError();  // clear the sticky "no driver / no device" status
-        return false;
-    }
-    return count > 0;
+    return cuda::succeeded(cudaGetDeviceCount(&count)) && count > 0;  // no driver or device: false
 }
 
 std::string cudaDescription() {
     int count = 0;
     const cudaError_t status = cudaGetDeviceCount(&count);
-    if (status != cudaSuccess) {
-        cudaGetLastError();
+    if (!cuda::succeeded(status)) {
         // Without any driver the runtime says its version is "insufficient": say both causes.
         if (status == cudaErrorInsufficientDriver)
             return "no usable CUDA device (no NVIDIA driver found, or one older than this build's CUDA " +
@@ -66,21 +61,15 @@ std::string cudaDescription() {
     if (count == 0) return "no CUDA device";
     cudaDeviceProp prop{};
     int device = 0;
-    if (cudaGetDevice(&device) != cudaSuccess || cudaGetDeviceProperties(&prop, device) != cudaSuccess) {
-        cudaGetLastError();
-        return "CUDA device (unknown)";
-    }
+    if (!cuda::succeeded(cudaGetDevice(&device)) || !cuda::succeeded(cudaGetDeviceProperties(&prop, device))) return "CUDA device (unknown)";
     return std::string(prop.name) + " (sm_" + std::to_string(prop.major) + std::to_string(prop.minor) + ", " +
            std::to_string(prop.totalGlobalMem >> 20) + " MiB)";
 }
 
 std::size_t freeDeviceBytes() {
     std::size_t free_bytes = 0, total_bytes = 0;
-    if (cudaMemGetInfo(&free_bytes, &total_bytes) != cudaSuccess) {
-        cudaGetLastError();  // no driver or device: the caller falls back to its default
-        return 0;
-    }
-    return free_bytes;
+    // No driver or device: 0, and the caller falls back to its default.
+    return cuda::succeeded(cudaMemGetInfo(&free_bytes, &total_bytes)) ? free_bytes : 0;
 }
 
 void* allocate(std::size_t bytes) {
@@ -101,7 +90,7 @@ void* allocate(std::size_t bytes) {
 
 void release(void* ptr) noexcept {
     if (!ptr) return;
-    if (cudaFree(ptr) != cudaSuccess) cudaGetLastError();  // nothing to do about it here; keep it off the next check
+    cuda::succeeded(cudaFree(ptr));  // nothing to do about a failure here; kept off the next check
     AllocationLedger& l = ledger();
     const std::lock_guard<std::mutex> lock(l.mutex);
     const auto it = l.sizes.find(ptr);
@@ -129,15 +118,11 @@ void resetPeakBytes() {
 void* allocatePinned(std::size_t bytes) noexcept {
     if (!cudaAvailable()) return nullptr;
     void* p = nullptr;
-    if (cudaMallocHost(&p, bytes) != cudaSuccess) {
-        cudaGetLastError();
-        return nullptr;
-    }
-    return p;
+    return cuda::succeeded(cudaMallocHost(&p, bytes)) ? p : nullptr;
 }
 
 void releasePinned(void* ptr) noexcept {
-    if (ptr && cudaFreeHost(ptr) != cudaSuccess) cudaGetLastError();
+    if (ptr) cuda::succeeded(cudaFreeHost(ptr));
 }
 
 void copyHostToDevice(void* dst, const void* src, std::size_t bytes) { VF_CUDA_CHECK(cudaMemcpy(dst, src, bytes, cudaMemcpyHostToDevice)); }
@@ -164,7 +149,7 @@ void* createEvent() {
     return e;
 }
 void destroyEvent(void* event) noexcept {
-    if (event && cudaEventDestroy(static_cast<cudaEvent_t>(event)) != cudaSuccess) cudaGetLastError();
+    if (event) cuda::succeeded(cudaEventDestroy(static_cast<cudaEvent_t>(event)));
 }
 void recordEvent(void* event) { VF_CUDA_CHECK(cudaEventRecord(static_cast<cudaEvent_t>(event))); }
 float eventElapsedMs(void* start, void* end) {

@@ -10,13 +10,19 @@
 
 namespace voxfuse::cuda {
 
-// The runtime also keeps a failure as its "last error", which the next launch check would report
-// against an innocent kernel: a failure is taken off it here (errors that break the context stay).
+// Whether a call succeeded. The runtime also keeps a failure as its "last error", which the next
+// launch check would report against an innocent kernel: a failure is taken off it here (errors that
+// break the context stay). Alone for the calls whose failure is handled where they are made (a
+// fallback, a description) or cannot be (a release).
+inline bool succeeded(cudaError_t status) {
+    if (status == cudaSuccess) return true;
+    cudaGetLastError();
+    return false;
+}
+
 inline void check(cudaError_t status, const char* call, const char* file, int line) {
-    if (status != cudaSuccess) {
-        cudaGetLastError();
+    if (!succeeded(status))
         throw DeviceError(std::string(call) + " failed at " + file + ":" + std::to_string(line) + ": " + cudaGetErrorString(status));
-    }
 }
 
 // Ceiling division for grid sizes.
