@@ -357,12 +357,15 @@ void bindPipeline(py::module_& m) {
                 copyDepth(depth, p.calib(), raw_scale, f.depth_raw);
                 if (rgb.is_none()) f.rgb = Image<Vec4u8>();
                 else copyRgb(rgb, p.calib(), f.rgb);
-                if (labels.is_none()) f.labels = Image<ClassId>();
-                else copyLabels(labels, f.labels);
-                // Labels given explicitly to a map that cannot hold them would be dropped without a word.
-                if (!labels.is_none() && !voxelTypeHasLabels(p.engine().settings().voxel_type))
-                    throw ConfigError(std::string("process: labels need a voxel type with classes (s_label, s_rgb_label); this pipeline's is ") +
-                                      toString(p.engine().settings().voxel_type));
+                if (labels.is_none()) {
+                    f.labels = Image<ClassId>();
+                } else {
+                    copyLabels(labels, f.labels);  // checked first: a wrong dtype or shape says so whatever the voxel type
+                    // Labels given to a map that cannot hold them would be dropped without a word.
+                    if (!voxelTypeHasLabels(p.engine().settings().voxel_type))
+                        throw ConfigError(std::string("process: labels need a voxel type with classes (s_label, s_rgb_label); this pipeline's is ") +
+                                          toString(p.engine().settings().voxel_type));
+                }
                 std::optional<Mat4f> given;
                 if (!pose.is_none()) given = arrayToMatrix(pose, "pose");
                 f.index = p.framesProcessed();
