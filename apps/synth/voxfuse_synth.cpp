@@ -6,6 +6,7 @@
 #include "KinectDepthModel.h"
 #include "SyntheticScene.h"
 #include "CommandLine.h"
+#include "voxfuse/io/AtomicFile.h"
 
 #include <CLI/CLI.hpp>
 #include <opencv2/core.hpp>
@@ -17,8 +18,8 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
+#include <memory>
 #include <random>
 #include <sstream>
 #include <stdexcept>
@@ -82,28 +83,20 @@ std::string timestampName(double timestamp) {
     return buffer;
 }
 
-std::ofstream openText(const fs::path& path) {
-    std::ofstream out(path);
-    if (!out) throw std::runtime_error("cannot write " + path.string());
-    return out;
-}
-
-// Streams are checked when closed: the last flush is where a full disk shows.
-void closeChecked(std::ofstream& out, const fs::path& path) {
-    if (!out.is_open()) return;
-    out.flush();
-    out.close();
-    if (!out) throw std::runtime_error("cannot write " + path.string() + " (disk full?)");
-}
+// Every file is written through the library's AtomicFile, which checks the last flush and the close
+// (where a full disk shows) and names the file and the reason.
+using OutputFile = std::unique_ptr<voxfuse::AtomicFile>;
+OutputFile openFile(const fs::path& path) { return std::make_unique<voxfuse::AtomicFile>(path.string()); }
 
 void writeCalib(const fs::path& path, const PinholeCamera& cam, const std::string& disparityLine) {
-    std::ofstream out = openText(path);
+    const OutputFile file = openFile(path);
+    std::ostream& out = file->stream();
     for (int camera = 0; camera < 2; ++camera)  // rgb, then depth: the same sensor
         out << cam.width << " " << cam.height << "\n"
             << cam.fx << " " << cam.fy << "\n"
             << cam.cx << " " << cam.cy << "\n\n";
     out << "1 0 0 0\n0 1 0 0\n0 0 1 0\n\n" << disparityLine << "\n";
-    closeChecked(out, path);
+    file->commit();
 }
 
 // 8-bit interleaved colour with a little Gaussian sensor noise; OpenCV wants BGR.
@@ -119,49 +112,50 @@ std::vector<std::uint8_t> toBytes(const std::vector<Eigen::Vector3f>& rgb, std::
     return bytes;
 }
 
-// Encoded in memory and written through a checked stream (the codec's own file writer does not check
-// its last flush).
+// Encoded in memory and written as every other file (the codec's own file writer does not check its
+// last flush).
 void writeImage(const fs::path& path, const cv::Mat& image, const std::vector<int>& params) {
     std::vector<std::uint8_t> bytes;
     if (!cv::imencode(path.extension().string(), image, bytes, params)) throw std::runtime_error("cannot encode " + path.string());
-    std::ofstream out(path, std::ios::binary);
-    out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
-    closeChecked(out, path);
+    const OutputFile file = openFile(path);
+    file->stream().write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+    file->commit();
 }
 
 void writePpm(const fs::path& path, int width, int height, const std::vector<std::uint8_t>& rgb) {
-    std::ofstream out(path, std::ios::binary);
-    out << "P6\n" << width << " " << height << "\n255\n";
-    out.write(reinterpret_cast<const char*>(rgb.data()), static_cast<std::streamsize>(rgb.size()));
-    closeChecked(out, path);
+    const OutputFile file = openFile(path);
+    file->stream() << "P6\n" << width << " " << height << "\n255\n";
+    file->stream().write(reinterpret_cast<const char*>(rgb.data()), static_cast<std::streamsize>(rgb.size()));
+    file->commit();
 }
 
 // 16-bit binary PGM; the format stores samples big-endian.
 void writePgm16(const fs::path& path, int width, int height, const std::vector<std::uint16_t>& values) {
-    std::ofstream out(path, std::ios::binary);
-    out << "P5\n" << width << " " << height << "\n65535\n";
+    const OutputFile file = openFile(path);
+    file->stream() << "P5\n" << width << " " << height << "\n65535\n";
     std::vector<char> bytes(values.size() * 2);
     for (std::size_t i = 0; i < values.size(); ++i) {
         bytes[2 * i] = static_cast<char>(values[i] >> 8);
         bytes[2 * i + 1] = static_cast<char>(values[i] & 0xFF);
     }
-    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-    closeChecked(out, path);
+    file->stream().write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    file->commit();
 }
 
 // `source` names the rendered sequence in every header ("synthetic_room", "synthetic_corridor").
-void writeTumHeader(std::ofstream& out, const std::string& source, const std::string& what, const std::string& columns) {
+void writeTumHeader(std::ostream& out, const std::string& source, const std::string& what, const std::string& columns) {
     out << "# " << what << "\n# file: 'voxfuse " << source << " (voxfuse_synth)'\n# " << columns << "\n";
 }
 
 // classes.txt: "id name" per semantic class of the scene, as the label images use them.
 void writeClasses(const fs::path& path, const std::string& source, const SyntheticScene& scene) {
-    std::ofstream out = openText(path);
+    const OutputFile file = openFile(path);
+    std::ostream& out = file->stream();
     out << "# semantic classes of the label images (labels/*.png, one class id per pixel)\n"
            "# file: 'voxfuse " << source << " (voxfuse_synth)'\n"
            "# id name   (0 = unlabelled: no surface)\n";
     for (const SemanticClass& c : scene.classes()) out << c.id << " " << c.name << "\n";
-    closeChecked(out, path);
+    file->commit();
 }
 
 // Label PNGs are 8-bit: every class a primitive uses must fit.
@@ -208,20 +202,20 @@ void render(const Options& opt, const fs::path& out) {
     else disparityLine << "kinect " << KinectDepthModel::kKinectK1 << " " << depthParams.baseline;
     writeCalib(out / "calib.txt", camera, disparityLine.str());
 
-    std::ofstream groundTruth = openText(out / "groundtruth.txt");
-    writeTumHeader(groundTruth, source, "ground truth trajectory (camera-to-world, exact)",
+    OutputFile groundTruth = openFile(out / "groundtruth.txt");
+    writeTumHeader(groundTruth->stream(), source, "ground truth trajectory (camera-to-world, exact)",
                    "timestamp tx ty tz qx qy qz qw");
-    std::ofstream rgbList, depthList, associations, labelList;
+    OutputFile rgbList, depthList, associations, labelList;
     if (tum) {
-        rgbList = openText(out / "rgb.txt");
-        depthList = openText(out / "depth.txt");
-        associations = openText(out / "associations.txt");
-        writeTumHeader(rgbList, source, "color images", "timestamp filename");
-        writeTumHeader(depthList, source, "depth maps", "timestamp filename");
+        rgbList = openFile(out / "rgb.txt");
+        depthList = openFile(out / "depth.txt");
+        associations = openFile(out / "associations.txt");
+        writeTumHeader(rgbList->stream(), source, "color images", "timestamp filename");
+        writeTumHeader(depthList->stream(), source, "depth maps", "timestamp filename");
     }
     if (labels) {
-        labelList = openText(out / "labels.txt");
-        writeTumHeader(labelList, source, "semantic labels (class ids, see classes.txt)", "timestamp filename");
+        labelList = openFile(out / "labels.txt");
+        writeTumHeader(labelList->stream(), source, "semantic labels (class ids, see classes.txt)", "timestamp filename");
     }
 
     const std::string rgbExt = opt.rgbFormat == "png" ? ".png" : ".jpg";
@@ -233,7 +227,7 @@ void render(const Options& opt, const fs::path& out) {
     for (int i = 0; i < opt.frames; ++i) {
         const double timestamp = kFirstTimestamp + i / CameraPath::kFps;
         const PoseRecord pose = makePoseRecord(timestamp, corridor ? corridor_walk.pose(i) : room_path.pose(i));
-        groundTruth << pose.line << "\n";
+        groundTruth->stream() << pose.line << "\n";
 
         const RenderedFrame frame = scene.render(camera, pose.pose, opt.colourSamples);
         const std::vector<float> depth = opt.noNoise
@@ -254,9 +248,9 @@ void render(const Options& opt, const fs::path& out) {
                 }
             writeImage(out / "rgb" / (name + rgbExt), bgr, rgbParams);
             writeImage(out / "depth" / (name + ".png"), depthImage, depthPngParams);
-            rgbList << name << " rgb/" << name << rgbExt << "\n";
-            depthList << name << " depth/" << name << ".png\n";
-            associations << name << " rgb/" << name << rgbExt << " " << name << " depth/" << name << ".png\n";
+            rgbList->stream() << name << " rgb/" << name << rgbExt << "\n";
+            depthList->stream() << name << " depth/" << name << ".png\n";
+            associations->stream() << name << " rgb/" << name << rgbExt << " " << name << " depth/" << name << ".png\n";
             if (labels) {
                 // Exact: the class at each pixel's centre ray, the one that gave the depth.
                 cv::Mat labelImage(opt.height, opt.width, CV_8UC1);
@@ -265,7 +259,7 @@ void render(const Options& opt, const fs::path& out) {
                         labelImage.at<std::uint8_t>(v, u) = static_cast<std::uint8_t>(
                             frame.label[static_cast<std::size_t>(v) * opt.width + u]);
                 writeImage(out / "labels" / (name + ".png"), labelImage, depthPngParams);
-                labelList << name << " labels/" << name << ".png\n";
+                labelList->stream() << name << " labels/" << name << ".png\n";
             }
         } else {
             char base[32];
@@ -278,11 +272,8 @@ void render(const Options& opt, const fs::path& out) {
         }
         std::cout << "\rframe " << (i + 1) << "/" << opt.frames << std::flush;
     }
-    closeChecked(groundTruth, out / "groundtruth.txt");
-    closeChecked(rgbList, out / "rgb.txt");
-    closeChecked(depthList, out / "depth.txt");
-    closeChecked(associations, out / "associations.txt");
-    closeChecked(labelList, out / "labels.txt");
+    for (const OutputFile* file : {&groundTruth, &rgbList, &depthList, &associations, &labelList})
+        if (*file) (*file)->commit();
 }
 
 // The sequence is rendered into a hidden folder beside the target and renamed into place once every
