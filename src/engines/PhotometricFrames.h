@@ -14,7 +14,7 @@ public:
     explicit PhotometricFrames(ColorTrackerKernels& kernels) : kernels_(kernels) {}
 
     // Builds the pyramid of the view's colour image (level 0 = full resolution). False when the view
-    // has no colour image of the calibrated size.
+    // has no colour image (or the calibration no colour camera).
     bool prepare(const View& view, int level_count);
     // Colours the model points (every `step`-th pixel of the depth camera's resolution, so that a
     // coarser model raycast gives the same points) with the previous frame. False when there is no

@@ -47,6 +47,28 @@ TEST_P(ColorTrackerTest, RecoversASmallMotion) {
     EXPECT_GT(tracker->lastStats().levels.back().iterations, 0);
 }
 
+TEST_P(ColorTrackerTest, AColourImageOfAnotherSizeIsTheCalibratedCameraAtThatResolution) {
+    // Colour at twice the depth's resolution, the calibration at the depth's (as integration takes it):
+    // the colour camera's intrinsics scale with the image, and the motion is recovered all the same.
+    const Intrinsics intr = test::kinectIntrinsics();
+    const Intrinsics large = test::kinectIntrinsics(1280, 960);
+    const auto withLargeColour = [&](const Mat4f& T_world_camera) {
+        View view = test::renderView(room(), intr, T_world_camera);
+        view.rgb = test::renderView(room(), large, T_world_camera).rgb;
+        return view;
+    };
+    const View first = withLargeColour(startPose());
+    const Mat4f moved = test::moveInCamera(startPose(), {0.4f, 1.f, 0.1f}, 1.5f, {0.015f, -0.01f, 0.01f});
+    auto tracker = makeTracker(colorSettings(), GetParam());
+    TrackingState state;
+    state.T_world_camera = startPose();
+    tracker->track(state, first, test::emptyModel(intr));
+    tracker->track(state, withLargeColour(moved), test::modelFromView(first, startPose()));
+    EXPECT_EQ(state.quality, TrackingQuality::Good);
+    EXPECT_LT(test::translationErrorM(state.T_world_camera, moved), 0.003f);
+    EXPECT_LT(test::rotationErrorDeg(state.T_world_camera, moved), 0.1f);
+}
+
 TEST_P(ColorTrackerTest, AMotionBeyondItsBasinIsReportedFailed) {
     // Photometric alignment only converges within a few pixels: 8 cm and 8 degrees is far beyond.
     const Intrinsics intr = test::kinectIntrinsics();
