@@ -55,11 +55,23 @@ bool SequenceRunner::step() {
         fr.timestamp_s = frame_.timestamp_s;
         fr.result = engine_.processFrame(frame_, given);
         reportFullMap(fr.result);
+        reportNoColourToTrack();
         record_.frames.push_back(fr);
         // A lost frame has no pose (it holds the last good one): the trajectory leaves it out.
         if (fr.result.status != TrackingStatus::Lost) record_.trajectory.push_back({frame_.timestamp_s, fr.result.T_world_camera});
         return true;
     }
+}
+
+// The colour tracker has nothing to go on in a frame without colour: said once, with the remedy,
+// since the frame's only other sign is a failed track.
+void SequenceRunner::reportNoColourToTrack() {
+    if (reported_no_colour_ || !frame_.rgb.empty() || poses_ == PoseSource::GroundTruth || engine_.settings().tracker.kind != TrackerKind::Color)
+        return;
+    reported_no_colour_ = true;
+    std::cerr << "\nvoxfuse: warning: frame " << frame_.index
+              << " has no colour image, and the colour tracker (--tracker color) follows colour alone: such frames cannot be tracked. "
+                 "Use --tracker ren (depth) or rgbd (depth, and colour where there is any).\n";
 }
 
 // Said when it happens: from then on the parts of the scene the map has no room for are not fused,

@@ -32,6 +32,7 @@ public:
     const FrameRecord& lastRecord() const { return record_.frames.back(); }
 
 private:
+    void reportNoColourToTrack();
     void reportFullMap(const FrameResult& result);
 
     ImageSource& source_;
@@ -41,7 +42,7 @@ private:
     RGBDFrame frame_;
     bool have_origin_ = false;
     Mat4f T_origin_world_ = Mat4f::identity();
-    bool reported_blocks_full_ = false, reported_hash_full_ = false;
+    bool reported_blocks_full_ = false, reported_hash_full_ = false, reported_no_colour_ = false;
 };
 
 }  // namespace voxfuse::app

@@ -61,3 +61,16 @@ execute_process(COMMAND ${VOXFUSE_CLI} ${WORK_DIR}/does_not_exist WORKING_DIRECT
 if(NOT rc EQUAL 2 OR NOT err MATCHES "does_not_exist")
   message(FATAL_ERROR "a missing source must exit 2 naming the path; got ${rc}: ${err}")
 endif()
+# Depth-only frames with the colour tracker: the run says why they cannot be tracked, and what to use.
+file(MAKE_DIRECTORY ${WORK_DIR}/depth_only)
+file(GLOB depth_images ${DATA_DIR}/depth/*.png)
+list(SORT depth_images)
+foreach(i 0 1 2)
+  list(GET depth_images ${i} image)
+  configure_file(${image} ${WORK_DIR}/depth_only/frame-00000${i}.depth.png COPYONLY)
+endforeach()
+execute_process(COMMAND ${VOXFUSE_CLI} ${WORK_DIR}/depth_only --calib ${DATA_DIR}/calib.txt --tracker color --relocalise off
+                        --out depth_only_out WORKING_DIRECTORY ${WORK_DIR} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0 OR NOT err MATCHES "frame 0 has no colour image" OR NOT err MATCHES "--tracker ren")
+  message(FATAL_ERROR "--tracker color on depth-only frames must say why they fail and name a depth tracker; got ${rc}:\n${err}")
+endif()
