@@ -1,11 +1,13 @@
 #pragma once
 // Internal: the hand-over between ThreadedImageSource's reader thread and its consumer. A bounded
 // FIFO of frames, frame errors and the end mark, which either makes the reader wait for room or
-// drops the oldest entry, and which can be closed to release a waiting reader.
+// drops the oldest entry, and which can be closed to release a waiting reader. Its places are made
+// up front, so that handing an entry over never allocates: a reader thread cannot fail on the way
+// and leave the consumer waiting for an end mark that never comes.
 
 #include <condition_variable>
 #include <cstddef>
-#include <deque>
+#include <vector>
 #include <exception>
 #include <mutex>
 
@@ -23,24 +25,26 @@ struct QueuedFrame {
 class BoundedFrameQueue {
 public:
     BoundedFrameQueue(std::size_t capacity, bool drop_oldest_when_full)
-        : capacity_(capacity), drop_oldest_(drop_oldest_when_full) {}
+        : capacity_(capacity), drop_oldest_(drop_oldest_when_full), slots_(capacity + 1) {}  // + 1: the end mark
 
     // Reader side. Frames and errors take a place each; the end mark always goes in at once, so that
-    // the reader can finish. Returns false, dropping the entry, once the queue is closed.
+    // the reader can finish (a reader gives one end mark, its last entry). Returns false, dropping the
+    // entry, once the queue is closed.
     bool push(QueuedFrame entry) {
         std::unique_lock<std::mutex> lock(mutex_);
         if (entry.kind != QueuedFrame::Kind::End) {
             if (drop_oldest_) {
-                if (entries_.size() >= capacity_ && !entries_.empty()) {
-                    entries_.pop_front();
+                if (count_ >= capacity_ && count_ > 0) {
+                    takeFront();
                     ++dropped_;
                 }
             } else {
-                not_full_.wait(lock, [&] { return closed_ || entries_.size() < capacity_; });
+                not_full_.wait(lock, [&] { return closed_ || count_ < capacity_; });
             }
         }
         if (closed_) return false;
-        entries_.push_back(std::move(entry));
+        slots_[(front_ + count_) % slots_.size()] = std::move(entry);
+        ++count_;
         not_empty_.notify_one();
         return true;
     }
@@ -48,9 +52,8 @@ public:
     // Consumer side: waits for the next entry.
     QueuedFrame pop() {
         std::unique_lock<std::mutex> lock(mutex_);
-        not_empty_.wait(lock, [&] { return !entries_.empty(); });
-        QueuedFrame entry = std::move(entries_.front());
-        entries_.pop_front();
+        not_empty_.wait(lock, [&] { return count_ > 0; });
+        QueuedFrame entry = takeFront();
         not_full_.notify_one();
         return entry;
     }
@@ -68,11 +71,20 @@ public:
     }
 
 private:
+    QueuedFrame takeFront() {
+        QueuedFrame entry = std::move(slots_[front_]);
+        slots_[front_] = QueuedFrame{};  // the frame's images go with the entry, not stay in the slot
+        front_ = (front_ + 1) % slots_.size();
+        --count_;
+        return entry;
+    }
+
     const std::size_t capacity_;
     const bool drop_oldest_;
     mutable std::mutex mutex_;
     std::condition_variable not_empty_, not_full_;
-    std::deque<QueuedFrame> entries_;
+    std::vector<QueuedFrame> slots_;  // a ring: count_ entries from front_ on
+    std::size_t front_ = 0, count_ = 0;
     bool closed_ = false;
     long dropped_ = 0;
 };
