@@ -387,9 +387,24 @@ private:
         raycastDepth(candidate_model_, candidate_depth_);
         check.depth = compareDepth(view_.depth, candidate_depth_, settings_.relocalisation.agreement_tolerance_m);
         if (!acceptRelocalisation(settings_.relocalisation, check)) return false;
+        // Geometry first: only a candidate it takes is rendered in colour and compared.
+        check.colour = compareCandidateColour();
+        if (!acceptRelocalisation(settings_.relocalisation, check)) return false;
         if (!withinReach(settings_.relocalisation, tracking_.T_world_camera, check.refined.T_world_camera, elapsed_s)) return false;
         tracking_ = check.refined;
         return true;
+    }
+
+    // The frame's colours against the map's, seen from the candidate (candidate_model_ and
+    // candidate_depth_); not compared where either has none.
+    ColourAgreement compareCandidateColour() {
+        if constexpr (!TVoxel::hasColor) {
+            return ColourAgreement{};
+        } else {
+            if (view_.rgb.empty()) return ColourAgreement{};
+            raycast_->render(scene_, candidate_model_, RenderMode::Color, candidate_colour_);
+            return compareColour(view_, candidate_depth_, candidate_colour_, settings_.relocalisation.agreement_tolerance_m);
+        }
     }
 
     // Bookkeeping of a fused, tracked frame: a good one joins the frames loss detection compares with,
@@ -522,6 +537,7 @@ private:
     int frames_since_relocalisation_ = INT_MAX / 2;
     RenderState candidate_model_;               // the model raycast from a relocalisation candidate
     Image<float> candidate_depth_;
+    Image<Vec4u8> candidate_colour_;            // its colour render (colour voxel types)
     std::unique_ptr<SwappingEngine<TVoxel>> swapping_;  // with SwapSettings::enabled (hash only)
     std::unique_ptr<GlobalCache> cache_;
     StageClock clock_;

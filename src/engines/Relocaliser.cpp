@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "voxfuse/core/Error.h"
+#include "voxfuse/shared/ColorTracker.h"  // intensityFromRgb
 
 namespace voxfuse {
 
@@ -25,11 +27,81 @@ DepthAgreement compareDepth(const Image<float>& frame_depth_m, const Image<float
     return a;
 }
 
+namespace {
+
+// Sums of one cell's intensities (0-255), their squares and products.
+struct CorrelationSums {
+    double n = 0, f = 0, m = 0, ff = 0, mm = 0, fm = 0;
+    void add(double fi, double mi) {
+        n += 1;
+        f += fi;
+        m += mi;
+        ff += fi * fi;
+        mm += mi * mi;
+        fm += fi * mi;
+    }
+};
+
+}  // namespace
+
+ColourAgreement compareColour(const View& view, const Image<float>& model_depth_m, const Image<Vec4u8>& model_colour, float tolerance_m,
+                              int min_textured_cells) {
+    ColourAgreement a;
+    const Image<float>& frame_depth_m = view.depth;
+    if (view.rgb.empty() || model_colour.empty() || !view.calib.rgb.valid()) return a;
+    if (frame_depth_m.size() != model_depth_m.size() || model_colour.size() != model_depth_m.size())
+        throw ConfigError("compareColour: the frame's depth, the model's depth and the model's colour differ in size");
+    const Intrinsics& depth_camera = view.calib.depth;
+    // A colour image of another size than calibrated is the same camera at that resolution.
+    const Intrinsics rgb_camera = view.rgb.size() == view.calib.rgb.size() ? view.calib.rgb : view.calib.rgb.resized(view.rgb.width(), view.rgb.height());
+    const Mat4f T_rgb_depth = rigidInverse(view.calib.T_depth_rgb);
+    const int width = frame_depth_m.width(), height = frame_depth_m.height();
+    const int cell = std::max(kColourCellMinPixels, width / kColourCellsAcross);
+    const int cells_x = (width + cell - 1) / cell, cells_y = (height + cell - 1) / cell;
+    std::vector<CorrelationSums> cells(std::size_t(cells_x) * std::size_t(cells_y));
+    const float* frame = frame_depth_m.host();
+    const float* model = model_depth_m.host();
+    const Vec4u8* model_rgb = model_colour.host();
+    const Vec4u8* frame_rgb = view.rgb.host();
+    for (int v = 0; v < height; ++v)
+        for (int u = 0; u < width; ++u) {
+            const int i = u + v * width;
+            if (!(frame[i] > 0.f) || !(model[i] > 0.f) || !(std::fabs(frame[i] - model[i]) < tolerance_m)) continue;
+            const Vec3f p_rgb = transformPoint(T_rgb_depth, depth_camera.unproject(float(u), float(v), frame[i]));
+            if (!(p_rgb.z > 0.f)) continue;
+            const int j = rgb_camera.nearestPixelIndex(rgb_camera.project(p_rgb));
+            if (j < 0) continue;
+            cells[std::size_t(u / cell + (v / cell) * cells_x)].add(255.0 * double(intensityFromRgb(frame_rgb[j])),
+                                                                    255.0 * double(intensityFromRgb(model_rgb[i])));
+        }
+    // Each cell's correlation, weighed by its pixels; cells with few pixels, or plain on either side
+    // (less than 3 grey levels of deviation: a wall, or sensor noise on one), have no say.
+    constexpr double kMinVariance = 9.0;
+    const double min_pixels = 0.25 * double(cell) * double(cell);
+    double weighted = 0.0, pixels = 0.0;
+    int textured = 0;
+    for (const CorrelationSums& c : cells) {
+        if (c.n < min_pixels) continue;
+        const double var_f = c.ff / c.n - (c.f / c.n) * (c.f / c.n), var_m = c.mm / c.n - (c.m / c.n) * (c.m / c.n);
+        if (!(var_f > kMinVariance) || !(var_m > kMinVariance)) continue;
+        weighted += c.n * (c.fm / c.n - (c.f / c.n) * (c.m / c.n)) / std::sqrt(var_f * var_m);
+        pixels += c.n;
+        ++textured;
+    }
+    a.pixels = int(pixels);
+    a.cells = textured;
+    if (textured < min_textured_cells) return a;
+    a.compared = true;
+    a.correlation = float(weighted / pixels);
+    return a;
+}
+
 bool acceptRelocalisation(const RelocalisationSettings& s, const RelocalisationCheck& c) {
     // Every comparison is false for a NaN, so a NaN measure rejects.
     return c.refined.quality == TrackingQuality::Good && c.refined.inlier_ratio >= s.min_inlier_ratio &&
            c.refined.residual_m <= s.max_residual_m && c.depth.overlap >= s.min_overlap && c.depth.agreement >= s.min_agreement &&
-           c.step_m <= s.max_refinement_step_m && c.step_deg <= s.max_refinement_step_deg;
+           c.step_m <= s.max_refinement_step_m && c.step_deg <= s.max_refinement_step_deg &&
+           (!c.colour.compared || c.colour.correlation >= s.min_colour_correlation);
 }
 
 bool withinReach(const RelocalisationSettings& s, const Mat4f& T_world_last, const Mat4f& T_world_candidate, double elapsed_s) {
@@ -44,6 +116,8 @@ Relocaliser::Relocaliser(const RelocalisationSettings& settings, Vec2i frame_siz
     if (!(settings.max_speed_m_per_s >= 0.f)) throw ConfigError("the relocalisation speed limit is a speed in m/s, 0 for none");
     if (!(settings.keyframe_min_dissimilarity >= 0.f && settings.keyframe_min_dissimilarity <= 1.f))
         throw ConfigError("the keyframe dissimilarity threshold lies in [0, 1]");
+    if (!(settings.min_colour_correlation >= -1.f && settings.min_colour_correlation <= 1.f))
+        throw ConfigError("the relocalisation's least colour correlation lies in [-1, 1] (-1: no colour test)");
     FernEncoder check(settings.ferns, frame_size, false);  // ConfigError now rather than at the first frame
 }
 

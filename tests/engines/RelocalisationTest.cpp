@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "DeviceTestSupport.h"
 #include "SyntheticViews.h"
 #include "TrackingTestSupport.h"
@@ -140,6 +142,118 @@ TEST_P(RelocalisationTest, AKeyframeFartherThanTheCameraCouldHaveMovedIsNoCandid
 }
 
 INSTANTIATE_TEST_SUITE_P(Devices, RelocalisationTest, test::kAllDevices, test::DeviceName());
+
+// A room whose shape is the same turned half about its vertical axis (x, y -> -x, -y), and whose two
+// halves are coloured differently: a camera turned so, at the other end, sees the same depth and other
+// colours. Pure albedo (ambient light only), so that the colours are the textures.
+synth::SyntheticScene halfTurnRoom() {
+    using V = Eigen::Vector3f;
+    const auto texture = [](synth::TextureKind kind, V a, V b, float scale, std::uint32_t seed) {
+        synth::Texture t;
+        t.kind = kind;
+        t.colorA = a;
+        t.colorB = b;
+        t.scale = scale;
+        t.seed = seed;
+        return t;
+    };
+    synth::SyntheticScene room;
+    room.addRectangle(V(0, 0, 0), V(0, 0, 1), 2.f, 1.5f, texture(synth::TextureKind::Noise, V(0.8f, 0.7f, 0.6f), V(0.3f, 0.25f, 0.2f), 0.15f, 1));
+    room.addRectangle(V(0, 0, 2.5f), V(0, 0, -1), 2.f, 1.5f, texture(synth::TextureKind::Noise, V(0.9f, 0.9f, 0.9f), V(0.6f, 0.6f, 0.6f), 0.3f, 2));
+    for (const float side : {1.f, -1.f}) {
+        const std::uint32_t seed = side > 0 ? 10 : 20;
+        const V tint = side > 0 ? V(0.9f, 0.4f, 0.3f) : V(0.3f, 0.5f, 0.9f);
+        room.addRectangle(V(2.f * side, 0, 1.25f), V(-side, 0, 0), 1.5f, 1.25f, texture(synth::TextureKind::Noise, tint, V(0.2f, 0.2f, 0.2f), 0.12f, seed));
+        room.addRectangle(V(0, 1.5f * side, 1.25f), V(0, -side, 0), 2.f, 1.25f,
+                          texture(synth::TextureKind::Stripes, tint, V(0.9f, 0.9f, 0.8f), 0.1f + 0.05f * side, seed + 1));
+        room.addBox(V(1.3f * side, 0.4f * side, 0.3f), Eigen::Quaternionf::Identity(), V(0.3f, 0.25f, 0.3f),
+                    texture(synth::TextureKind::Checker, tint, V(0.95f, 0.95f, 0.9f), side > 0 ? 0.08f : 0.13f, seed + 2));
+        room.addSphere(V(1.5f * side, -0.8f * side, 0.9f), 0.25f, texture(synth::TextureKind::Noise, V(0.2f, 0.8f, 0.3f), tint, 0.05f, seed + 3));
+    }
+    room.setAmbient(1.f);
+    return room;
+}
+
+// Turned half about the room's vertical axis.
+Mat4f halfTurn(const Mat4f& T_world_camera) {
+    Eigen::Matrix4f turn = Eigen::Matrix4f::Identity();
+    turn(0, 0) = turn(1, 1) = -1.f;
+    return toMat4f(turn * toEigen(T_world_camera));
+}
+
+class ColourRelocalisationTest : public ::testing::TestWithParam<Device> {
+protected:
+    void SetUp() override { VF_SKIP_IF_UNAVAILABLE(GetParam()); }
+
+    // Tracks 8 frames looking at the +x end, loses the camera behind a covered lens, then shows the
+    // same view turned half (the -x end), then the +x end again. The statuses of the last 8 frames.
+    std::vector<TrackingStatus> run(const RelocalisationSettings& relocalisation) {
+        MainEngineSettings s;
+        s.device = GetParam();
+        s.voxel_type = VoxelType::SRgb;
+        s.scene = test::centimetreSceneParams(4.f);
+        s.relocalisation = relocalisation;
+        RGBDCalib calib;
+        calib.depth = calib.rgb = kCamera;
+        calib.disparity = DisparityCalib::affine(0.001f);
+        auto engine = MainEngine::create(s, calib);
+        static const synth::SyntheticScene room = halfTurnRoom();
+        const Mat4f start = test::lookAt({0.2f, 0.1f, 1.4f}, {2.f, 0.2f, 0.8f});
+        const Mat4f T_origin_world = rigidInverse(start);  // the engine's world is the first camera
+        int index = 0;
+        // The frame seen from T_world_camera; the pose it is given, if any, is checked in the engine's world.
+        const auto process = [&](const Mat4f& T_world_camera, bool covered = false) {
+            View view = test::renderView(room, kCamera, T_world_camera);
+            if (covered) std::fill(view.depth.host(), view.depth.host() + view.depth.pixelCount(), 0.f);
+            const FrameResult r = engine->processFrame(test::toRgbdFrame(view, index++), nullptr);
+            error_m_ = test::translationErrorM(r.T_world_camera, T_origin_world * T_world_camera);
+            return r;
+        };
+        for (int i = 0; i < 8; ++i) {
+            const FrameResult r = process(test::moveInCamera(start, {0.f, 1.f, 0.f}, 0.5f * float(i), {0.01f * float(i), 0.f, 0.f}));
+            EXPECT_EQ(r.status, TrackingStatus::Tracking) << "frame " << i;
+        }
+        for (int i = 0; i < 3; ++i) EXPECT_EQ(process(start, true).status, TrackingStatus::Lost) << "a covered lens";
+        std::vector<TrackingStatus> statuses;
+        for (int i = 0; i < 4; ++i) {
+            const Mat4f T_world_camera = halfTurn(test::moveInCamera(start, {0.f, 1.f, 0.f}, 0.5f * float(i), {0.01f * float(i), 0.f, 0.f}));
+            const FrameResult r = process(T_world_camera);
+            statuses.push_back(r.status);
+            if (r.status != TrackingStatus::Lost) {
+                EXPECT_GT(error_m_, 0.3f) << "taken for the other end";
+            }
+        }
+        for (int i = 0; i < 4; ++i) {
+            const Mat4f T_world_camera = test::moveInCamera(start, {0.f, 1.f, 0.f}, 2.f + 0.5f * float(i), {0.04f + 0.01f * float(i), 0.f, 0.01f});
+            const FrameResult r = process(T_world_camera);
+            statuses.push_back(r.status);
+            if (r.status != TrackingStatus::Lost) {
+                EXPECT_LT(error_m_, 0.005f);
+            }
+        }
+        return statuses;
+    }
+
+    float error_m_ = 0.f;  // of the last frame's pose
+};
+
+// Depth alone takes the other end for the seen one (the first frame there is "found" at the pose the
+// camera was lost at); the colours do not agree, so with the colour test the frames there stay lost,
+// and the camera is found on coming back.
+TEST_P(ColourRelocalisationTest, APlaceShapedLikeASeenOneButColouredOtherwiseIsNotTakenForIt) {
+    RelocalisationSettings depth_only;
+    depth_only.min_colour_correlation = -1.f;
+    const std::vector<TrackingStatus> fooled = run(depth_only);
+    EXPECT_NE(std::find(fooled.begin(), fooled.begin() + 4, TrackingStatus::Relocalised), fooled.begin() + 4)
+        << "the scene no longer fools depth alone: the test shows nothing";
+
+    const std::vector<TrackingStatus> statuses = run(RelocalisationSettings());
+    for (int i = 0; i < 4; ++i) EXPECT_EQ(statuses[std::size_t(i)], TrackingStatus::Lost) << "frame " << i << " at the other end";
+    EXPECT_EQ(statuses[4], TrackingStatus::Relocalised) << "back at the seen end";
+    for (int i = 5; i < 8; ++i) EXPECT_EQ(statuses[std::size_t(i)], TrackingStatus::Tracking);
+}
+
+INSTANTIATE_TEST_SUITE_P(Devices, ColourRelocalisationTest, test::kAllDevices, test::DeviceName());
 
 TEST(RelocalisationSettingsTest, OffKeepsNoKeyframesAndNeverRelocalises) {
     MainEngineSettings s;

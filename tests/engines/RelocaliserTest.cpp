@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 #include "voxfuse/core/Error.h"
@@ -27,6 +28,104 @@ TEST(RelocaliserTest, DepthAgreementCountsOverlapAndPixelsWithinTheTolerance) {
     std::fill(no_depth.host(), no_depth.host() + no_depth.pixelCount(), 0.f);
     EXPECT_EQ(compareDepth(no_depth, model, 0.02f).overlap, 0.f) << "no valid depth: nothing overlaps";
     EXPECT_THROW(compareDepth(frame, Image<float>(Vec2i{5, 2}), 0.02f), ConfigError);
+}
+
+// A depth camera of 160x120 (16 x 12 cells of 10 pixels) whose colour camera is the same (registered
+// frames), the frame's depth 1 m everywhere and its colours a pattern with no two rows alike.
+View colourView(int rgb_scale = 1) {
+    View view;
+    view.calib.depth = Intrinsics{160, 120, 160.f, 160.f, 79.5f, 59.5f};
+    view.calib.rgb = view.calib.depth;
+    view.depth.resize(Vec2i{160, 120});
+    std::fill(view.depth.host(), view.depth.host() + view.depth.pixelCount(), 1.f);
+    view.rgb.resize(Vec2i{160 * rgb_scale, 120 * rgb_scale});
+    for (int v = 0; v < view.rgb.height(); ++v)
+        for (int u = 0; u < view.rgb.width(); ++u) {
+            const int x = u / rgb_scale, y = v / rgb_scale;
+            const unsigned char g = (unsigned char)((x * 37 + y * y * 11) % 200 + 20);
+            view.rgb.at(u, v) = Vec4u8{g, g, g, 255};
+        }
+    return view;
+}
+
+// The model's colours: `grey(frame grey)` at each depth pixel.
+template <class F>
+Image<Vec4u8> modelColour(const View& registered, F grey) {
+    Image<Vec4u8> colour(registered.depth.size());
+    for (int v = 0; v < colour.height(); ++v)
+        for (int u = 0; u < colour.width(); ++u) {
+            const unsigned char g = (unsigned char)grey(int(registered.rgb.at(u, v).x));
+            colour.at(u, v) = Vec4u8{g, g, g, 255};
+        }
+    return colour;
+}
+
+Image<float> constantDepth(float depth_m) {
+    Image<float> depth(Vec2i{160, 120});
+    std::fill(depth.host(), depth.host() + depth.pixelCount(), depth_m);
+    return depth;
+}
+
+TEST(RelocaliserTest, ColourAgreementIsTheCorrelationOfIntensitiesWhereDepthsAgree) {
+    const View view = colourView();
+    Image<float> model_depth = constantDepth(1.005f);
+    // Another exposure of the same surface: gain and offset do not count.
+    ColourAgreement a = compareColour(view, model_depth, modelColour(view, [](int g) { return g / 2 + 30; }), 0.02f);
+    ASSERT_TRUE(a.compared);
+    EXPECT_EQ(a.cells, 16 * 12);
+    EXPECT_EQ(a.pixels, 160 * 120);
+    EXPECT_GT(a.correlation, 0.99f);
+    a = compareColour(view, model_depth, modelColour(view, [](int g) { return 250 - g; }), 0.02f);
+    ASSERT_TRUE(a.compared);
+    EXPECT_LT(a.correlation, -0.99f) << "the negative";
+    // Pixels whose depths disagree (an occluder) are not compared, whatever their colour.
+    Image<Vec4u8> spoilt = modelColour(view, [](int g) { return g; });
+    for (int v = 0; v < 120; ++v)
+        for (int u = 0; u < 40; ++u) {
+            model_depth.at(u, v) = 1.1f;
+            spoilt.at(u, v) = Vec4u8{(unsigned char)(u * v % 7 * 30), 0, 255, 255};
+        }
+    a = compareColour(view, model_depth, spoilt, 0.02f);
+    ASSERT_TRUE(a.compared);
+    EXPECT_EQ(a.pixels, 120 * 120);
+    EXPECT_GT(a.correlation, 0.99f);
+    // Colour at twice the calibrated resolution is the same camera, sampled at its pixels.
+    a = compareColour(colourView(2), model_depth, spoilt, 0.02f);
+    ASSERT_TRUE(a.compared);
+    EXPECT_GT(a.correlation, 0.99f);
+}
+
+TEST(RelocaliserTest, ColourComparesTextureNotWhereBrightAndDarkRegionsLie) {
+    // The same layout of a bright and a dark half, with unrelated texture in each: a place of the
+    // same shape under other colours. The image-wide correlation would be high; the cells' is not.
+    View view = colourView();
+    Image<Vec4u8> other(view.depth.size());
+    for (int v = 0; v < 120; ++v)
+        for (int u = 0; u < 160; ++u) {
+            const bool bright = u < 80;
+            const int g = int(view.rgb.at(u, v).x) / 4 + (bright ? 180 : 20);
+            view.rgb.at(u, v) = Vec4u8{(unsigned char)g, (unsigned char)g, (unsigned char)g, 255};
+            const int h = (u * u * 13 + v * 29) % 50 + (bright ? 180 : 20);
+            other.at(u, v) = Vec4u8{(unsigned char)h, (unsigned char)h, (unsigned char)h, 255};
+        }
+    const ColourAgreement a = compareColour(view, constantDepth(1.f), other, 0.02f);
+    ASSERT_TRUE(a.compared);
+    EXPECT_LT(std::fabs(a.correlation), 0.3f);
+}
+
+TEST(RelocaliserTest, ColourGivesNoVerdictWithoutColourOrTexture) {
+    const View view = colourView();
+    const Image<float> model_depth = constantDepth(1.f);
+    const Image<Vec4u8> same = modelColour(view, [](int g) { return g; });
+    EXPECT_TRUE(compareColour(view, model_depth, same, 0.02f).compared);
+    EXPECT_FALSE(compareColour(view, model_depth, same, 0.02f, 16 * 12 + 1).compared) << "fewer cells than asked for";
+    EXPECT_FALSE(compareColour(view, model_depth, modelColour(view, [](int) { return 128; }), 0.02f).compared)
+        << "a plain surface correlates with nothing";
+    View grey = colourView();
+    grey.rgb = Image<Vec4u8>();
+    EXPECT_FALSE(compareColour(grey, model_depth, same, 0.02f).compared) << "a frame without colour";
+    EXPECT_FALSE(compareColour(view, model_depth, Image<Vec4u8>(), 0.02f).compared) << "a map without colour";
+    EXPECT_THROW(compareColour(view, model_depth, Image<Vec4u8>(Vec2i{20, 15}), 0.02f), ConfigError);
 }
 
 RelocalisationCheck passingCheck() {
@@ -53,6 +152,8 @@ TEST(RelocaliserTest, ACandidateIsTakenOnlyWhenEveryMeasurePasses) {
         {"not converged", [](RelocalisationCheck& c) { c.step_m = 0.02f; }},
         {"still turning", [](RelocalisationCheck& c) { c.step_deg = 2.f; }},
         {"NaN residual", [](RelocalisationCheck& c) { c.refined.residual_m = std::numeric_limits<float>::quiet_NaN(); }},
+        {"other colours", [](RelocalisationCheck& c) { c.colour = ColourAgreement{true, 0.3f, 40, 5000}; }},
+        {"NaN colour", [](RelocalisationCheck& c) { c.colour = ColourAgreement{true, std::numeric_limits<float>::quiet_NaN(), 40, 5000}; }},
     };
     for (const auto& [what, spoil] : spoilers) {
         RelocalisationCheck c = passingCheck();
@@ -62,6 +163,11 @@ TEST(RelocaliserTest, ACandidateIsTakenOnlyWhenEveryMeasurePasses) {
     RelocalisationCheck c = passingCheck();
     c.depth.agreement = nan;
     EXPECT_FALSE(acceptRelocalisation(s, c));
+    c = passingCheck();
+    c.colour = ColourAgreement{false, -1.f, 1, 10};
+    EXPECT_TRUE(acceptRelocalisation(s, c)) << "colours not compared: no colour test";
+    c.colour = ColourAgreement{true, 0.8f, 40, 5000};
+    EXPECT_TRUE(acceptRelocalisation(s, c));
 }
 
 TrackingState withInliers(float ratio) {
@@ -121,6 +227,11 @@ TEST(RelocaliserTest, RejectsSettingsItCannotUse) {
     s = RelocalisationSettings();
     s.ferns.tests_per_fern = 0;
     EXPECT_THROW(Relocaliser(s, {640, 480}), ConfigError) << "checked when made, not at the first frame";
+    for (float correlation : {-1.5f, 1.1f, std::numeric_limits<float>::quiet_NaN()}) {
+        s = RelocalisationSettings();
+        s.min_colour_correlation = correlation;
+        EXPECT_THROW(Relocaliser(s, {640, 480}), ConfigError) << correlation;
+    }
     for (float speed : {-1.f, std::numeric_limits<float>::quiet_NaN()}) {
         s = RelocalisationSettings();
         s.max_speed_m_per_s = speed;

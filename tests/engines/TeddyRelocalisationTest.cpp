@@ -47,10 +47,11 @@ struct TeddyRun {
     int lost = 0, attempts = 0, relocalised = 0;
 };
 
-// The default pipeline with coarse 1 cm voxels (quick, and the ATE is the same as at 5 mm).
+// The default pipeline (colour voxels: relocalisation compares colours too) with coarse 1 cm voxels
+// (quick, and the ATE is the same as at 5 mm).
 TeddyRun play(const std::vector<test::PlayedFrame>& script, const char* name) {
     MainEngineSettings s;
-    s.voxel_type = VoxelType::S;
+    s.voxel_type = VoxelType::SRgb;
     s.scene.voxel_size_m = 0.01f;
     s.scene.mu_m = 0.04f;
     const Teddy& t = teddy();

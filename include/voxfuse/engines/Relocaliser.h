@@ -45,6 +45,10 @@ struct RelocalisationSettings {
     float agreement_tolerance_m = 0.02f;
     float max_refinement_step_m = 0.01f;      // the second refinement moves the pose less than this: it had converged
     float max_refinement_step_deg = 1.f;
+    // Where the map and the frame have colour: the correlation of the frame's intensities with the
+    // model's fused colours, over the pixels whose depths agree (compareColour). Geometry alone takes
+    // a mirror-symmetric or repeating place for another; its colours tell them apart.
+    float min_colour_correlation = 0.5f;
 };
 
 // How a frame's depth agrees with the model's depth seen from the same pose (both in metres, 0 = none).
@@ -54,12 +58,34 @@ struct DepthAgreement {
 };
 DepthAgreement compareDepth(const Image<float>& frame_depth_m, const Image<float>& model_depth_m, float tolerance_m);
 
+// How a frame's colours agree with the model's fused colours seen from the same pose. The depth
+// image is cut into cells (kColourCellsAcross across); in each, the normalised cross-correlation
+// (zero mean, so that exposure and gain do not count) of the two intensities over the frame's depth
+// pixels whose depth agrees with the model's within `tolerance_m` (no occluders) and which the colour
+// camera sees; then the mean over the cells, weighed by their pixels. Cells compare texture, not
+// where bright and dark regions lie, which the same shape under other colours often shares.
+// `model_colour` is a colour render (RenderMode::Color) of the raycast that gave `model_depth_m`, in
+// the depth camera. No verdict (`compared` false) without colour on either side, or with fewer than
+// `min_textured_cells` cells that have both pixels and texture on both sides (plain walls correlate
+// with nothing).
+constexpr int kColourCellsAcross = 16;
+constexpr int kColourCellMinPixels = 8;
+struct ColourAgreement {
+    bool compared = false;
+    float correlation = 0.f;  // in [-1, 1] when compared
+    int cells = 0;            // that had their say
+    int pixels = 0;           // in them
+};
+ColourAgreement compareColour(const View& view, const Image<float>& model_depth_m, const Image<Vec4u8>& model_colour, float tolerance_m,
+                              int min_textured_cells = 8);
+
 // What acceptance looks at for one candidate.
 struct RelocalisationCheck {
     TrackingState refined;  // the second refinement's verdict and pose
     float step_m = 0.f;     // how far the second refinement moved the pose
     float step_deg = 0.f;
     DepthAgreement depth;   // at the first refinement's pose, against the raycast from there
+    ColourAgreement colour; // the same, for colour (not compared: no colour test)
 };
 bool acceptRelocalisation(const RelocalisationSettings& settings, const RelocalisationCheck& check);
 
