@@ -374,7 +374,15 @@ private:
     bool refineCandidate(Mat4f T_world_start, const RenderState* model, double elapsed_s) {
         TrackingState first;
         first.T_world_camera = T_world_start;
-        if (!model) raycast_->raycast(scene_, view_.calib.depth, T_world_start, candidate_model_);
+        // The first refinement meets the model as tracking does (its resolution, normals from points:
+        // a fraction of the cost, and most candidates end here). The check's raycast is at the frame's
+        // resolution with SDF normals, valid up to silhouettes, so that inlier ratios are the ones its
+        // thresholds were measured with.
+        if (!model) {
+            const int factor = settings_.tracking_raycast_downsample;
+            raycast_->raycast(scene_, factor > 1 ? view_.calib.depth.downsampled(factor) : view_.calib.depth, T_world_start, candidate_model_,
+                              RaycastNormals::FromPoints);
+        }
         tracker_->track(first, view_, model ? *model : candidate_model_);
         // Too little of the frame explained already: not worth the second refinement.
         if (first.quality != TrackingQuality::Good || first.inlier_ratio < settings_.relocalisation.min_inlier_ratio) return false;
