@@ -267,8 +267,13 @@ Eigen::Vector3f gammaEncode(const Eigen::Vector3f& linear) {
     return out;
 }
 
-Texture makeTexture(TextureKind kind, const Eigen::Vector3f& a, const Eigen::Vector3f& b,
-                    float scale, std::uint32_t seed = 0) {
+Eigen::Quaternionf yaw(float degrees) {
+    return Eigen::Quaternionf(Eigen::AngleAxisf(degrees * kPi / 180.0f, Eigen::Vector3f::UnitZ()));
+}
+
+}  // namespace
+
+Texture makeTexture(TextureKind kind, const Eigen::Vector3f& a, const Eigen::Vector3f& b, float scale, std::uint32_t seed) {
     Texture tex;
     tex.kind = kind;
     tex.colorA = a;
@@ -277,12 +282,6 @@ Texture makeTexture(TextureKind kind, const Eigen::Vector3f& a, const Eigen::Vec
     tex.seed = seed;
     return tex;
 }
-
-Eigen::Quaternionf yaw(float degrees) {
-    return Eigen::Quaternionf(Eigen::AngleAxisf(degrees * kPi / 180.0f, Eigen::Vector3f::UnitZ()));
-}
-
-}  // namespace
 
 // -------------------------------------------------------------------- Texture
 

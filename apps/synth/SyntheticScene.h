@@ -34,6 +34,7 @@ struct Texture {
 
     Eigen::Vector3f albedo(const Eigen::Vector3f& p_local) const;
 };
+Texture makeTexture(TextureKind kind, const Eigen::Vector3f& a, const Eigen::Vector3f& b, float scale, std::uint32_t seed = 0);
 
 enum class PrimitiveKind { Rectangle, Box, Sphere, Cylinder };
 

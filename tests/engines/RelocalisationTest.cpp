@@ -18,6 +18,19 @@ namespace {
 
 const Intrinsics kCamera = test::kinectIntrinsics(320, 240);
 
+// The pipeline on 1 cm voxels seeing through kCamera.
+std::unique_ptr<MainEngine> makeEngine(Device device, VoxelType voxel, const RelocalisationSettings& relocalisation) {
+    MainEngineSettings s;
+    s.device = device;
+    s.voxel_type = voxel;
+    s.scene = test::centimetreSceneParams(4.f);
+    s.relocalisation = relocalisation;
+    RGBDCalib calib;
+    calib.depth = calib.rgb = kCamera;
+    calib.disparity = DisparityCalib::affine(0.001f);
+    return MainEngine::create(s, calib);
+}
+
 class RelocalisationTest : public ::testing::TestWithParam<Device> {
 protected:
     void SetUp() override {
@@ -26,15 +39,7 @@ protected:
     }
 
     std::unique_ptr<MainEngine> makeEngine(const RelocalisationSettings& relocalisation) const {
-        MainEngineSettings s;
-        s.device = GetParam();
-        s.voxel_type = VoxelType::S;
-        s.scene = test::centimetreSceneParams(4.f);
-        s.relocalisation = relocalisation;
-        RGBDCalib calib;
-        calib.depth = calib.rgb = kCamera;
-        calib.disparity = DisparityCalib::affine(0.001f);
-        return MainEngine::create(s, calib);
+        return voxfuse::makeEngine(GetParam(), VoxelType::S, relocalisation);
     }
 
     // The room seen from the synthetic camera path at `path_frame` (30 per second, ~1 cm apart).
@@ -148,15 +153,7 @@ INSTANTIATE_TEST_SUITE_P(Devices, RelocalisationTest, test::kAllDevices, test::D
 // colours. Pure albedo (ambient light only), so that the colours are the textures.
 synth::SyntheticScene halfTurnRoom() {
     using V = Eigen::Vector3f;
-    const auto texture = [](synth::TextureKind kind, V a, V b, float scale, std::uint32_t seed) {
-        synth::Texture t;
-        t.kind = kind;
-        t.colorA = a;
-        t.colorB = b;
-        t.scale = scale;
-        t.seed = seed;
-        return t;
-    };
+    const auto texture = synth::makeTexture;
     synth::SyntheticScene room;
     room.addRectangle(V(0, 0, 0), V(0, 0, 1), 2.f, 1.5f, texture(synth::TextureKind::Noise, V(0.8f, 0.7f, 0.6f), V(0.3f, 0.25f, 0.2f), 0.15f, 1));
     room.addRectangle(V(0, 0, 2.5f), V(0, 0, -1), 2.f, 1.5f, texture(synth::TextureKind::Noise, V(0.9f, 0.9f, 0.9f), V(0.6f, 0.6f, 0.6f), 0.3f, 2));
@@ -188,15 +185,7 @@ protected:
     // Tracks 8 frames looking at the +x end, loses the camera behind a covered lens, then shows the
     // same view turned half (the -x end), then the +x end again. The statuses of the last 8 frames.
     std::vector<TrackingStatus> run(const RelocalisationSettings& relocalisation) {
-        MainEngineSettings s;
-        s.device = GetParam();
-        s.voxel_type = VoxelType::SRgb;
-        s.scene = test::centimetreSceneParams(4.f);
-        s.relocalisation = relocalisation;
-        RGBDCalib calib;
-        calib.depth = calib.rgb = kCamera;
-        calib.disparity = DisparityCalib::affine(0.001f);
-        auto engine = MainEngine::create(s, calib);
+        auto engine = makeEngine(GetParam(), VoxelType::SRgb, relocalisation);
         static const synth::SyntheticScene room = halfTurnRoom();
         const Mat4f start = test::lookAt({0.2f, 0.1f, 1.4f}, {2.f, 0.2f, 0.8f});
         const Mat4f T_origin_world = rigidInverse(start);  // the engine's world is the first camera
@@ -256,14 +245,9 @@ TEST_P(ColourRelocalisationTest, APlaceShapedLikeASeenOneButColouredOtherwiseIsN
 INSTANTIATE_TEST_SUITE_P(Devices, ColourRelocalisationTest, test::kAllDevices, test::DeviceName());
 
 TEST(RelocalisationSettingsTest, OffKeepsNoKeyframesAndNeverRelocalises) {
-    MainEngineSettings s;
-    s.voxel_type = VoxelType::S;
-    s.scene = test::centimetreSceneParams(4.f);
-    s.relocalisation.enabled = false;
-    RGBDCalib calib;
-    calib.depth = calib.rgb = kCamera;
-    calib.disparity = DisparityCalib::affine(0.001f);
-    auto engine = MainEngine::create(s, calib);
+    RelocalisationSettings off;
+    off.enabled = false;
+    auto engine = makeEngine(Device::CPU, VoxelType::S, off);
     const synth::SyntheticScene room = synth::SyntheticScene::defaultRoom();
     for (int f : {0, 3, 6, 480}) {
         const FrameResult r = engine->processFrame(
