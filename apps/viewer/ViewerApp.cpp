@@ -65,6 +65,7 @@ ViewerApp::ViewerApp(const ViewerOptions& options, std::unique_ptr<ImageSource> 
     record_.settings = engine_->settings();
     record_.tracked = options_.poses == app::PoseSource::Tracker;
     runner_ = std::make_unique<app::SequenceRunner>(*source_, *engine_, options_.poses, record_);
+    if (options_.skip_frames > 0) runner_->skip(options_.skip_frames);
     running_ = options_.start_running;
 
     GLFWwindow* w = window_.handle();

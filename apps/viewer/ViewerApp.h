@@ -21,6 +21,7 @@ struct ViewerOptions {
     int window_width = 1200;  // 2/3 for the model, 1/3 for the live images, a 40-pixel status bar:
     int window_height = 640;  // 4:3 panels at this size
     int max_frames = 0;                  // stop processing after N frames (0 = the whole source)
+    int skip_frames = 0;                 // dropped from the start of the source first
     bool start_running = true;           // process continuously from the start (space toggles)
     std::string screenshot_path;         // save the window as PNG once processing stops
     bool exit_when_done = false;         // quit once processing stops (after the screenshot)

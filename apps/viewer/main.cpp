@@ -1,17 +1,15 @@
-// voxfuse_viewer: the interactive front-end. Takes the same sources as the voxfuse CLI and shows the
-// reconstruction as it grows, InfiniTAM style.
+// voxfuse_viewer: the interactive front-end. Takes the same sources (a live camera too) and the same
+// map and tracker options as the voxfuse CLI, and shows the reconstruction as it grows, InfiniTAM style.
 
 #include <CLI/CLI.hpp>
 #include <charconv>
 #include <filesystem>
 #include <iostream>
 
-#include "LabelInput.h"
-#include "RelocalisationOptions.h"
 #include "OptionChecks.h"
+#include "PipelineOptions.h"
 #include "HeapPolicy.h"
 #include "CommandLine.h"
-#include "DefaultData.h"
 #include "ProgramMain.h"
 #include "ViewerApp.h"
 #include "voxfuse/core/Error.h"
@@ -28,16 +26,9 @@ constexpr const char* kKeyHelp =
     "      c back to the camera | m save mesh | s save map | p screenshot | r reset the map | q/Esc quit\n";
 
 struct Options {
-    std::string source;
-    SourceOptions source_options;
-    app::LabelInputOptions labels;  // and --voxel
-    std::string index = "hash";
-    std::string device = "cpu";
-    std::string poses = "track";
+    app::PipelineOptions pipeline;  // the source, the map and the tracker: what voxfuse takes
     std::string size;
-    std::string load_map;
     bool paused = false;
-    MainEngineSettings engine;
     viewer::ViewerOptions viewer;
 };
 
@@ -57,29 +48,26 @@ void parseWindowSize(const std::string& text, viewer::ViewerOptions& out) {
 }
 
 int run(Options& o) {
-    if (o.source.empty() && o.source_options.rgb_pattern.empty() && o.source_options.depth_pattern.empty()) o.source = app::bundledSequence("voxfuse_viewer");
-    if (!o.size.empty()) parseWindowSize(o.size, o.viewer);
-    std::unique_ptr<ImageSource> source = openImageSource(o.source, o.source_options);
-    MainEngineSettings& s = o.engine;
-    if (!o.load_map.empty()) {
-        // The map decides the voxel type, the index and the voxel size.
-        const MapFileInfo map = readMapFileInfo(o.load_map);
-        if (!o.labels.voxel.empty() && o.labels.voxel != map.voxel_type)
-            throw ConfigError(o.load_map + ": the map has '" + map.voxel_type + "' voxels; --voxel cannot change it");
-        o.labels.voxel = map.voxel_type;
-        o.index = map.hash ? "hash" : "dense";
-        s = settingsForMap(map, s);
+    app::PipelineOptions& p = o.pipeline;
+    if (p.list_devices) {
+        app::listCameras();
+        return 0;
     }
-    app::attachLabelInput(source, o.source, o.labels, s, "voxfuse_viewer");
-    source = framesForEngine(std::move(source), false);  // the same undistorted frames as voxfuse
+    app::checkPipelineOptions(p);
+    if (!o.size.empty()) parseWindowSize(o.size, o.viewer);
+    if (!p.load_map.empty()) app::adoptMapSettings(p, readMapFileInfo(p.load_map));
+    std::unique_ptr<ImageSource> source = app::openSource(p, "voxfuse_viewer");
+    MainEngineSettings& s = p.engine;
+    app::attachLabelInput(source, p.source, p.labels, s, "voxfuse_viewer");
+    source = framesForEngine(std::move(source), p.threaded);  // the same undistorted frames as voxfuse; a camera's read ahead
     std::cerr << "voxfuse_viewer: " << source->description() << "\n";
 
-    s.index_type = parseIndexType(o.index);
-    s.device = o.device == "cuda" ? Device::CUDA : Device::CPU;
+    app::applyDeviceAndIndex(p, s);
     std::unique_ptr<MainEngine> engine = MainEngine::create(s, source->calib());
-    if (!o.load_map.empty()) engine->loadMap(o.load_map);
+    if (!p.load_map.empty()) engine->loadMap(p.load_map);
 
-    o.viewer.poses = o.poses == "track" ? app::PoseSource::Tracker : app::PoseSource::GroundTruth;
+    o.viewer.poses = p.poses == "track" ? app::PoseSource::Tracker : app::PoseSource::GroundTruth;
+    o.viewer.skip_frames = p.skip_frames;
     o.viewer.start_running = !o.paused || o.viewer.exit_when_done;  // --exit waits for processing to stop
     viewer::ViewerApp app(o.viewer, std::move(source), std::move(engine));
     std::cerr << kKeyHelp;
@@ -93,19 +81,13 @@ int main(int argc, char** argv) {
     CLI::App cli{"VoxFuse viewer: watch the reconstruction grow, frame by frame.\n"
                  "With no SOURCE, runs on the bundled synthetic sequence.\n" + std::string(kKeyHelp)};
     Options o;
-    cli.add_option("source", o.source, "TUM RGB-D folder, per-frame folder, Stray Scanner capture or .oni recording");
-    cli.add_option("--rgb", o.source_options.rgb_pattern, "PPM colour file pattern, e.g. frames/%04i.ppm");
-    cli.add_option("--depth", o.source_options.depth_pattern, "16-bit PGM depth file pattern, e.g. frames/%04i.pgm");
-    cli.add_option("--calib", o.source_options.calib_path, "InfiniTAM calib.txt (overrides the source's own)");
-    app::addVoxelAndLabelOptions(cli, o.labels, "s_rgb");
-    cli.add_option("--index", o.index, "voxel index")->capture_default_str()->check(CLI::IsMember({"dense", "hash"}));
-    cli.add_option("--voxel-size", o.engine.scene.voxel_size_m, "voxel edge in metres")->capture_default_str()->check(app::floatIn(0.0, 1.0, true));
-    cli.add_option("--device", o.device, "where the frame loop runs and the map lives: cpu, or cuda for the GPU (image processing, tracking, fusion, raycast, meshes)")->capture_default_str()->check(CLI::IsMember({"cpu", "cuda"}));
-    cli.add_option("--poses", o.poses, "track the camera, or take the source's ground truth")
-        ->capture_default_str()->check(CLI::IsMember({"track", "groundtruth"}));
-    app::addRelocalisationOptions(cli, o.engine.relocalisation);
+    app::addSourceOptions(cli, o.pipeline);
+    app::addMapOptions(cli, o.pipeline);
+    app::addTrackingOptions(cli, o.pipeline);
     cli.add_option("--out", o.viewer.out_dir, "folder for the mesh (m), the map (s) and screenshot (p)")->capture_default_str();
-    cli.add_option("--load-map", o.load_map, "continue the map in this file (.vfm; see voxfuse --save-map and key s)")->check(CLI::ExistingFile);
+    cli.add_option("--load-map", o.pipeline.load_map,
+                   "continue the map in this file (.vfm; see voxfuse --save-map and key s): its voxel type, index and voxel size are used")
+        ->check(CLI::ExistingFile);
     cli.add_option("--frames", o.viewer.max_frames, "stop processing after N frames (0 = all)")->check(app::nonNegativeInt());
     cli.add_flag("--paused", o.paused, "start paused (n steps, space runs)");
     cli.add_option("--size", o.size, "window size WIDTHxHEIGHT (default 1200x640)");
@@ -113,5 +95,6 @@ int main(int argc, char** argv) {
     cli.add_flag("--exit", o.viewer.exit_when_done, "quit once processing stops (after --screenshot); for scripts and tests");
     app::addVersionFlag(cli, "voxfuse_viewer");
     if (const auto status = app::parseCommandLine(cli, argc, argv, "voxfuse_viewer")) return *status;
+    app::noteGivenOptions(cli, o.pipeline);
     return app::runReportingErrors("voxfuse_viewer", [&] { return run(o); });
 }

@@ -11,18 +11,15 @@
 #include <iostream>
 
 #include "Interrupt.h"
-#include "LabelInput.h"
-#include "RelocalisationOptions.h"
 #include "OptionChecks.h"
 #include "OutputFolder.h"
+#include "PipelineOptions.h"
 #include "HeapPolicy.h"
 #include "CommandLine.h"
-#include "DefaultData.h"
 #include "ProgramMain.h"
 #include "ResourceUsage.h"
 #include "RunRecord.h"
 #include "SequenceRunner.h"
-#include "SyntheticSource.h"
 #include "voxfuse/core/Error.h"
 #include "voxfuse/core/Timer.h"
 #include "voxfuse/engines/MainEngine.h"
@@ -34,8 +31,6 @@
 #include "voxfuse/io/MapFile.h"
 #include "voxfuse/io/MeshIO.h"
 #include "voxfuse/io/ImageSource.h"
-#include "voxfuse/io/OpenNISource.h"
-#include "voxfuse/io/StrayScannerSource.h"
 #include "voxfuse/io/ThreadedImageSource.h"
 #include "voxfuse/io/UndistortedImageSource.h"
 #include "voxfuse/mapping/OccupancyMapper.h"
@@ -47,40 +42,19 @@ using namespace voxfuse;
 namespace {
 
 struct CliOptions {
-    std::string source;
-    SourceOptions source_options;
+    app::PipelineOptions pipeline;        // the source, the map and the tracker (shared with the viewer)
     std::string out_dir = "voxfuse_out";
     bool overwrite = false;               // replace an earlier run's outputs in out_dir
     int max_frames = -1;  // -1 = all; 0 = none (with --load-map: the map's outputs only)
-    int skip_frames = 0;  // dropped from the start of the source
-    int active_blocks = 0;  // > 0: swapping with an active voxel array of this many blocks
     int render_every = 25;
-    std::string index = "hash";
-    std::string device = "cpu";
-    std::string poses = "track";
-    bool threaded = false;                // decode (and undistort) on a reader thread ahead of the engine
-    bool live = false;                    // read an OpenNI2 camera instead of a recording
-    std::string device_uri;               // which camera ("" = the first)
-    bool list_devices = false;
     bool write_mesh = false;              // DIR/mesh.ply at the end
     std::string mesh_path;                // or this file (.ply, .obj, .stl)
     bool write_cloud = false;             // DIR/cloud.ply at the end
     float cloud_voxel_m = 0.f;            // downsample the cloud to one point per cell of this size
     float occupancy_res_m = 0.f;          // > 0: an OctoMap with cells of this size -> DIR/occupancy.bt
-    app::LabelInputOptions labels;        // and --voxel
     bool mesh_per_class = false;          // DIR/mesh_class_<id>.ply for each class of the mesh
     std::vector<int> exclude_classes;     // dropped from the mesh and the cloud (e.g. people from a static map)
-    std::string tracker;                  // overrides of the tracker settings, applied in this order:
-    std::string tracker_config;           //   the settings file, then the single options
-    std::string tracker_levels;
-    std::vector<int> tracker_iterations;
-    std::vector<float> tracker_max_distance;
-    std::vector<int> dense_size{512, 512, 512};
-    std::vector<int> dense_offset{-256, -256, 0};
     std::string save_map;                 // write the map here at the end
-    std::string load_map;                 // continue this map (its voxel type, index and voxel size)
-    std::vector<std::string> given;       // options given on the command line, by their long names
-    MainEngineSettings engine;
 };
 
 class ProgressLine {
@@ -100,11 +74,6 @@ private:
     int total_;
     bool tty_;
 };
-
-// The tracker settings: defaults, then --tracker-config FILE, then the single options.
-TrackerSettings trackerSettings(const CliOptions& o) {
-    return trackerSettingsWith({o.tracker_config, o.tracker, o.tracker_levels, o.tracker_iterations, o.tracker_max_distance, "the --tracker options"});
-}
 
 std::vector<ClassId> excludedClasses(const CliOptions& o) { return std::vector<ClassId>(o.exclude_classes.begin(), o.exclude_classes.end()); }
 
@@ -166,41 +135,21 @@ void writeRunFiles(app::RunRecord& record, app::OutputFolder& out, bool with_tim
     app::writeSummaryJson(out.file("summary.json"), record);
 }
 
-bool given(const CliOptions& o, const char* option) { return std::find(o.given.begin(), o.given.end(), option) != o.given.end(); }
-
-// Options that would be silently ignored in this combination are errors instead.
+// Options that would be silently ignored in this combination are errors instead: those of the
+// pipeline (app::checkPipelineOptions), and what --load-map with --frames 0 leaves unread.
 void checkCombinations(const CliOptions& o) {
-    auto refuse = [](const std::string& why) { throw ConfigError(why); };
-    const bool dense = o.index == "dense";
-    for (const char* option : {"--volume-size", "--volume-offset"})
-        if (given(o, option) && !dense && o.load_map.empty()) refuse(std::string(option) + " sets the dense volume: it needs --index dense");
-    for (const char* option : {"--max-blocks", "--hash-buckets", "--hash-excess"})
-        if (given(o, option) && dense) refuse(std::string(option) + " sets the hash index: it does nothing with --index dense");
-    const bool swapping = o.engine.swap.enabled || o.active_blocks > 0 || !o.engine.swap.swap_file.empty();
-    if (given(o, "--swap-blocks-per-frame") && !swapping) refuse("--swap-blocks-per-frame needs swapping (--swap, --active-blocks or --swap-file)");
-    if (swapping && dense) refuse("swapping needs the hash index (--index hash)");
-    if (o.poses == "groundtruth")
-        for (const char* option : {"--tracker", "--tracker-config", "--tracker-levels", "--tracker-iterations", "--tracker-max-distance"})
-            if (given(o, option)) refuse(std::string(option) + " sets the tracker, which --poses groundtruth does not use");
-    if (!o.device_uri.empty() && !o.live) refuse("--device-uri picks a live camera: it needs --live");
-    if (o.live && (!o.source.empty() || !o.source_options.depth_pattern.empty()))
-        refuse("--live reads a camera: give no SOURCE, --rgb or --depth with it");
-    if (!o.source.empty() && !o.source_options.depth_pattern.empty() && app::SyntheticSource::isSyntheticName(o.source))
-        refuse("--rgb/--depth name files: they cannot be used with a synthetic source");
-    if (given(o, "--min-confidence") && !StrayScannerSource::isCapture(o.source))
-        refuse("--min-confidence filters iPhone LiDAR depth: '" + o.source + "' is not a Stray Scanner capture");
-    if (given(o, "--calib") && app::SyntheticSource::isSyntheticName(o.source))
-        refuse("--calib replaces a recording's calibration: the synthetic source renders with its own");
-    if (!o.load_map.empty() && o.max_frames == 0) {
+    const app::PipelineOptions& p = o.pipeline;
+    app::checkPipelineOptions(p);
+    if (!p.load_map.empty() && o.max_frames == 0) {
         // Only the map is read: whatever reads, tracks or fuses frames would be ignored.
         for (const char* option : {"source", "--live", "--device-uri", "--threaded", "--min-confidence", "--rgb", "--depth", "--calib", "--skip",
                                    "--render-every", "--min-depth", "--max-depth", "--depth-gap-tolerance", "--occupancy", "--poses", "--tracker",
                                    "--tracker-config", "--tracker-levels", "--tracker-iterations", "--tracker-max-distance", "--labels",
                                    "--label-match", "--label-ignore", "--label-update", "--relocalise", "--relocalise-candidates",
                                    "--relocalise-max-speed"})
-            if (given(o, option))
-                refuse(std::string(option == std::string("source") ? "a SOURCE" : option) +
-                       " concerns frames, and --load-map with --frames 0 reads none (leave it out, or give frames)");
+            if (p.wasGiven(option))
+                throw ConfigError(std::string(option == std::string("source") ? "a SOURCE" : option) +
+                                  " concerns frames, and --load-map with --frames 0 reads none (leave it out, or give frames)");
     }
 }
 
@@ -209,41 +158,6 @@ void checkCombinations(const CliOptions& o) {
 void checkOutputPaths(const CliOptions& o) {
     if (!o.mesh_path.empty()) requireWritable(o.mesh_path);
     if (!o.save_map.empty()) requireWritable(o.save_map);
-}
-
-// With --load-map the map decides the voxel type, the index and its table, the voxel size and mu;
-// giving another on the command line is an error rather than silently ignored. The block ceiling is
-// the map's unless --max-blocks gives one: it bounds how far the map may grow on this machine, and a
-// map that filled its ceiling elsewhere must be able to go on (the full-map warning says so).
-void adoptMapSettings(CliOptions& o, const MapFileInfo& map) {
-    MainEngineSettings adopted = settingsForMap(map, o.engine);
-    if (given(o, "--max-blocks")) adopted.hash.max_block_count = o.engine.hash.max_block_count;
-    auto conflict = [&](const char* option, const std::string& what) {
-        throw ConfigError(o.load_map + ": the map has " + what + "; " + option + " cannot change it (leave the option out)");
-    };
-    if (!o.labels.voxel.empty() && o.labels.voxel != map.voxel_type) conflict("--voxel", "'" + map.voxel_type + "' voxels");
-    if (given(o, "--index") && o.index != (map.hash ? "hash" : "dense")) conflict("--index", std::string("the ") + (map.hash ? "hash" : "dense") + " index");
-    if (given(o, "--voxel-size") && o.engine.scene.voxel_size_m != map.scene.voxel_size_m)
-        conflict("--voxel-size", std::to_string(map.scene.voxel_size_m) + " m voxels");
-    if (given(o, "--mu") && o.engine.scene.mu_m != map.scene.mu_m) conflict("--mu", "mu " + std::to_string(map.scene.mu_m) + " m");
-    if (given(o, "--max-blocks") && !map.hash) conflict("--max-blocks", "the dense index");
-    for (const char* option : {"--hash-buckets", "--hash-excess", "--volume-size", "--volume-offset"})
-        if (given(o, option)) conflict(option, "its own index settings");
-    o.labels.voxel = map.voxel_type;
-    o.index = map.hash ? "hash" : "dense";
-    o.engine = adopted;
-    o.dense_size = {adopted.dense_size.x, adopted.dense_size.y, adopted.dense_size.z};
-    o.dense_offset = {adopted.dense_offset.x, adopted.dense_offset.y, adopted.dense_offset.z};
-}
-
-void applyDeviceAndIndex(const CliOptions& o, MainEngineSettings& s) {
-    s.index_type = parseIndexType(o.index);
-    if (o.active_blocks > 0 || !s.swap.swap_file.empty()) s.swap.enabled = true;
-    if (o.active_blocks > 0) s.hash.max_block_count = o.active_blocks;
-    s.device = o.device == "cuda" ? Device::CUDA : Device::CPU;
-    s.dense_size = {o.dense_size[0], o.dense_size[1], o.dense_size[2]};
-    s.dense_offset = {o.dense_offset[0], o.dense_offset[1], o.dense_offset[2]};
-    s.tracker = trackerSettings(o);
 }
 
 void saveMapIfAsked(MainEngine& engine, const CliOptions& o, app::RunRecord& record) {
@@ -257,21 +171,22 @@ void saveMapIfAsked(MainEngine& engine, const CliOptions& o, app::RunRecord& rec
 // --load-map with --frames 0: no source, only what the map gives (mesh, cloud, a render from the
 // pose it was saved at, the map saved again).
 int runOnMapAlone(CliOptions& o, const MapFileInfo& map) {
-    if (!map.camera.valid()) throw ConfigError(o.load_map + ": the map has no camera to render from; give a SOURCE");
-    MainEngineSettings& s = o.engine;
+    const app::PipelineOptions& p = o.pipeline;
+    if (!map.camera.valid()) throw ConfigError(p.load_map + ": the map has no camera to render from; give a SOURCE");
+    MainEngineSettings s = p.engine;
     s.voxel_type = parseVoxelType(map.voxel_type);
-    applyDeviceAndIndex(o, s);
+    app::applyDeviceAndIndex(p, s);
     RGBDCalib calib;
     calib.depth = calib.rgb = map.camera;
     std::unique_ptr<MainEngine> engine = MainEngine::create(s, calib);
     const Timer wall;
-    engine->loadMap(o.load_map);
+    engine->loadMap(p.load_map);
     app::OutputFolder out(o.out_dir, o.overwrite, "voxfuse");
     checkOutputPaths(o);
     app::RunRecord record;
-    record.source = "map " + o.load_map + " (no frames)";
+    record.source = "map " + p.load_map + " (no frames)";
     record.settings = engine->settings();
-    record.map_loaded = o.load_map;
+    record.map_loaded = p.load_map;
     saveRenders(*engine, out, "map");
     writeMapOutputs(*engine, o, out);
     saveMapIfAsked(*engine, o, record);
@@ -285,53 +200,45 @@ int runOnMapAlone(CliOptions& o, const MapFileInfo& map) {
 }
 
 int run(CliOptions& o) {
-    if (o.list_devices) {
-        const std::vector<std::string> uris = OpenNISource::deviceUris();
-        std::cout << (uris.empty() ? "no OpenNI2 camera found\n" : "OpenNI2 cameras:\n");
-        for (const auto& uri : uris) std::cout << "  " << uri << "\n";
+    app::PipelineOptions& p = o.pipeline;
+    if (p.list_devices) {
+        app::listCameras();
         return 0;
     }
     checkCombinations(o);
     MapFileInfo map;
-    if (!o.load_map.empty()) {
-        map = readMapFileInfo(o.load_map);
-        adoptMapSettings(o, map);
+    if (!p.load_map.empty()) {
+        map = readMapFileInfo(p.load_map);
+        app::adoptMapSettings(p, map);
         if (o.max_frames == 0) return runOnMapAlone(o, map);
     } else if (o.max_frames == 0) {
         throw ConfigError("--frames 0 processes no frame: it needs --load-map, a map to write outputs from");
     }
-    std::unique_ptr<ImageSource> source;
-    if (o.live) {
-        source = OpenNISource::openDevice(o.device_uri, o.source_options);
-    } else {
-        if (o.source.empty() && o.source_options.rgb_pattern.empty() && o.source_options.depth_pattern.empty()) o.source = app::bundledSequence("voxfuse");
-        if (app::SyntheticSource::isSyntheticName(o.source)) source = app::SyntheticSource::open(o.source);
-        else source = openImageSource(o.source, o.source_options);
-    }
-    MainEngineSettings& s = o.engine;
+    std::unique_ptr<ImageSource> source = app::openSource(p, "voxfuse");
+    MainEngineSettings& s = p.engine;
     // Label images are decoded on the reader thread too: the stream goes inside it.
-    LabelledImageSource* labels = app::attachLabelInput(source, o.source, o.labels, s, "voxfuse");
+    LabelledImageSource* labels = app::attachLabelInput(source, p.source, p.labels, s, "voxfuse");
     // Before the run, not after it: a run must not end without its outputs over an option it cannot honour.
     if ((o.mesh_per_class || !o.exclude_classes.empty()) && !voxelTypeHasLabels(s.voxel_type))
         throw ConfigError("--mesh-per-class and --exclude-classes need a voxel type with classes (s_label, s_rgb_label)");
     // Frames reach the engine undistorted, read ahead on a reader thread with --threaded (always
     // for live cameras, so that the engine never makes the driver wait).
-    source = framesForEngine(std::move(source), o.threaded);
+    source = framesForEngine(std::move(source), p.threaded);
     const auto* threaded = dynamic_cast<const ThreadedImageSource*>(source.get());
     std::cerr << "voxfuse: " << source->description() << "\n";
 
-    applyDeviceAndIndex(o, s);
+    app::applyDeviceAndIndex(p, s);
 
     std::unique_ptr<MainEngine> engine = MainEngine::create(s, source->calib());
     app::RunRecord record;
-    if (!o.load_map.empty()) {
-        engine->loadMap(o.load_map);
-        record.map_loaded = o.load_map;
+    if (!p.load_map.empty()) {
+        engine->loadMap(p.load_map);
+        record.map_loaded = p.load_map;
     }
     record.source = source->description();
     record.has_labels = labels != nullptr;
     record.settings = engine->settings();
-    record.tracked = o.poses == "track";
+    record.tracked = p.poses == "track";
     app::SequenceRunner runner(*source, *engine, record.tracked ? app::PoseSource::Tracker : app::PoseSource::GroundTruth, record);
     const int total = o.max_frames >= 0 && (source->frameCount() < 0 || o.max_frames < source->frameCount()) ? o.max_frames
                                                                                                                 : source->frameCount();
@@ -346,7 +253,7 @@ int run(CliOptions& o) {
     // still refuse the run has run.
     app::OutputFolder out(o.out_dir, o.overwrite, "voxfuse");
     checkOutputPaths(o);
-    if (o.skip_frames > 0) std::cerr << "voxfuse: skipped the first " << runner.skip(o.skip_frames) << " frames\n";
+    if (p.skip_frames > 0) std::cerr << "voxfuse: skipped the first " << runner.skip(p.skip_frames) << " frames\n";
     ProgressLine progress(total);
     const Timer wall;
     int last_rendered = -1;
@@ -400,61 +307,19 @@ int main(int argc, char** argv) {
                  "With no SOURCE, runs on the bundled synthetic sequence.\n"
                  "Ctrl-C (or SIGTERM) stops after the current frame and writes the outputs of the frames done; a second one quits at once."};
     CliOptions o;
-    cli.add_option("source", o.source,
-                   "TUM RGB-D folder, per-frame folder (frame-XXXXXX.depth.png), OpenNI .oni recording, Stray Scanner (iPhone LiDAR) "
-                   "folder, or synthetic[:N] / synthetic-corridor[:N] (rendered in memory)");
-    cli.add_flag("--live", o.live, "read a live OpenNI2 camera (Kinect, PrimeSense, Structure)");
-    cli.add_option("--device-uri", o.device_uri, "with --live: which camera (see --list-devices; default: the first)");
-    cli.add_flag("--list-devices", o.list_devices, "list the OpenNI2 cameras and exit");
-    cli.add_flag("--threaded", o.threaded, "decode and undistort frames on a reader thread ahead of the engine (always on for --live)");
-    cli.add_option("--min-confidence", o.source_options.min_depth_confidence, "iPhone LiDAR: keep depth of at least this confidence (0-2)")
-        ->capture_default_str()->check(app::intIn(0, 2));
-    cli.add_option("--rgb", o.source_options.rgb_pattern, "PPM colour file pattern, e.g. frames/%04i.ppm");
-    cli.add_option("--depth", o.source_options.depth_pattern, "16-bit PGM depth file pattern, e.g. frames/%04i.pgm");
-    cli.add_option("--calib", o.source_options.calib_path, "InfiniTAM calib.txt (overrides the source's own)");
+    app::addSourceOptions(cli, o.pipeline);
     cli.add_option("--out", o.out_dir, "output folder (refused when it holds an earlier run's outputs, unless --overwrite)")->capture_default_str();
     cli.add_flag("--overwrite", o.overwrite, "replace the outputs of an earlier run in the output folder (they are removed first)");
     cli.add_option("--frames", o.max_frames, "process at most N frames (default: all; 0 with --load-map: none, only the map's outputs)")
         ->check(app::nonNegativeInt());
-    cli.add_flag("--swap", o.engine.swap.enabled,
-                 "swapping: only the map near the view stays in the voxel array (--active-blocks), the rest goes to host memory "
-                 "or --swap-file");
-    cli.add_option("--active-blocks", o.active_blocks, "swapping: blocks the active voxel array holds at most (implies --swap)")
-        ->check(app::positiveInt());
-    cli.add_option("--swap-file", o.engine.swap.swap_file,
-                   "swapping: keep the swapped-out map in this new file (an existing path is refused; deleted as it opens) "
-                   "instead of memory (implies --swap)");
-    cli.add_option("--swap-blocks-per-frame", o.engine.swap.blocks_per_frame, "swapping: blocks moved each way per frame at most")
-        ->capture_default_str()->check(app::intIn(1, 1 << 20));
-    cli.add_option("--skip", o.skip_frames, "drop the first N frames of the source (e.g. those a --load-map map already holds)")
-        ->check(app::nonNegativeInt());
     cli.add_option("--save-map", o.save_map, "write the map to this file (.vfm) at the end, to continue or export it later");
-    cli.add_option("--load-map", o.load_map,
+    cli.add_option("--load-map", o.pipeline.load_map,
                    "continue the map in this file (.vfm): its voxel type, index and voxel size are used, tracking resumes where it was "
                    "saved; with --frames 0 no SOURCE is read")
         ->check(CLI::ExistingFile);
     cli.add_option("--render-every", o.render_every, "write render_XXXXXX.png every N frames (0 = only the last)")
         ->capture_default_str()->check(app::nonNegativeInt());
-    cli.add_option("--voxel-size", o.engine.scene.voxel_size_m, "voxel edge in metres")->capture_default_str()->check(app::floatIn(0.0, 1.0, true));
-    cli.add_option("--mu", o.engine.scene.mu_m, "truncation band in metres")->capture_default_str()->check(app::floatIn(0.0, 10.0, true));
-    cli.add_option("--max-weight", o.engine.scene.max_weight, "cap on the per-voxel weight")->capture_default_str()->check(app::intIn(1, 255));
-    cli.add_option("--min-depth", o.engine.scene.view_frustum_min_m, "ignore depth below (m)")->capture_default_str()->check(app::floatIn(0.0, 1000.0));
-    cli.add_option("--max-depth", o.engine.scene.view_frustum_max_m, "ignore depth beyond (m)")->capture_default_str()->check(app::floatIn(0.0, 1000.0, true));
-    cli.add_option("--depth-gap-tolerance", o.engine.depth_gap_tolerance,
-                   "fill a pixel without depth whose two neighbours (left-right, else up-down) agree within this fraction of their depth; 0 = never")
-        ->capture_default_str()->check(app::floatIn(0.0, 0.5));
-    app::addVoxelAndLabelOptions(cli, o.labels, "s_rgb");
-    cli.add_option("--index", o.index, "voxel index")->capture_default_str()->check(CLI::IsMember({"dense", "hash"}));
-    cli.add_option("--max-blocks", o.engine.hash.max_block_count,
-                   "hash: most 8^3 voxel blocks (memory grows on demand up to this); 0 = automatic: as many as the hash has entries "
-                   "and 3/4 of the device's free memory holds (on the GPU with room for the copy a growth makes)")
-        ->capture_default_str()->check(app::intIn(0, 1 << 22));
-    cli.add_option("--hash-buckets", o.engine.hash.bucket_count, "hash: number of ordered buckets")->capture_default_str()->check(app::positiveInt());
-    cli.add_option("--hash-excess", o.engine.hash.excess_entry_count, "hash: entries in the excess list")->capture_default_str()->check(app::nonNegativeInt());
-    cli.add_option("--volume-size", o.dense_size, "dense volume size in voxels (x y z)")->expected(3)->capture_default_str()->check(app::intIn(1, 1 << 16));
-    cli.add_option("--volume-offset", o.dense_offset, "dense volume's first voxel, grid units (x y z)")
-        ->expected(3)->capture_default_str()->check(app::intIn(-(1 << 24), 1 << 24));
-    cli.add_option("--device", o.device, "where the frame loop runs and the map lives: cpu, or cuda for the GPU (image processing, tracking, fusion, raycast, meshes)")->capture_default_str()->check(CLI::IsMember({"cpu", "cuda"}));
+    app::addMapOptions(cli, o.pipeline);
     cli.add_flag("--mesh", o.write_mesh, "write the map's mesh (marching cubes) to DIR/mesh.ply at the end");
     cli.add_option("--mesh-file", o.mesh_path, "write the mesh to this file instead (.ply, .obj or .stl)")->check(app::meshFileName());
     cli.add_flag("--cloud", o.write_cloud, "write the surface points with normals (and colours) to DIR/cloud.ply");
@@ -465,27 +330,10 @@ int main(int argc, char** argv) {
     cli.add_flag("--mesh-per-class", o.mesh_per_class, "also write one mesh per semantic class: DIR/mesh_class_<id>.ply");
     cli.add_option("--exclude-classes", o.exclude_classes, "drop these classes from the mesh and the cloud (e.g. people from a static map)")
         ->delimiter(',')->check(app::intIn(0, 65535));
-    cli.add_option("--poses", o.poses, "track the camera, or take the source's ground truth")
-        ->capture_default_str()->check(CLI::IsMember({"track", "groundtruth"}));
-    cli.add_option("--tracker", o.tracker, "icp | color | ren | rgbd (default: ren, ICP then a robust refinement)")
-        ->check(CLI::IsMember({"icp", "color", "ren", "rgbd"}));
-    cli.add_option("--tracker-config", o.tracker_config, "tracker settings file ('key = value' lines)")->check(CLI::ExistingFile);
-    cli.add_option("--tracker-levels", o.tracker_levels, "pyramid levels coarse to fine: r rotation, t translation, b both (e.g. rbb)")
-        ->check(CLI::Validator(
-            [](std::string& levels) -> std::string {
-                if (levels.empty() || levels.size() > 8) return "'" + levels + "': need 1 to 8 levels";
-                if (levels.find_first_not_of("rtb") != std::string::npos) return "'" + levels + "': level types are r, t or b";
-                return {};
-            },
-            "LEVELS"));
-    cli.add_option("--tracker-iterations", o.tracker_iterations, "iterations per level, coarse to fine")->check(app::intIn(1, 1000));
-    cli.add_option("--tracker-max-distance", o.tracker_max_distance, "ICP outlier distance per level (m), coarse to fine")
-        ->check(app::floatIn(0.0, 10.0, true));
-    app::addRelocalisationOptions(cli, o.engine.relocalisation);
+    app::addTrackingOptions(cli, o.pipeline);
     app::addVersionFlag(cli, "voxfuse");
     if (const auto status = app::parseCommandLine(cli, argc, argv, "voxfuse")) return *status;
-    for (const CLI::Option* option : cli.get_options())
-        if (option->count() > 0) o.given.push_back(option->get_name());  // "--index", or "source" for the positional
+    app::noteGivenOptions(cli, o.pipeline);
 
     app::interrupt::install("voxfuse");
     return app::runReportingErrors("voxfuse", [&] { return run(o); });

@@ -36,3 +36,26 @@ message(STATUS "${check_out}")
 if(NOT check_rc EQUAL 0)
   message(FATAL_ERROR "the screenshot ${shot} failed the check")
 endif()
+
+# The viewer takes voxfuse's source, map and tracker options (app::PipelineOptions): a synthetic
+# source, frames skipped, another tracker and a depth limit.
+set(shot2 "${WORK_DIR}/shot_options.png")
+execute_process(
+  COMMAND "${XVFB_RUN}" -a -s "-screen 0 1280x800x24" "${VIEWER}" synthetic:6 --skip 2 --tracker rgbd --max-depth 2.5 --frames 3
+          --screenshot "${shot2}" --exit
+  WORKING_DIRECTORY "${WORK_DIR}"
+  RESULT_VARIABLE viewer_rc
+  OUTPUT_VARIABLE viewer_out
+  ERROR_VARIABLE viewer_out)
+if(NOT viewer_rc EQUAL 0 OR NOT EXISTS "${shot2}")
+  message(FATAL_ERROR "voxfuse_viewer with the pipeline options exited with ${viewer_rc}:\n${viewer_out}")
+endif()
+execute_process(COMMAND "${CHECKER}" "${shot2}" RESULT_VARIABLE check_rc OUTPUT_VARIABLE check_out ERROR_VARIABLE check_out)
+if(NOT check_rc EQUAL 0)
+  message(FATAL_ERROR "the screenshot ${shot2} failed the check:\n${check_out}")
+endif()
+# And refuses what voxfuse refuses, before any window opens.
+execute_process(COMMAND "${VIEWER}" --device-uri some-camera WORKING_DIRECTORY "${WORK_DIR}" RESULT_VARIABLE viewer_rc ERROR_VARIABLE viewer_err)
+if(viewer_rc EQUAL 0 OR NOT viewer_err MATCHES "needs --live")
+  message(FATAL_ERROR "voxfuse_viewer --device-uri without --live must be refused; got ${viewer_rc}: ${viewer_err}")
+endif()
