@@ -192,13 +192,14 @@ int main(int argc, char** argv) {
         record.source = source->description();
         record.settings = engine->settings();
         record.tracked = poses == "track";
-        app::SequenceRunner runner(*source, *engine, record.tracked ? app::PoseSource::Tracker : app::PoseSource::GroundTruth, record);
+        app::SequenceRunner runner(*source, *engine, record.tracked ? app::PoseSource::Tracker : app::PoseSource::GroundTruth, record,
+                                   "voxfuse_bench");
         // Per pyramid level of the tracker, coarse to fine: "track L0 160x120", ...
         std::vector<std::string> level_names;
         std::map<std::string, std::vector<double>> level_samples, level_iterations;
         const Timer wall;
         Image<Vec4u8> rendered;
-        while ((max_frames <= 0 || int(record.frames.size()) < max_frames) && !app::interrupt::requested() && runner.step()) {
+        while ((max_frames <= 0 || int(record.frames.size()) < max_frames) && runner.processNext(app::interrupt::requested)) {
             if (render) {
                 const Timer render_time;
                 engine->renderLast(RenderMode::Shaded, rendered);

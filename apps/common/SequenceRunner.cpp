@@ -6,8 +6,8 @@
 
 namespace voxfuse::app {
 
-SequenceRunner::SequenceRunner(ImageSource& source, MainEngine& engine, PoseSource poses, RunRecord& record)
-    : source_(source), engine_(engine), poses_(poses), record_(record) {
+SequenceRunner::SequenceRunner(ImageSource& source, MainEngine& engine, PoseSource poses, RunRecord& record, const char* program)
+    : source_(source), engine_(engine), poses_(poses), record_(record), program_(program) {
     if (poses_ == PoseSource::GroundTruth && source_.groundTruth().empty())
         throw ConfigError("poses from ground truth need a source with ground truth, and '" + source_.description() + "' has none");
 }
@@ -24,43 +24,49 @@ int SequenceRunner::skip(int count) {
     return skipped;
 }
 
-bool SequenceRunner::step() {
+bool SequenceRunner::processNext(const std::function<bool()>& stop) {
     for (;;) {
-        try {
-            if (!source_.next(frame_)) return false;
-        } catch (const IoError& e) {
-            ++record_.frames_unreadable;
-            std::cerr << "\nvoxfuse: skipping unreadable frame: " << e.what() << "\n";
-            continue;
-        }
-        Mat4f pose;
-        const Mat4f* given = nullptr;
-        if (poses_ == PoseSource::GroundTruth) {
-            if (!frame_.has_ground_truth) {
-                ++record_.frames_without_pose;
-                continue;
-            }
-            if (!have_origin_) {
-                // The world is the first frame's camera, or the one of the map the engine continues.
-                Mat4f T_source_world = frame_.T_world_camera_gt;
-                if (!engine_.sourceOrigin(T_source_world)) engine_.setSourceOrigin(T_source_world);
-                T_origin_world_ = rigidInverse(T_source_world);
-                have_origin_ = true;
-            }
-            pose = T_origin_world_ * frame_.T_world_camera_gt;
-            given = &pose;
-        }
-        FrameRecord fr;
-        fr.index = frame_.index;
-        fr.timestamp_s = frame_.timestamp_s;
-        fr.result = engine_.processFrame(frame_, given);
-        reportFullMap(fr.result);
-        reportNoColourToTrack();
-        record_.frames.push_back(fr);
-        // A lost frame has no pose (it holds the last good one): the trajectory leaves it out.
-        if (fr.result.status != TrackingStatus::Lost) record_.trajectory.push_back({frame_.timestamp_s, fr.result.T_world_camera});
-        return true;
+        if (stop()) return false;
+        const Step result = step();
+        if (result != Step::Skipped) return result == Step::Processed;
     }
+}
+
+SequenceRunner::Step SequenceRunner::step() {
+    try {
+        if (!source_.next(frame_)) return Step::End;
+    } catch (const IoError& e) {
+        ++record_.frames_unreadable;
+        std::cerr << "\n" << program_ << ": skipping unreadable frame: " << e.what() << "\n";
+        return Step::Skipped;
+    }
+    Mat4f pose;
+    const Mat4f* given = nullptr;
+    if (poses_ == PoseSource::GroundTruth) {
+        if (!frame_.has_ground_truth) {
+            ++record_.frames_without_pose;
+            return Step::Skipped;
+        }
+        if (!have_origin_) {
+            // The world is the first frame's camera, or the one of the map the engine continues.
+            Mat4f T_source_world = frame_.T_world_camera_gt;
+            if (!engine_.sourceOrigin(T_source_world)) engine_.setSourceOrigin(T_source_world);
+            T_origin_world_ = rigidInverse(T_source_world);
+            have_origin_ = true;
+        }
+        pose = T_origin_world_ * frame_.T_world_camera_gt;
+        given = &pose;
+    }
+    FrameRecord fr;
+    fr.index = frame_.index;
+    fr.timestamp_s = frame_.timestamp_s;
+    fr.result = engine_.processFrame(frame_, given);
+    reportFullMap(fr.result);
+    reportNoColourToTrack();
+    record_.frames.push_back(fr);
+    // A lost frame has no pose (it holds the last good one): the trajectory leaves it out.
+    if (fr.result.status != TrackingStatus::Lost) record_.trajectory.push_back({frame_.timestamp_s, fr.result.T_world_camera});
+    return Step::Processed;
 }
 
 // The colour tracker has nothing to go on in a frame without colour: said once, with the remedy,
@@ -69,7 +75,7 @@ void SequenceRunner::reportNoColourToTrack() {
     if (reported_no_colour_ || !frame_.rgb.empty() || poses_ == PoseSource::GroundTruth || engine_.settings().tracker.kind != TrackerKind::Color)
         return;
     reported_no_colour_ = true;
-    std::cerr << "\nvoxfuse: warning: frame " << frame_.index
+    std::cerr << "\n" << program_ << ": warning: frame " << frame_.index
               << " has no colour image, and the colour tracker (--tracker color) follows colour alone: such frames cannot be tracked. "
                  "Use --tracker ren (depth) or rgbd (depth, and colour where there is any).\n";
 }
@@ -81,7 +87,7 @@ void SequenceRunner::reportFullMap(const FrameResult& result) {
     const bool blocks_full = a.failures_blocks_full_this_frame > 0 && !reported_blocks_full_;
     const bool hash_full = a.failures_hash_full_this_frame > 0 && !reported_hash_full_;
     if (!blocks_full && !hash_full) return;  // every frame comes here: no text made for nothing
-    const std::string frame = "voxfuse: warning: frame " + std::to_string(frame_.index) + ": ";
+    const std::string frame = std::string(program_) + ": warning: frame " + std::to_string(frame_.index) + ": ";
     const std::string effect = " of the blocks this frame's depth needs could not be allocated; what they hold is not fused (nor, from "
                                "now on, anything else the map has no room for) and tracking may fail. ";
     if (blocks_full) {

@@ -18,16 +18,24 @@ enum class PoseSource { GroundTruth, Tracker };
 
 class SequenceRunner {
 public:
-    SequenceRunner(ImageSource& source, MainEngine& engine, PoseSource poses, RunRecord& record);
+    // `program` names the front-end in what the run says on stderr.
+    SequenceRunner(ImageSource& source, MainEngine& engine, PoseSource poses, RunRecord& record, const char* program);
 
-    // Reads and processes the next frame. Returns false at the end of the source. Frames that cannot
-    // be read, or that lack a ground-truth pose when poses come from ground truth, are counted in the
-    // record and skipped (the call moves on to the next frame).
-    bool step();
+    enum class Step {
+        Processed,  // the next frame was read and processed
+        Skipped,    // it could not be read, or lacks the ground-truth pose poses come from: counted in the record
+        End         // the source has no more frames
+    };
+    // Reads the next frame and processes it. After Skipped the caller calls again: a GUI gets back to
+    // its events in between, so that a camera which stopped delivering (an error every few seconds)
+    // does not hold it.
+    Step step();
+    // step() until a frame was processed (true), or the source ended or `stop` says so (false).
+    bool processNext(const std::function<bool()>& stop);
     // Reads and drops the next `count` frames (a run that continues a map saved after them). Returns
     // how many there were.
     int skip(int count);
-    // The frame last processed (valid after step() returned true).
+    // The frame last processed (valid after Step::Processed).
     const RGBDFrame& frame() const { return frame_; }
     const FrameRecord& lastRecord() const { return record_.frames.back(); }
 
@@ -39,6 +47,7 @@ private:
     MainEngine& engine_;
     PoseSource poses_;
     RunRecord& record_;
+    const char* program_;
     RGBDFrame frame_;
     bool have_origin_ = false;
     Mat4f T_origin_world_ = Mat4f::identity();

@@ -64,8 +64,8 @@ ViewerApp::ViewerApp(const ViewerOptions& options, std::unique_ptr<ImageSource> 
     record_.source = source_->description();
     record_.settings = engine_->settings();
     record_.tracked = options_.poses == app::PoseSource::Tracker;
-    runner_ = std::make_unique<app::SequenceRunner>(*source_, *engine_, options_.poses, record_);
-    if (options_.skip_frames > 0) runner_->skip(options_.skip_frames);
+    runner_ = std::make_unique<app::SequenceRunner>(*source_, *engine_, options_.poses, record_, "voxfuse_viewer");
+    if (options_.skip_frames > 0) std::cerr << "voxfuse_viewer: skipped the first " << runner_->skip(options_.skip_frames) << " frames\n";
     running_ = options_.start_running;
 
     GLFWwindow* w = window_.handle();
@@ -130,9 +130,17 @@ void ViewerApp::saveScreenshot(const std::string& path) {
 
 void ViewerApp::processNextFrame() {
     const Timer wall;
-    if (!runner_->step()) {
+    const app::SequenceRunner::Step step = runner_->step();
+    if (step == app::SequenceRunner::Step::End) {
         end_of_source_ = true;
         status_ = "end of the sequence";
+        updateTitle();
+        return;
+    }
+    if (step == app::SequenceRunner::Step::Skipped) {
+        // Back to the window's events; the next frame comes on the next pass.
+        status_ = "frame skipped: " + std::to_string(record_.frames_unreadable) + " unreadable, " + std::to_string(record_.frames_without_pose) +
+                  " without a ground-truth pose so far";
         updateTitle();
         return;
     }

@@ -146,7 +146,7 @@ void checkCombinations(const CliOptions& o) {
                                    "--render-every", "--min-depth", "--max-depth", "--depth-gap-tolerance", "--occupancy", "--poses", "--tracker",
                                    "--tracker-config", "--tracker-levels", "--tracker-iterations", "--tracker-max-distance", "--labels",
                                    "--label-match", "--label-ignore", "--label-update", "--relocalise", "--relocalise-candidates",
-                                   "--relocalise-max-speed"})
+                                   "--relocalise-max-speed", "--relocalise-min-colour-correlation"})
             if (p.wasGiven(option))
                 throw ConfigError(std::string(option == std::string("source") ? "a SOURCE" : option) +
                                   " concerns frames, and --load-map with --frames 0 reads none (leave it out, or give frames)");
@@ -239,7 +239,7 @@ int run(CliOptions& o) {
     record.has_labels = labels != nullptr;
     record.settings = engine->settings();
     record.tracked = p.poses == "track";
-    app::SequenceRunner runner(*source, *engine, record.tracked ? app::PoseSource::Tracker : app::PoseSource::GroundTruth, record);
+    app::SequenceRunner runner(*source, *engine, record.tracked ? app::PoseSource::Tracker : app::PoseSource::GroundTruth, record, "voxfuse");
     const int total = o.max_frames >= 0 && (source->frameCount() < 0 || o.max_frames < source->frameCount()) ? o.max_frames
                                                                                                                 : source->frameCount();
     // The occupancy map is built on its own thread; the loop hands it each fused frame and never waits.
@@ -257,7 +257,7 @@ int run(CliOptions& o) {
     ProgressLine progress(total);
     const Timer wall;
     int last_rendered = -1;
-    while ((o.max_frames < 0 || int(record.frames.size()) < o.max_frames) && !app::interrupt::requested() && runner.step()) {
+    while ((o.max_frames < 0 || int(record.frames.size()) < o.max_frames) && runner.processNext(app::interrupt::requested)) {
         const FrameResult& fr = runner.lastRecord().result;
         record.frames_with_labels += !runner.frame().labels.empty();
         if (occupancy && fr.fused) occupancy->submit(engine->view().depth, engine->view().calib.depth, fr.T_world_camera);
