@@ -8,7 +8,8 @@
 
 namespace voxfuse::app {
 
-// --relocalise on|off, --relocalise-candidates N and --relocalise-max-speed M, written into `settings`
+// --relocalise on|off, --relocalise-candidates N, --relocalise-max-speed M and
+// --relocalise-min-colour-correlation C, written into `settings`
 // (kept alive by the caller).
 inline void addRelocalisationOptions(CLI::App& cli, RelocalisationSettings& settings) {
     cli.add_option_function<std::string>(
@@ -20,6 +21,9 @@ inline void addRelocalisationOptions(CLI::App& cli, RelocalisationSettings& sett
     cli.add_option("--relocalise-max-speed", settings.max_speed_m_per_s,
                    "relocalisation: m/s the camera may have moved since the last good frame; poses farther away are not taken (0: no limit)")
         ->capture_default_str()->check(app::floatIn(0.0, 1e6));
+    cli.add_option("--relocalise-min-colour-correlation", settings.min_colour_correlation,
+                   "relocalisation: how well a found pose's view must correlate with the map's colours (colour voxels; -1: no colour test)")
+        ->capture_default_str()->check(app::floatIn(-1.0, 1.0));
 }
 
 }  // namespace voxfuse::app

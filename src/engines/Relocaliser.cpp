@@ -70,7 +70,10 @@ ColourAgreement compareColour(const View& view, const Image<float>& model_depth_
             const Vec3f p_rgb = transformPoint(T_rgb_depth, depth_camera.unproject(float(u), float(v), frame[i]));
             if (!(p_rgb.z > 0.f)) continue;
             const int j = rgb_camera.nearestPixelIndex(rgb_camera.project(p_rgb));
-            if (j < 0) continue;
+            // Voxels that never saw colour (fused from frames without it, or outside the colour
+            // camera's view) render exactly black: no colour to compare, not a black surface.
+            const Vec4u8 m = model_rgb[i];
+            if (j < 0 || (m.x == 0 && m.y == 0 && m.z == 0)) continue;
             cells[std::size_t(u / cell + (v / cell) * cells_x)].add(255.0 * double(intensityFromRgb(frame_rgb[j])),
                                                                     255.0 * double(intensityFromRgb(model_rgb[i])));
         }
@@ -90,7 +93,7 @@ ColourAgreement compareColour(const View& view, const Image<float>& model_depth_
     }
     a.pixels = int(pixels);
     a.cells = textured;
-    if (textured < min_textured_cells) return a;
+    if (textured == 0 || textured < min_textured_cells) return a;
     a.compared = true;
     a.correlation = float(weighted / pixels);
     return a;

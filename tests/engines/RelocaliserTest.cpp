@@ -95,6 +95,37 @@ TEST(RelocaliserTest, ColourAgreementIsTheCorrelationOfIntensitiesWhereDepthsAgr
     EXPECT_GT(a.correlation, 0.99f);
 }
 
+TEST(RelocaliserTest, ColourIsSampledThroughTheDepthToColourExtrinsics) {
+    // A colour camera 2.5 cm to the right of the depth camera (fx 160: 4 pixels at 1 m). It sees the
+    // depth pixel u at its own u - 4; the model's colours sit at the depth pixels.
+    View view = colourView();
+    const Image<Vec4u8> at_depth_pixels = modelColour(view, [](int g) { return g; });
+    view.calib.T_depth_rgb = Mat4f::identity();
+    view.calib.T_depth_rgb.m[3] = 0.025f;  // rgb -> depth: x + 2.5 cm
+    for (int v = 0; v < 120; ++v)
+        for (int u = 0; u < 160; ++u) view.rgb.at(u, v) = u + 4 < 160 ? at_depth_pixels.at(u + 4, v) : Vec4u8{0, 0, 0, 255};
+    ColourAgreement a = compareColour(view, constantDepth(1.f), at_depth_pixels, 0.02f);
+    ASSERT_TRUE(a.compared);
+    EXPECT_GT(a.correlation, 0.99f);
+    EXPECT_EQ(a.pixels, 156 * 120) << "the 4 right columns lie outside the colour image";
+    view.calib.T_depth_rgb.m[3] = -0.025f;  // the extrinsics taken the wrong way round
+    a = compareColour(view, constantDepth(1.f), at_depth_pixels, 0.02f);
+    ASSERT_TRUE(a.compared);
+    EXPECT_LT(a.correlation, 0.5f);
+}
+
+TEST(RelocaliserTest, MapPixelsWithoutColourAreNotCompared) {
+    // Voxels that never saw colour render exactly black: half of each cell so, and the rest agreeing.
+    const View view = colourView();
+    Image<Vec4u8> half = modelColour(view, [](int g) { return g; });
+    for (int v = 0; v < 120; ++v)
+        for (int u = 0; u < 160; u += 2) half.at(u, v) = Vec4u8{0, 0, 0, 255};
+    const ColourAgreement a = compareColour(view, constantDepth(1.f), half, 0.02f);
+    ASSERT_TRUE(a.compared);
+    EXPECT_EQ(a.pixels, 80 * 120);
+    EXPECT_GT(a.correlation, 0.99f);
+}
+
 TEST(RelocaliserTest, ColourComparesTextureNotWhereBrightAndDarkRegionsLie) {
     // The same layout of a bright and a dark half, with unrelated texture in each: a place of the
     // same shape under other colours. The image-wide correlation would be high; the cells' is not.
@@ -119,6 +150,8 @@ TEST(RelocaliserTest, ColourGivesNoVerdictWithoutColourOrTexture) {
     const Image<Vec4u8> same = modelColour(view, [](int g) { return g; });
     EXPECT_TRUE(compareColour(view, model_depth, same, 0.02f).compared);
     EXPECT_FALSE(compareColour(view, model_depth, same, 0.02f, 16 * 12 + 1).compared) << "fewer cells than asked for";
+    const Image<Vec4u8> plain = modelColour(view, [](int) { return 128; });
+    EXPECT_FALSE(compareColour(view, model_depth, plain, 0.02f, 0).compared) << "no textured cell: no verdict, whatever the least asked for";
     EXPECT_FALSE(compareColour(view, model_depth, modelColour(view, [](int) { return 128; }), 0.02f).compared)
         << "a plain surface correlates with nothing";
     View grey = colourView();
