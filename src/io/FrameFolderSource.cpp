@@ -136,8 +136,7 @@ bool FrameFolderSource::next(RGBDFrame& frame) {
     if (position_ >= frames_.size()) return false;
     const int index = int(position_);
     const FrameFiles& f = frames_[position_++];  // moves on even if this frame throws
-    frame_reading::readDepth(f.depth_path, index, calib_.depth, read_.depth_raw);
-    if (!f.colour_path.empty()) frame_reading::readColour(f.colour_path, index, calib_.rgb, read_.rgb);
+    frame_reading::readDepthAndColour(f.depth_path, f.colour_path, index, calib_.depth, calib_.rgb, read_.depth_raw, read_.rgb);
     read_.handOver(frame, !f.colour_path.empty());
     frame.index = index;
     frame.file_number = f.number;

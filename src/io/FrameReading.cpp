@@ -3,6 +3,8 @@
 #include <cctype>
 #include <cmath>
 #include <filesystem>
+#include <future>
+#include <system_error>
 
 #include "TextParsing.h"
 #include "voxfuse/core/Error.h"
@@ -86,6 +88,26 @@ void readDepth(const std::string& path, int frame, const Intrinsics& depth_camer
 void readColour(const std::string& path, int frame, const Intrinsics& rgb_camera, Image<Vec4u8>& rgb) {
     withFrame(frame, [&] { readColorImage(path, rgb); });
     requireSize(path, frame, rgb.size(), rgb_camera, "rgb");
+}
+
+void readDepthAndColour(const std::string& depth_path, const std::string& colour_path, int frame, const Intrinsics& depth_camera,
+                        const Intrinsics& rgb_camera, Image<std::uint16_t>& depth, Image<Vec4u8>& rgb) {
+    if (colour_path.empty()) return readDepth(depth_path, frame, depth_camera, depth);
+    std::future<void> colour;
+    try {
+        colour = std::async(std::launch::async, [&] { readColour(colour_path, frame, rgb_camera, rgb); });
+    } catch (const std::system_error&) {
+        // No thread to be had (a process limit): one after the other.
+        readDepth(depth_path, frame, depth_camera, depth);
+        return readColour(colour_path, frame, rgb_camera, rgb);
+    }
+    try {
+        readDepth(depth_path, frame, depth_camera, depth);
+    } catch (...) {
+        colour.wait();  // it writes into `rgb`, which the caller owns
+        throw;
+    }
+    colour.get();
 }
 
 }  // namespace frame_reading

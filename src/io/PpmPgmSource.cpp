@@ -110,8 +110,8 @@ bool PpmPgmSource::next(RGBDFrame& frame) {
             throw IoError(path, "missing: a gap in the sequence (index " + std::to_string(file_index) + "); it goes on to index " +
                                     std::to_string(first_index_ + frame_count_ - 1), position);
     }
-    frame_reading::readDepth(depth_path, position, calib_.depth, read_.depth_raw);
-    if (!rgb_pattern_.empty()) frame_reading::readColour(fileName(rgb_pattern_, file_index), position, calib_.rgb, read_.rgb);
+    frame_reading::readDepthAndColour(depth_path, rgb_pattern_.empty() ? std::string() : fileName(rgb_pattern_, file_index), position, calib_.depth,
+                                      calib_.rgb, read_.depth_raw, read_.rgb);
     read_.handOver(frame, !rgb_pattern_.empty());
     frame.index = position;
     frame.timestamp_s = double(file_index) / 30.0;

@@ -130,8 +130,7 @@ bool TumSource::next(RGBDFrame& frame) {
     if (position_ >= pairs_.size()) return false;
     const int index = int(position_);
     const FramePair& pair = pairs_[position_++];  // moves on even if this frame throws
-    frame_reading::readDepth(pair.depth_path, index, calib_.depth, read_.depth_raw);
-    frame_reading::readColour(pair.rgb_path, index, calib_.rgb, read_.rgb);
+    frame_reading::readDepthAndColour(pair.depth_path, pair.rgb_path, index, calib_.depth, calib_.rgb, read_.depth_raw, read_.rgb);
     read_.handOver(frame, true);
     frame.index = index;
     frame.timestamp_s = pair.depth_time_s;
