@@ -217,6 +217,27 @@ TEST(TumSource, CorruptFrameThrowsThenContinues) {
     EXPECT_FALSE(source.next(frame));
 }
 
+// The colour decodes on a thread of its own beside the depth: either failing is the frame's error,
+// named by its file, and the depth's when both fail.
+TEST(TumSource, ABadColourImageOrBothBadNameTheFile) {
+    HandMadeTumFolder folder;
+    writeBytes(folder.dir.file("rgb/1.033000.png"), "not a png");
+    writeBytes(folder.dir.file("rgb/1.067000.png"), "not a png either");
+    writeBytes(folder.dir.file("depth/1.072000.png"), "nor this");
+    TumSource source(folder.dir.path());
+    RGBDFrame frame;
+    ASSERT_TRUE(source.next(frame));
+    for (const char* expected : {"rgb/1.033000.png", "depth/1.072000.png"}) {
+        try {
+            source.next(frame);
+            FAIL() << "expected IoError naming " << expected;
+        } catch (const IoError& e) {
+            EXPECT_TRUE(containsText(e.file(), expected)) << e.what();
+        }
+    }
+    EXPECT_FALSE(source.next(frame)) << "the folder's three frames were read";
+}
+
 // ----------------------------------------------------------------------------------------------
 // PPM/PGM sequences
 
