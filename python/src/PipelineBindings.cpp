@@ -260,6 +260,8 @@ void bindPipeline(py::module_& m) {
                        "relocalisation: keyframes tried per lost frame, most alike first")
         .def_readwrite("relocalise_max_speed", &PipelineSettings::relocalise_max_speed,
                        "relocalisation: m/s the camera may have moved since the last good frame; poses farther away are not taken (0: no limit)")
+        .def_readwrite("relocalise_min_colour_correlation", &PipelineSettings::relocalise_min_colour_correlation,
+                       "relocalisation: how well a found pose's view must correlate with the map's colours (colour voxels; -1: no colour test)")
         .def("to_dict", [](const PipelineSettings& s) {
             py::dict d;
             py::object obj = py::cast(s);
@@ -267,7 +269,7 @@ void bindPipeline(py::module_& m) {
                                      "depth_gap_tolerance", "max_blocks", "hash_buckets", "hash_excess", "volume_size", "volume_offset",
                                      "tracker", "tracker_config", "tracker_levels", "tracker_iterations", "tracker_max_distance",
                                      "label_update", "swap", "active_blocks", "swap_file", "swap_blocks_per_frame", "relocalise",
-                                     "relocalise_candidates", "relocalise_max_speed"})
+                                     "relocalise_candidates", "relocalise_max_speed", "relocalise_min_colour_correlation"})
                 d[name] = obj.attr(name);
             return d;
         }, "Every setting by name.")

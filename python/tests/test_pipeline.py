@@ -153,6 +153,10 @@ def test_relocalisation_settings_are_checked():
         voxfuse.Pipeline(calib, relocalise_candidates=0)
     with pytest.raises(voxfuse.ConfigError, match="speed limit"):
         voxfuse.Pipeline(calib, relocalise_max_speed=-1.0)
+    with pytest.raises(voxfuse.ConfigError, match="colour correlation"):
+        voxfuse.Pipeline(calib, relocalise_min_colour_correlation=1.5)
+    off = voxfuse.Pipeline(calib, relocalise_min_colour_correlation=-1.0)
+    assert off.settings.to_dict()["relocalise_min_colour_correlation"] == -1.0
 
 
 def test_reset_forgets_the_ground_truth_origin(room_frames):
