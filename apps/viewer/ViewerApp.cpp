@@ -1,6 +1,7 @@
 #include "ViewerApp.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -12,6 +13,7 @@
 #include "voxfuse/core/Timer.h"
 #include "voxfuse/io/ImageIO.h"
 #include "voxfuse/io/MeshIO.h"
+#include "voxfuse/io/ThreadedImageSource.h"
 #include "voxfuse/shared/Render.h"
 
 namespace voxfuse::viewer {
@@ -86,8 +88,16 @@ bool ViewerApp::processingDone() const {
 int ViewerApp::run() {
     bool screenshot_taken = options_.screenshot_path.empty();
     while (!window_.shouldClose()) {
-        if ((running_ || step_requested_) && !processingDone()) processNextFrame();
-        step_requested_ = false;
+        if ((running_ || step_requested_) && !processingDone()) {
+            // A frame read ahead (a camera's) is waited for a moment only: the window is served
+            // meanwhile, also while the camera is silent.
+            if (frameArrives()) {
+                processNextFrame();
+                step_requested_ = false;
+            }
+        } else {
+            step_requested_ = false;
+        }
         if (processingDone() && running_) {
             running_ = false;
             updateTitle();
@@ -126,6 +136,11 @@ void ViewerApp::saveScreenshot(const std::string& path) {
     status_ = "screenshot saved to " + path;
     std::cerr << "voxfuse_viewer: screenshot saved to " << path << "\n";
     updateTitle();
+}
+
+bool ViewerApp::frameArrives() {
+    auto* threaded = dynamic_cast<ThreadedImageSource*>(source_.get());
+    return !threaded || threaded->waitForFrame(std::chrono::milliseconds(50));
 }
 
 void ViewerApp::processNextFrame() {

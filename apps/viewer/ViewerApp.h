@@ -45,6 +45,7 @@ public:
 
 private:
     bool processingDone() const;
+    bool frameArrives();  // the next frame can be taken without holding the window up (see run())
     void processNextFrame();
     void updateLiveImages();
     void renderModel();

@@ -5,6 +5,7 @@
 // up front, so that handing an entry over never allocates: a reader thread cannot fail on the way
 // and leave the consumer waiting for an end mark that never comes.
 
+#include <chrono>
 #include <condition_variable>
 #include <cstddef>
 #include <vector>
@@ -56,6 +57,12 @@ public:
         QueuedFrame entry = takeFront();
         not_full_.notify_one();
         return entry;
+    }
+
+    // Consumer side: whether an entry is there, waiting for one at most `timeout`.
+    bool waitForEntry(std::chrono::milliseconds timeout) {
+        std::unique_lock<std::mutex> lock(mutex_);
+        return not_empty_.wait_for(lock, timeout, [&] { return count_ > 0; });
     }
 
     // Refuses later pushes and wakes a reader waiting for room.

@@ -114,6 +114,8 @@ bool ThreadedImageSource::next(RGBDFrame& frame) {
     return false;
 }
 
+bool ThreadedImageSource::waitForFrame(std::chrono::milliseconds timeout) { return state_->ended || state_->queue.waitForEntry(timeout); }
+
 int ThreadedImageSource::frameCount() const { return state_->frame_count; }
 std::string ThreadedImageSource::description() const { return state_->description; }
 const std::vector<TimedPose>& ThreadedImageSource::groundTruth() const { return state_->ground_truth; }

@@ -257,6 +257,24 @@ TEST(ThreadedImageSource, DestructionWhileTheReaderWaitsForACameraDoesNotHang) {
     EXPECT_LT(std::chrono::steady_clock::now() - start, 2s);
 }
 
+TEST(ThreadedImageSource, WaitForFrameSaysWhetherNextReturnsAtOnce) {
+    // A camera with 300 ms between frames: a 10 ms wait finds nothing at first, a longer one the
+    // frame; after the last frame the end counts as ready too.
+    Watchdog watchdog(30s, "WaitForFrameSaysWhetherNextReturnsAtOnce");
+    auto progress = std::make_shared<Progress>();
+    Script script;
+    script.frames = 1;
+    script.delay = 300ms;
+    auto source = threaded(script, progress, capacity(2));
+    EXPECT_FALSE(source->waitForFrame(10ms)) << "the first frame takes 300 ms";
+    EXPECT_TRUE(source->waitForFrame(5s));
+    RGBDFrame frame;
+    ASSERT_TRUE(source->next(frame));
+    EXPECT_TRUE(source->waitForFrame(5s)) << "the end mark";
+    EXPECT_FALSE(source->next(frame));
+    EXPECT_TRUE(source->waitForFrame(0ms)) << "ended: next() returns false at once";
+}
+
 TEST(ThreadedImageSource, PassesTheSourcePropertiesThrough) {
     auto progress = std::make_shared<Progress>();
     Script script;

@@ -2,6 +2,7 @@
 // Reads (decodes, undistorts) frames on a thread of its own, ahead of the engine, through a bounded
 // queue: the engine's frame time no longer includes PNG/JPEG/video decoding and remapping.
 
+#include <chrono>
 #include <memory>
 #include <string>
 #include <vector>
@@ -44,6 +45,9 @@ public:
     // Any other exception is rethrown at its place too, but ends the sequence: the reader stops and
     // later calls return false. Call from one thread only.
     bool next(RGBDFrame& frame) override;
+    // Whether next() would return at once (a frame, a frame's error or the end), waiting for that at
+    // most `timeout`: an interactive caller keeps serving its window while a camera is silent.
+    bool waitForFrame(std::chrono::milliseconds timeout);
     int frameCount() const override;
     std::string description() const override;
     const std::vector<TimedPose>& groundTruth() const override;
