@@ -8,9 +8,9 @@
 #include <chrono>
 #include <condition_variable>
 #include <cstddef>
-#include <vector>
 #include <exception>
 #include <mutex>
+#include <vector>
 
 #include "voxfuse/io/RGBDFrame.h"
 

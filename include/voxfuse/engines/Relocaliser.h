@@ -63,8 +63,8 @@ DepthAgreement compareDepth(const Image<float>& frame_depth_m, const Image<float
 // (zero mean, so that exposure and gain do not count) of the two intensities over the frame's depth
 // pixels whose depth agrees with the model's within `tolerance_m` (no occluders), which the colour
 // camera sees and whose model colour is not exactly black (voxels that never saw colour render so);
-// then the mean over the cells, weighed by their pixels. Cells compare texture, not
-// where bright and dark regions lie, which the same shape under other colours often shares.
+// then the mean over the cells, weighed by their pixels. Cells compare texture, not where bright and
+// dark regions lie, which the same shape under other colours often shares.
 // `model_colour` is a colour render (RenderMode::Color) of the raycast that gave `model_depth_m`, in
 // the depth camera. No verdict (`compared` false) without colour on either side, or with fewer than
 // `min_textured_cells` cells that have both pixels and texture on both sides (plain walls correlate
