@@ -122,8 +122,9 @@ int ViewerApp::run() {
         }
         if (processingDone() && options_.exit_when_done) break;
         window_.swapBuffers();
-        // Idle without spinning when nothing is being processed; keep polling while frames flow.
-        if (running_ || model_dirty_ || screenshot_requested_) glfwPollEvents();
+        // Idle without spinning when nothing is being processed; keep polling while frames flow (or a
+        // step waits for the camera's next frame).
+        if (running_ || step_requested_ || model_dirty_ || screenshot_requested_) glfwPollEvents();
         else glfwWaitEvents();
     }
     return 0;
