@@ -16,10 +16,9 @@ IntegrationFrame makeIntegrationFrame(const SceneParams& params, const View& vie
     f.depth = depth;
     // The colour camera sees world points through depth-from-world followed by rgb-from-depth.
     f.T_rgb_world = rigidInverse(view.calib.T_depth_rgb) * f.T_depth_world;
-    f.rgb_intrinsics = view.calib.rgb;
     f.rgb = view.rgb.empty() ? nullptr : rgb;
     // Colour and label images whose size disagrees with the calibration are scaled into it.
-    if (f.rgb && view.rgb.size() != view.calib.rgb.size()) f.rgb_intrinsics = view.calib.rgb.resized(view.rgb.width(), view.rgb.height());
+    f.rgb_intrinsics = f.rgb ? view.colourCamera() : view.calib.rgb;
     f.labels = view.labels.empty() ? nullptr : labels;
     f.T_label_world = view.calib.labelsFromColour() ? f.T_rgb_world : f.T_depth_world;
     f.label_intrinsics = view.calib.labelCamera().resized(view.labels.width(), view.labels.height());

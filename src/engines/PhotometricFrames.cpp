@@ -11,9 +11,7 @@ bool PhotometricFrames::prepare(const View& view, int level_count) {
     has_current_ = false;
     depth_width_ = view.calib.depth.width;
     if (view.rgb.empty() || !view.calib.rgb.valid()) return false;
-    // A colour image whose size disagrees with the calibration is the same camera at another
-    // resolution, as integration takes it.
-    const Intrinsics rgb = view.rgb.size() == view.calib.rgb.size() ? view.calib.rgb : view.calib.rgb.resized(view.rgb.width(), view.rgb.height());
+    const Intrinsics rgb = view.colourCamera();  // at the colour image's resolution
     levels_.resize(std::size_t(level_count));
     T_rgb_depth_ = rigidInverse(view.calib.T_depth_rgb);
     for (int i = 0; i < level_count; ++i) {

@@ -52,8 +52,7 @@ ColourAgreement compareColour(const View& view, const Image<float>& model_depth_
     if (frame_depth_m.size() != model_depth_m.size() || model_colour.size() != model_depth_m.size())
         throw ConfigError("compareColour: the frame's depth, the model's depth and the model's colour differ in size");
     const Intrinsics& depth_camera = view.calib.depth;
-    // A colour image of another size than calibrated is the same camera at that resolution.
-    const Intrinsics rgb_camera = view.rgb.size() == view.calib.rgb.size() ? view.calib.rgb : view.calib.rgb.resized(view.rgb.width(), view.rgb.height());
+    const Intrinsics rgb_camera = view.colourCamera();  // at the colour image's resolution
     const Mat4f T_rgb_depth = rigidInverse(view.calib.T_depth_rgb);
     const int width = frame_depth_m.width(), height = frame_depth_m.height();
     const int cell = std::max(kColourCellMinPixels, width / kColourCellsAcross);

@@ -20,6 +20,12 @@ struct View {
     double timestamp_s = 0.0;
 
     FrameClock clock() const { return {timestamp_s, frame_index}; }
+    // The colour camera as the colour image sees it: an image of another size than calibrated is the
+    // same camera at that resolution. Integration, the colour trackers and relocalisation all use it.
+    // For a view with a colour image.
+    Intrinsics colourCamera() const {
+        return rgb.size() == calib.rgb.size() ? calib.rgb : calib.rgb.resized(rgb.width(), rgb.height());
+    }
 };
 
 }  // namespace voxfuse
