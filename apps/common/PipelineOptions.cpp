@@ -11,6 +11,7 @@
 #include "voxfuse/engines/TrackerSettings.h"
 #include "voxfuse/io/OpenNISource.h"
 #include "voxfuse/io/StrayScannerSource.h"
+#include "voxfuse/io/UndistortedImageSource.h"
 
 namespace voxfuse::app {
 
@@ -155,11 +156,28 @@ void listCameras() {
     for (const auto& uri : uris) std::cout << "  " << uri << "\n";
 }
 
+namespace {
+
 std::unique_ptr<ImageSource> openSource(PipelineOptions& o, const char* program) {
     if (o.live) return OpenNISource::openDevice(o.device_uri, o.source_options);
     if (o.source.empty() && o.source_options.rgb_pattern.empty() && o.source_options.depth_pattern.empty()) o.source = bundledSequence(program);
     if (SyntheticSource::isSyntheticName(o.source)) return SyntheticSource::open(o.source);
     return openImageSource(o.source, o.source_options);
+}
+
+}  // namespace
+
+Pipeline openPipeline(PipelineOptions& o, const char* program) {
+    Pipeline p;
+    p.source = openSource(o, program);
+    // Label images are decoded on the reader thread too: the stream goes inside it.
+    p.labels = attachLabelInput(p.source, o.source, o.labels, o.engine, program);
+    p.source = framesForEngine(std::move(p.source), o.threaded);
+    std::cerr << program << ": " << p.source->description() << "\n";
+    applyDeviceAndIndex(o, o.engine);
+    p.engine = MainEngine::create(o.engine, p.source->calib());
+    if (!o.load_map.empty()) p.engine->loadMap(o.load_map);
+    return p;
 }
 
 }  // namespace voxfuse::app

@@ -70,8 +70,17 @@ void applyDeviceAndIndex(const PipelineOptions& o, MainEngineSettings& s);
 
 // --list-devices: prints the OpenNI2 cameras on stdout.
 void listCameras();
-// The frame source the options name: a live camera, a synthetic sequence, a recording, or the bundled
-// sequence when nothing is named. Not yet undistorted nor read ahead (framesForEngine does that).
-std::unique_ptr<ImageSource> openSource(PipelineOptions& o, const char* program);
+
+// What the options make, the same in every program that takes them.
+struct Pipeline {
+    std::unique_ptr<ImageSource> source;    // the frames as the engine takes them
+    LabelledImageSource* labels = nullptr;  // the label stream inside `source`, if any
+    std::unique_ptr<MainEngine> engine;     // with the --load-map map loaded
+};
+// Opens the source the options name (a live camera, a synthetic sequence, a recording, or the bundled
+// sequence when nothing is named) with its labels, undistorted and read ahead with --threaded (always
+// for a camera, so that the engine never makes the driver wait), says it on stderr, settles the
+// voxel type and the engine settings in o.engine and makes the engine. After adoptMapSettings.
+Pipeline openPipeline(PipelineOptions& o, const char* program);
 
 }  // namespace voxfuse::app

@@ -13,7 +13,6 @@
 #include "ProgramMain.h"
 #include "ViewerApp.h"
 #include "voxfuse/core/Error.h"
-#include "voxfuse/io/UndistortedImageSource.h"
 
 
 namespace fs = std::filesystem;
@@ -56,20 +55,12 @@ int run(Options& o) {
     app::checkPipelineOptions(p);
     if (!o.size.empty()) parseWindowSize(o.size, o.viewer);
     if (!p.load_map.empty()) app::adoptMapSettings(p, readMapFileInfo(p.load_map));
-    std::unique_ptr<ImageSource> source = app::openSource(p, "voxfuse_viewer");
-    MainEngineSettings& s = p.engine;
-    app::attachLabelInput(source, p.source, p.labels, s, "voxfuse_viewer");
-    source = framesForEngine(std::move(source), p.threaded);  // the same undistorted frames as voxfuse; a camera's read ahead
-    std::cerr << "voxfuse_viewer: " << source->description() << "\n";
-
-    app::applyDeviceAndIndex(p, s);
-    std::unique_ptr<MainEngine> engine = MainEngine::create(s, source->calib());
-    if (!p.load_map.empty()) engine->loadMap(p.load_map);
+    app::Pipeline pipeline = app::openPipeline(p, "voxfuse_viewer");  // the same frames and engine as voxfuse's
 
     o.viewer.poses = p.poses == "track" ? app::PoseSource::Tracker : app::PoseSource::GroundTruth;
     o.viewer.skip_frames = p.skip_frames;
     o.viewer.start_running = !o.paused || o.viewer.exit_when_done;  // --exit waits for processing to stop
-    viewer::ViewerApp app(o.viewer, std::move(source), std::move(engine));
+    viewer::ViewerApp app(o.viewer, std::move(pipeline.source), std::move(pipeline.engine));
     std::cerr << kKeyHelp;
     return app.run();
 }

@@ -32,7 +32,6 @@
 #include "voxfuse/io/MeshIO.h"
 #include "voxfuse/io/ImageSource.h"
 #include "voxfuse/io/ThreadedImageSource.h"
-#include "voxfuse/io/UndistortedImageSource.h"
 #include "voxfuse/mapping/OccupancyMapper.h"
 
 
@@ -214,29 +213,17 @@ int run(CliOptions& o) {
     } else if (o.max_frames == 0) {
         throw ConfigError("--frames 0 processes no frame: it needs --load-map, a map to write outputs from");
     }
-    std::unique_ptr<ImageSource> source = app::openSource(p, "voxfuse");
-    MainEngineSettings& s = p.engine;
-    // Label images are decoded on the reader thread too: the stream goes inside it.
-    LabelledImageSource* labels = app::attachLabelInput(source, p.source, p.labels, s, "voxfuse");
+    app::Pipeline pipeline = app::openPipeline(p, "voxfuse");
+    ImageSource* source = pipeline.source.get();
+    MainEngine* engine = pipeline.engine.get();
     // Before the run, not after it: a run must not end without its outputs over an option it cannot honour.
-    if ((o.mesh_per_class || !o.exclude_classes.empty()) && !voxelTypeHasLabels(s.voxel_type))
+    if ((o.mesh_per_class || !o.exclude_classes.empty()) && !voxelTypeHasLabels(p.engine.voxel_type))
         throw ConfigError("--mesh-per-class and --exclude-classes need a voxel type with classes (s_label, s_rgb_label)");
-    // Frames reach the engine undistorted, read ahead on a reader thread with --threaded (always
-    // for live cameras, so that the engine never makes the driver wait).
-    source = framesForEngine(std::move(source), p.threaded);
-    const auto* threaded = dynamic_cast<const ThreadedImageSource*>(source.get());
-    std::cerr << "voxfuse: " << source->description() << "\n";
-
-    app::applyDeviceAndIndex(p, s);
-
-    std::unique_ptr<MainEngine> engine = MainEngine::create(s, source->calib());
+    const auto* threaded = dynamic_cast<const ThreadedImageSource*>(source);
     app::RunRecord record;
-    if (!p.load_map.empty()) {
-        engine->loadMap(p.load_map);
-        record.map_loaded = p.load_map;
-    }
+    record.map_loaded = p.load_map;
     record.source = source->description();
-    record.has_labels = labels != nullptr;
+    record.has_labels = pipeline.labels != nullptr;
     record.settings = engine->settings();
     record.tracked = p.poses == "track";
     app::SequenceRunner runner(*source, *engine, record.tracked ? app::PoseSource::Tracker : app::PoseSource::GroundTruth, record, "voxfuse");
