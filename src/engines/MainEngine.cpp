@@ -413,7 +413,8 @@ private:
         } else {
             if (view_.rgb.empty()) return ColourAgreement{};
             raycast_->render(scene_, candidate_model_, RenderMode::Color, candidate_colour_);
-            return compareColour(view_, candidate_depth_, candidate_colour_, settings_.relocalisation.agreement_tolerance_m);
+            return compareColour(view_, candidate_depth_, candidate_colour_, settings_.relocalisation.agreement_tolerance_m,
+                                 settings_.scene.voxel_size_m);
         }
     }
 

@@ -42,10 +42,45 @@ struct CorrelationSums {
     }
 };
 
+// The frame's intensities (0-255) summed over boxes in constant time: a summed-area table.
+class BoxIntensity {
+public:
+    explicit BoxIntensity(const Image<Vec4u8>& rgb) : width_(rgb.width()), height_(rgb.height()) {
+        sums_.assign(std::size_t(width_ + 1) * std::size_t(height_ + 1), 0.0);
+        for (int v = 0; v < height_; ++v) {
+            double row = 0.0;
+            for (int u = 0; u < width_; ++u) {
+                row += 255.0 * double(intensityFromRgb(rgb.at(u, v)));
+                at(u + 1, v + 1) = at(u + 1, v) + row;
+            }
+        }
+    }
+    // The mean over the pixels whose centres lie within `half` of (x, y) on each axis, at least the
+    // nearest one; -1 when (x, y) lies outside the image.
+    double mean(float x, float y, float half) const {
+        if (!(x >= -0.5f && y >= -0.5f && x < float(width_) - 0.5f && y < float(height_) - 0.5f)) return -1.0;
+        half = std::min(half, float(width_ + height_));  // no wider than the image, whatever the depth
+        int u0 = std::max(0, int(std::ceil(x - half))), u1 = std::min(width_ - 1, int(std::floor(x + half)));
+        int v0 = std::max(0, int(std::ceil(y - half))), v1 = std::min(height_ - 1, int(std::floor(y + half)));
+        if (u0 > u1 || v0 > v1) {  // narrower than a pixel: the nearest
+            u0 = u1 = std::min(width_ - 1, int(x + 0.5f));
+            v0 = v1 = std::min(height_ - 1, int(y + 0.5f));
+        }
+        const double sum = at(u1 + 1, v1 + 1) - at(u0, v1 + 1) - at(u1 + 1, v0) + at(u0, v0);
+        return sum / (double(u1 - u0 + 1) * double(v1 - v0 + 1));
+    }
+
+private:
+    double& at(int u, int v) { return sums_[std::size_t(u) + std::size_t(v) * std::size_t(width_ + 1)]; }
+    double at(int u, int v) const { return sums_[std::size_t(u) + std::size_t(v) * std::size_t(width_ + 1)]; }
+    int width_, height_;
+    std::vector<double> sums_;
+};
+
 }  // namespace
 
 ColourAgreement compareColour(const View& view, const Image<float>& model_depth_m, const Image<Vec4u8>& model_colour, float tolerance_m,
-                              int min_textured_cells) {
+                              float voxel_size_m, int min_textured_cells) {
     ColourAgreement a;
     const Image<float>& frame_depth_m = view.depth;
     if (view.rgb.empty() || model_colour.empty() || !view.calib.rgb.valid()) return a;
@@ -61,20 +96,23 @@ ColourAgreement compareColour(const View& view, const Image<float>& model_depth_
     const float* frame = frame_depth_m.host();
     const float* model = model_depth_m.host();
     const Vec4u8* model_rgb = model_colour.host();
-    const Vec4u8* frame_rgb = view.rgb.host();
+    const BoxIntensity frame_intensity(view.rgb);
+    // Half the footprint, in colour pixels, of the model's colour at one metre.
+    const float half_footprint_px_m = 0.5f * kColourFootprintVoxels * voxel_size_m * 0.5f * (rgb_camera.fx + rgb_camera.fy);
     for (int v = 0; v < height; ++v)
         for (int u = 0; u < width; ++u) {
             const int i = u + v * width;
             if (!(frame[i] > 0.f) || !(model[i] > 0.f) || !(std::fabs(frame[i] - model[i]) < tolerance_m)) continue;
             const Vec3f p_rgb = transformPoint(T_rgb_depth, depth_camera.unproject(float(u), float(v), frame[i]));
             if (!(p_rgb.z > 0.f)) continue;
-            const int j = rgb_camera.nearestPixelIndex(rgb_camera.project(p_rgb));
             // Voxels that never saw colour (fused from frames without it, or outside the colour
             // camera's view) render exactly black: no colour to compare, not a black surface.
             const Vec4u8 m = model_rgb[i];
-            if (j < 0 || (m.x == 0 && m.y == 0 && m.z == 0)) continue;
-            cells[std::size_t(u / cell + (v / cell) * cells_x)].add(255.0 * double(intensityFromRgb(frame_rgb[j])),
-                                                                    255.0 * double(intensityFromRgb(model_rgb[i])));
+            if (m.x == 0 && m.y == 0 && m.z == 0) continue;
+            const Vec2f px = rgb_camera.project(p_rgb);
+            const double f = frame_intensity.mean(px.x, px.y, half_footprint_px_m / p_rgb.z);
+            if (f < 0.0) continue;
+            cells[std::size_t(u / cell + (v / cell) * cells_x)].add(f, 255.0 * double(intensityFromRgb(m)));
         }
     // Each cell's correlation, weighed by its pixels; cells with few pixels, or plain on either side
     // (less than 3 grey levels of deviation: a wall, or sensor noise on one), have no say.

@@ -70,12 +70,12 @@ TEST(RelocaliserTest, ColourAgreementIsTheCorrelationOfIntensitiesWhereDepthsAgr
     const View view = colourView();
     Image<float> model_depth = constantDepth(1.005f);
     // Another exposure of the same surface: gain and offset do not count.
-    ColourAgreement a = compareColour(view, model_depth, modelColour(view, [](int g) { return g / 2 + 30; }), 0.02f);
+    ColourAgreement a = compareColour(view, model_depth, modelColour(view, [](int g) { return g / 2 + 30; }), 0.02f, 0.f);
     ASSERT_TRUE(a.compared);
     EXPECT_EQ(a.cells, 16 * 12);
     EXPECT_EQ(a.pixels, 160 * 120);
     EXPECT_GT(a.correlation, 0.99f);
-    a = compareColour(view, model_depth, modelColour(view, [](int g) { return 250 - g; }), 0.02f);
+    a = compareColour(view, model_depth, modelColour(view, [](int g) { return 250 - g; }), 0.02f, 0.f);
     ASSERT_TRUE(a.compared);
     EXPECT_LT(a.correlation, -0.99f) << "the negative";
     // Pixels whose depths disagree (an occluder) are not compared, whatever their colour.
@@ -85,14 +85,44 @@ TEST(RelocaliserTest, ColourAgreementIsTheCorrelationOfIntensitiesWhereDepthsAgr
             model_depth.at(u, v) = 1.1f;
             spoilt.at(u, v) = Vec4u8{(unsigned char)(u * v % 7 * 30), 0, 255, 255};
         }
-    a = compareColour(view, model_depth, spoilt, 0.02f);
+    a = compareColour(view, model_depth, spoilt, 0.02f, 0.f);
     ASSERT_TRUE(a.compared);
     EXPECT_EQ(a.pixels, 120 * 120);
     EXPECT_GT(a.correlation, 0.99f);
     // Colour at twice the calibrated resolution is the same camera, sampled at its pixels.
-    a = compareColour(colourView(2), model_depth, spoilt, 0.02f);
+    a = compareColour(colourView(2), model_depth, spoilt, 0.02f, 0.f);
     ASSERT_TRUE(a.compared);
     EXPECT_GT(a.correlation, 0.99f);
+}
+
+TEST(RelocaliserTest, ColourFinerThanTheMapIsAveragedOverTheMapsFootprint) {
+    // Colour at 4x the depth's resolution (fx 640): each depth pixel's 4x4 colour pixels hold the
+    // map's colour plus texture finer than the map, +-60 grey levels in pairs that cancel. Voxels
+    // of 1 / (1.5 * 160) m make the footprint at 1 m those 4x4 pixels.
+    View view = colourView(4);
+    Image<Vec4u8> map_colour(view.depth.size());
+    for (int y = 0; y < 120; ++y)
+        for (int x = 0; x < 160; ++x) {
+            const int g = (x * 37 + y * y * 11) % 120 + 68;
+            map_colour.at(x, y) = Vec4u8{(unsigned char)g, (unsigned char)g, (unsigned char)g, 255};
+            for (int dy = 0; dy < 4; ++dy)
+                for (int dx = 0; dx < 4; ++dx) {
+                    // (dx, dy) and (3 - dx, 3 - dy) are a pair; the sign of each pair from a hash.
+                    const bool first = dy < 2;
+                    const int pair = first ? dx + 4 * dy : (3 - dx) + 4 * (3 - dy);
+                    const unsigned hash = (unsigned(x) * 73856093u) ^ (unsigned(y) * 19349663u) ^ (unsigned(pair) * 83492791u);
+                    const int sign = (hash >> 4) & 1u ? 1 : -1;
+                    const int fine = g + (first ? sign : -sign) * 60;
+                    view.rgb.at(4 * x + dx, 4 * y + dy) = Vec4u8{(unsigned char)fine, (unsigned char)fine, (unsigned char)fine, 255};
+                }
+        }
+    const ColourAgreement points = compareColour(view, constantDepth(1.f), map_colour, 0.02f, 0.f);
+    ASSERT_TRUE(points.compared);
+    EXPECT_LT(points.correlation, 0.7f) << "a colour pixel on its own carries the finer texture: the test shows something";
+    const ColourAgreement footprint = compareColour(view, constantDepth(1.f), map_colour, 0.02f, 1.f / (1.5f * 160.f));
+    ASSERT_TRUE(footprint.compared);
+    EXPECT_GT(footprint.correlation, 0.99f);
+    EXPECT_EQ(footprint.pixels, 160 * 120);
 }
 
 TEST(RelocaliserTest, ColourIsSampledThroughTheDepthToColourExtrinsics) {
@@ -104,12 +134,12 @@ TEST(RelocaliserTest, ColourIsSampledThroughTheDepthToColourExtrinsics) {
     view.calib.T_depth_rgb.m[3] = 0.025f;  // rgb -> depth: x + 2.5 cm
     for (int v = 0; v < 120; ++v)
         for (int u = 0; u < 160; ++u) view.rgb.at(u, v) = u + 4 < 160 ? at_depth_pixels.at(u + 4, v) : Vec4u8{0, 0, 0, 255};
-    ColourAgreement a = compareColour(view, constantDepth(1.f), at_depth_pixels, 0.02f);
+    ColourAgreement a = compareColour(view, constantDepth(1.f), at_depth_pixels, 0.02f, 0.f);
     ASSERT_TRUE(a.compared);
     EXPECT_GT(a.correlation, 0.99f);
     EXPECT_EQ(a.pixels, 156 * 120) << "the 4 right columns lie outside the colour image";
     view.calib.T_depth_rgb.m[3] = -0.025f;  // the extrinsics taken the wrong way round
-    a = compareColour(view, constantDepth(1.f), at_depth_pixels, 0.02f);
+    a = compareColour(view, constantDepth(1.f), at_depth_pixels, 0.02f, 0.f);
     ASSERT_TRUE(a.compared);
     EXPECT_LT(a.correlation, 0.5f);
 }
@@ -120,7 +150,7 @@ TEST(RelocaliserTest, MapPixelsWithoutColourAreNotCompared) {
     Image<Vec4u8> half = modelColour(view, [](int g) { return g; });
     for (int v = 0; v < 120; ++v)
         for (int u = 0; u < 160; u += 2) half.at(u, v) = Vec4u8{0, 0, 0, 255};
-    const ColourAgreement a = compareColour(view, constantDepth(1.f), half, 0.02f);
+    const ColourAgreement a = compareColour(view, constantDepth(1.f), half, 0.02f, 0.f);
     ASSERT_TRUE(a.compared);
     EXPECT_EQ(a.pixels, 80 * 120);
     EXPECT_GT(a.correlation, 0.99f);
@@ -139,7 +169,7 @@ TEST(RelocaliserTest, ColourComparesTextureNotWhereBrightAndDarkRegionsLie) {
             const int h = (u * u * 13 + v * 29) % 50 + (bright ? 180 : 20);
             other.at(u, v) = Vec4u8{(unsigned char)h, (unsigned char)h, (unsigned char)h, 255};
         }
-    const ColourAgreement a = compareColour(view, constantDepth(1.f), other, 0.02f);
+    const ColourAgreement a = compareColour(view, constantDepth(1.f), other, 0.02f, 0.f);
     ASSERT_TRUE(a.compared);
     EXPECT_LT(std::fabs(a.correlation), 0.3f);
 }
@@ -148,17 +178,17 @@ TEST(RelocaliserTest, ColourGivesNoVerdictWithoutColourOrTexture) {
     const View view = colourView();
     const Image<float> model_depth = constantDepth(1.f);
     const Image<Vec4u8> same = modelColour(view, [](int g) { return g; });
-    EXPECT_TRUE(compareColour(view, model_depth, same, 0.02f).compared);
-    EXPECT_FALSE(compareColour(view, model_depth, same, 0.02f, 16 * 12 + 1).compared) << "fewer cells than asked for";
+    EXPECT_TRUE(compareColour(view, model_depth, same, 0.02f, 0.f).compared);
+    EXPECT_FALSE(compareColour(view, model_depth, same, 0.02f, 0.f, 16 * 12 + 1).compared) << "fewer cells than asked for";
     const Image<Vec4u8> plain = modelColour(view, [](int) { return 128; });
-    EXPECT_FALSE(compareColour(view, model_depth, plain, 0.02f, 0).compared) << "no textured cell: no verdict, whatever the least asked for";
-    EXPECT_FALSE(compareColour(view, model_depth, modelColour(view, [](int) { return 128; }), 0.02f).compared)
+    EXPECT_FALSE(compareColour(view, model_depth, plain, 0.02f, 0.f, 0).compared) << "no textured cell: no verdict, whatever the least asked for";
+    EXPECT_FALSE(compareColour(view, model_depth, modelColour(view, [](int) { return 128; }), 0.02f, 0.f).compared)
         << "a plain surface correlates with nothing";
     View grey = colourView();
     grey.rgb = Image<Vec4u8>();
-    EXPECT_FALSE(compareColour(grey, model_depth, same, 0.02f).compared) << "a frame without colour";
-    EXPECT_FALSE(compareColour(view, model_depth, Image<Vec4u8>(), 0.02f).compared) << "a map without colour";
-    EXPECT_THROW(compareColour(view, model_depth, Image<Vec4u8>(Vec2i{20, 15}), 0.02f), ConfigError);
+    EXPECT_FALSE(compareColour(grey, model_depth, same, 0.02f, 0.f).compared) << "a frame without colour";
+    EXPECT_FALSE(compareColour(view, model_depth, Image<Vec4u8>(), 0.02f, 0.f).compared) << "a map without colour";
+    EXPECT_THROW(compareColour(view, model_depth, Image<Vec4u8>(Vec2i{20, 15}), 0.02f, 0.f), ConfigError);
 }
 
 RelocalisationCheck passingCheck() {

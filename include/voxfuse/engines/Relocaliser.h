@@ -66,11 +66,16 @@ DepthAgreement compareDepth(const Image<float>& frame_depth_m, const Image<float
 // then the mean over the cells, weighed by their pixels. Cells compare texture, not where bright and
 // dark regions lie, which the same shape under other colours often shares.
 // `model_colour` is a colour render (RenderMode::Color) of the raycast that gave `model_depth_m`, in
-// the depth camera. No verdict (`compared` false) without colour on either side, or with fewer than
-// `min_textured_cells` cells that have both pixels and texture on both sides (plain walls correlate
-// with nothing).
+// the depth camera. It holds no detail finer than the map's voxels (`voxel_size_m`; 0 compares
+// single colour pixels): the render interpolates between voxels. So the frame's intensity is its
+// mean over the footprint of kColourFootprintVoxels voxels at the pixel's depth (the nearest colour
+// pixel where that is narrower than one), and texture that only the frame resolves (a colour camera
+// finer than the map) is not taken for disagreement. No verdict (`compared` false) without colour
+// on either side, or with fewer than `min_textured_cells` cells that have both pixels and texture
+// on both sides (plain walls correlate with nothing).
 constexpr int kColourCellsAcross = 16;
 constexpr int kColourCellMinPixels = 8;
+constexpr float kColourFootprintVoxels = 1.5f;  // a trilinear read's spread, as a box (measured best of 0-3)
 struct ColourAgreement {
     bool compared = false;
     float correlation = 0.f;  // in [-1, 1] when compared
@@ -78,7 +83,7 @@ struct ColourAgreement {
     int pixels = 0;           // in them
 };
 ColourAgreement compareColour(const View& view, const Image<float>& model_depth_m, const Image<Vec4u8>& model_colour, float tolerance_m,
-                              int min_textured_cells = 8);
+                              float voxel_size_m, int min_textured_cells = 8);
 
 // What acceptance looks at for one candidate.
 struct RelocalisationCheck {
