@@ -275,7 +275,9 @@ int main(int argc, char** argv) {
         if (record.has_trajectory_error) {
             const TrajectoryError& e = record.trajectory_error;
             const std::string rpe = e.rpe_pairs > 0 ? formatMillimetres(e.rpe_trans_m_per_s) + " mm/s" : "n/a (too short)";
-            std::printf("\n  ATE RMSE %.2f mm over %d poses, RPE %s; %d frames failed tracking", 1000.0 * e.ate_rmse_m, e.pairs, rpe.c_str(),
+            std::printf("\n  ATE RMSE %.2f mm over %d poses (%.2f mm with the timestamps moved %+.1f ms, the best offset), RPE %s; "
+                        "%d frames failed tracking",
+                        1000.0 * e.ate_rmse_m, e.pairs, 1000.0 * e.ate_rmse_at_best_offset_m, 1000.0 * e.best_time_offset_s, rpe.c_str(),
                         app::countQuality(record, TrackingQuality::Failed));
         }
         if (s.relocalisation.enabled)
@@ -334,6 +336,8 @@ int main(int argc, char** argv) {
         for (const auto& level : level_names) iterations[level.substr(2)] = meanOf(level_iterations[level]);
         if (record.has_trajectory_error) {
             j["ate_rmse_m"] = record.trajectory_error.ate_rmse_m;
+            j["ate_best_time_offset_s"] = record.trajectory_error.best_time_offset_s;
+            j["ate_rmse_at_best_time_offset_m"] = record.trajectory_error.ate_rmse_at_best_offset_m;
             if (record.trajectory_error.rpe_pairs > 0) j["rpe_trans_m_per_s"] = record.trajectory_error.rpe_trans_m_per_s;
         }
         j["tracking_failed_frames"] = app::countQuality(record, TrackingQuality::Failed);

@@ -1,6 +1,7 @@
 #include "RunRecord.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <map>
 #include <sstream>
@@ -125,6 +126,8 @@ void writeSummaryJson(const std::string& path, const RunRecord& run) {
         j["rpe_trans_m_per_s"] = e.rpe_trans_m_per_s;
         j["rpe_rot_deg_per_s"] = e.rpe_rot_deg_per_s;
         j["rpe_pairs"] = e.rpe_pairs;
+        j["ate_best_time_offset_s"] = e.best_time_offset_s;
+        j["ate_rmse_at_best_time_offset_m"] = e.ate_rmse_at_best_offset_m;
     }
     j["median_ms"] = medianTotalMs(run);
     j["fps"] = framesPerSecond(run);
@@ -217,6 +220,11 @@ std::string summaryText(const RunRecord& run, const std::string& out_dir) {
             s << line;
         } else {
             s << "RPE n/a (sequence shorter than its 1 s step)\n";
+        }
+        if (std::isfinite(e.best_time_offset_s)) {
+            std::snprintf(line, sizeof line, "  clocks       best offset %+.1f ms (frame times against the ground truth's, within %.0f ms): ATE RMSE %.1f mm\n",
+                          1000.0 * e.best_time_offset_s, 1000.0 * TrajectoryErrorOptions().max_time_offset_s, 1000.0 * e.ate_rmse_at_best_offset_m);
+            s << line;
         }
     }
     if (run.has_labels) {

@@ -34,9 +34,11 @@ void bindTrajectory(py::module_& m) {
     m.def(
         "evaluate_trajectory",
         [](const py::handle& timestamps, const py::handle& poses, const py::handle& gt_timestamps, const py::handle& gt_poses,
-           double max_time_difference) {
+           double max_time_difference, double time_offset, double max_time_offset) {
             TrajectoryErrorOptions o;
             o.max_time_difference_s = max_time_difference;
+            o.time_offset_s = time_offset;
+            o.max_time_offset_s = max_time_offset;
             const TrajectoryError e = evaluateTrajectory(timedPoses(timestamps, poses, "estimate"),
                                                          timedPoses(gt_timestamps, gt_poses, "ground truth"), o);
             py::dict d;
@@ -49,11 +51,17 @@ void bindTrajectory(py::module_& m) {
             d["rpe_trans_m_per_s"] = e.rpe_trans_m_per_s;
             d["rpe_rot_deg_per_s"] = e.rpe_rot_deg_per_s;
             d["T_truth_estimate"] = matrixToArray(e.T_truth_estimate);
+            d["best_time_offset_s"] = e.best_time_offset_s;
+            d["ate_rmse_at_best_time_offset_m"] = e.ate_rmse_at_best_offset_m;
             return d;
         },
         py::arg("timestamps"), py::arg("poses"), py::arg("gt_timestamps"), py::arg("gt_poses"), py::arg("max_time_difference") = 0.02,
+        py::arg("time_offset") = 0.0, py::arg("max_time_offset") = 0.1,
         "ATE and RPE of camera-to-world poses (N, 4, 4) against ground truth, after a rigid alignment (TUM's\n"
-        "evaluate_ate / evaluate_rpe); poses pair by nearest timestamp within max_time_difference seconds.");
+        "evaluate_ate / evaluate_rpe); poses pair by nearest timestamp within max_time_difference seconds,\n"
+        "after time_offset (s) is added to their timestamps. best_time_offset_s is the offset within\n"
+        "max_time_offset of it (1 ms steps) with the least ATE, ate_rmse_at_best_time_offset_m that ATE\n"
+        "(NaN when max_time_offset is 0).");
     m.def(
         "read_tum_trajectory", [](const std::string& path) { return timedPosesToArrays(readTumTrajectory(path)); }, py::arg("path"),
         "Reads a TUM trajectory file ('timestamp tx ty tz qx qy qz qw'): (timestamps (N,), poses (N, 4, 4)).");

@@ -30,6 +30,23 @@ def test_bundled_sequence_is_tracked_against_its_ground_truth(room_source):
     assert s["stages"]["total"]["frames"] == 30 and s["stages"]["total"]["median_ms"] > 0
 
 
+def test_trajectory_error_finds_a_clock_that_lags():
+    # Ground truth at 100 Hz on a path where a time shift is no rigid motion; the camera's poses
+    # exact at 25 Hz, stamped 30 ms late.
+    t = np.arange(500) * 0.01
+    poses = np.tile(np.eye(4), (len(t), 1, 1))
+    poses[:, 0, 3], poses[:, 1, 3], poses[:, 2, 3] = t, 0.3 * np.sin(2 * t), 0.1 * t * t
+    cam = np.arange(20, 480, 4)
+    err = voxfuse.evaluate_trajectory(t[cam] + 0.03, poses[cam], t, poses)
+    assert err["ate_rmse_m"] > 0.005
+    assert abs(err["best_time_offset_s"] + 0.03) < 1e-6 and err["ate_rmse_at_best_time_offset_m"] < 1e-5
+    at = voxfuse.evaluate_trajectory(t[cam] + 0.03, poses[cam], t, poses, time_offset=-0.03)
+    assert at["ate_rmse_m"] < 1e-5
+    assert np.isnan(voxfuse.evaluate_trajectory(t[cam], poses[cam], t, poses, max_time_offset=0)["best_time_offset_s"])
+    with pytest.raises(voxfuse.ConfigError, match="at most 1 s"):
+        voxfuse.evaluate_trajectory(t[cam], poses[cam], t, poses, max_time_offset=5.0)
+
+
 def test_saved_map_continues_and_meshes_as_the_original(room_frames, tmp_path):
     source, frames = room_frames
     p = voxfuse.Pipeline(source.calib, voxel="s_rgb", voxel_size=0.01)

@@ -7,6 +7,7 @@
 #include <Eigen/Geometry>
 
 #include "voxfuse/core/EigenInterop.h"
+#include "voxfuse/core/Error.h"
 #include "voxfuse/eval/TrajectoryError.h"
 
 namespace voxfuse {
@@ -100,6 +101,88 @@ TEST(TrajectoryErrorTest, RpeMeasuresRotationalDriftPerSecond) {
     EXPECT_EQ(e.rpe_pairs, 21);
     EXPECT_NEAR(e.rpe_rot_deg_per_s, 1.0, 1e-2);
     EXPECT_NEAR(e.rpe_trans_m_per_s, 0.0, 1e-6);
+}
+
+// A path on which a time shift is no rigid motion: x = t, y = 0.3 sin(2t), z = 0.1 t^2 (m, s).
+Mat4f curvedPathPose(double t) {
+    return pose({float(t), 0.3f * float(std::sin(2.0 * t)), 0.1f * float(t * t)}, 15.f * float(t));
+}
+
+TEST(TrajectoryErrorTest, TheBestTimeOffsetUndoesAClockThatLags) {
+    // Ground truth at 100 Hz; the camera at 25 Hz on its grid, its poses exact but stamped 30 ms late.
+    std::vector<TimedPose> truth, estimate;
+    for (int i = 0; i <= 500; ++i) truth.push_back({0.01 * i, curvedPathPose(0.01 * i)});
+    for (int i = 5; i < 120; ++i) estimate.push_back({0.04 * i + 0.03, kWorldOffset * curvedPathPose(0.04 * i)});
+    const TrajectoryError e = evaluateTrajectory(estimate, truth);
+    EXPECT_EQ(e.pairs, 115);
+    EXPECT_GT(e.ate_rmse_m, 0.005) << "the lag costs several millimetres";
+    EXPECT_NEAR(e.best_time_offset_s, -0.030, 1e-9) << "offsets of -34..-26 ms all pair each pose with its own time";
+    EXPECT_NEAR(e.ate_rmse_at_best_offset_m, 0.0, 1e-5);
+
+    TrajectoryErrorOptions shifted;  // the offset given: the ATE and RPE at it, the search around it
+    shifted.time_offset_s = -0.03;
+    const TrajectoryError at = evaluateTrajectory(estimate, truth, shifted);
+    EXPECT_NEAR(at.ate_rmse_m, 0.0, 1e-5);
+    EXPECT_NEAR(at.rpe_trans_m_per_s, 0.0, 1e-5);
+    EXPECT_NEAR(at.best_time_offset_s, -0.030, 1e-9);
+
+    // -30 ms lies outside +-20 ms: the best within pairs each pose with the ground truth 10 ms
+    // after its time, as every offset of -20..-16 ms does; the middle of those.
+    TrajectoryErrorOptions narrow;
+    narrow.max_time_offset_s = 0.02;
+    EXPECT_NEAR(evaluateTrajectory(estimate, truth, narrow).best_time_offset_s, -0.018, 1e-9);
+    TrajectoryErrorOptions off;
+    off.max_time_offset_s = 0.0;
+    EXPECT_TRUE(std::isnan(evaluateTrajectory(estimate, truth, off).best_time_offset_s));
+    TrajectoryErrorOptions wide;
+    wide.max_time_offset_s = 1e9;  // a billion steps: refused, not run
+    EXPECT_THROW(evaluateTrajectory(estimate, truth, wide), ConfigError);
+    TrajectoryErrorOptions nan_offset;
+    nan_offset.time_offset_s = std::nan("");
+    EXPECT_THROW(evaluateTrajectory(estimate, truth, nan_offset), ConfigError);
+}
+
+TEST(TrajectoryErrorTest, OffsetsThatLoseMoreThanAFewPairsAreNoCandidates) {
+    // Up to 1.6 s: ground truth at 100 Hz and exact poses 40 ms apart. After it: poses 80 ms apart,
+    // 5 m off, and ground truth only at their times. An offset of 21-59 ms leaves those 10 of 50
+    // without a partner (the rest pair with ground truth that much later, a few centimetres off),
+    // which would score far better than any offset that keeps them.
+    std::vector<TimedPose> truth, estimate;
+    for (int i = 0; i < 160; ++i) truth.push_back({0.01 * i, curvedPathPose(0.01 * i)});
+    for (int k = 0; k < 40; ++k) estimate.push_back({0.04 * k, kWorldOffset * curvedPathPose(0.04 * k)});
+    for (int j = 0; j < 10; ++j) {
+        const double t = 1.6 + 0.08 * j;
+        truth.push_back({t, curvedPathPose(t)});
+        Mat4f wild = curvedPathPose(t);
+        wild.m[3] += 5.f;  // x
+        estimate.push_back({t, kWorldOffset * wild});
+    }
+    const TrajectoryError e = evaluateTrajectory(estimate, truth);
+    EXPECT_EQ(e.pairs, 50);
+    EXPECT_GT(e.ate_rmse_m, 1.0);
+    EXPECT_GT(e.ate_rmse_at_best_offset_m, 1.0) << "best at " << e.best_time_offset_s << " s";
+    TrajectoryErrorOptions at_30ms;
+    at_30ms.time_offset_s = 0.03;
+    at_30ms.max_time_offset_s = 0.0;
+    const TrajectoryError dropped = evaluateTrajectory(estimate, truth, at_30ms);
+    EXPECT_EQ(dropped.pairs, 40);
+    EXPECT_LT(dropped.ate_rmse_m, 0.1) << "what the offset would have scored";
+}
+
+TEST(TrajectoryErrorTest, AnOffsetMayLeaveAPoseOfAGapInTheGroundTruthUnpaired) {
+    // Poses 50 ms apart, exact but stamped 30 ms late; ground truth at 100 Hz but for 1.98-2.02 s.
+    // At the best offset the pose stamped 2.03 s has no partner (nearest 30 ms away), where at 0 it
+    // has: one pose fewer is allowed, so the offset is found all the same.
+    std::vector<TimedPose> truth, estimate;
+    for (int i = 0; i <= 500; ++i)
+        if (i < 198 || i > 202) truth.push_back({0.01 * i, curvedPathPose(0.01 * i)});
+    for (int k = 2; k < 90; ++k) estimate.push_back({0.05 * k + 0.03, kWorldOffset * curvedPathPose(0.05 * k)});
+    const TrajectoryError e = evaluateTrajectory(estimate, truth);
+    EXPECT_EQ(e.pairs, 88);
+    EXPECT_NEAR(e.best_time_offset_s, -0.030, 1e-9);
+    EXPECT_NEAR(e.ate_rmse_at_best_offset_m, 0.0, 1e-5);
+    const std::vector<TimedPose> two(truth.begin(), truth.begin() + 2);
+    EXPECT_TRUE(std::isnan(evaluateTrajectory(two, truth).best_time_offset_s)) << "too few pairs";
 }
 
 }  // namespace

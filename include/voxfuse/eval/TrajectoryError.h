@@ -12,6 +12,8 @@ namespace voxfuse {
 struct TrajectoryErrorOptions {
     double max_time_difference_s = 0.02;  // an estimated pose pairs with the nearest ground-truth pose within this
     double rpe_delta_s = 1.0;             // RPE compares motions over this time step
+    double time_offset_s = 0.0;           // added to the estimated timestamps before pairing (TUM's evaluate_ate --offset)
+    double max_time_offset_s = 0.1;       // the best offset is searched within +-this of time_offset_s (0: no search; at most 1 s)
 };
 
 struct TrajectoryError {
@@ -35,9 +37,20 @@ struct TrajectoryError {
     int rpe_pairs = 0;
     double rpe_trans_m_per_s = 0.0;   // NaN when rpe_pairs == 0
     double rpe_rot_deg_per_s = 0.0;
+
+    // The clock offset that fits best: of the offsets (added to the estimated timestamps) within
+    // max_time_offset_s of time_offset_s, in 1 ms steps, that leave at most 2% (at least one) of the
+    // pairs without a partner (ground truth has gaps), the one with the least ATE RMSE (the middle of the run of offsets that pair alike, since poses pair
+    // by nearest timestamp), and that RMSE. A camera whose timestamps lag or lead the ground truth's
+    // clock (a driver's delivery delay, another machine's clock) shows here, and how much of the ATE
+    // it accounts for: the error of a pose grows with the camera's speed times the offset. NaN
+    // without a search or with fewer than 3 pairs.
+    double best_time_offset_s = 0.0;
+    double ate_rmse_at_best_offset_m = 0.0;
 };
 
-// Neither input needs to be sorted. No alignment of time offsets is attempted.
+// Neither input needs to be sorted. ConfigError for a time offset that is not finite or a search
+// wider than 1 s.
 TrajectoryError evaluateTrajectory(const std::vector<TimedPose>& estimated, const std::vector<TimedPose>& ground_truth,
                                    const TrajectoryErrorOptions& options = {});
 
