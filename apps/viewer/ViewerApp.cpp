@@ -21,6 +21,8 @@ namespace {
 
 constexpr float kBackgroundGrey = 0.15f;  // window behind the panels: tells the panels' edges from black model background
 
+constexpr const char* kWaitingMessage = "waiting for frames from the source";
+
 constexpr const char* kKeysLine = "n next | space run | 1-5 mode | drag/wheel view | c camera | m mesh | s map | p shot | r reset | q quit";
 
 const char* modeName(RenderMode mode) {
@@ -141,7 +143,23 @@ void ViewerApp::saveScreenshot(const std::string& path) {
 
 bool ViewerApp::frameArrives() {
     auto* threaded = dynamic_cast<ThreadedImageSource*>(source_.get());
-    return !threaded || threaded->waitForFrame(std::chrono::milliseconds(50));
+    if (!threaded) return true;
+    if (threaded->waitForFrame(std::chrono::milliseconds(50))) {
+        if (status_.rfind(kWaitingMessage, 0) == 0) status_.clear();
+        silence_.reset();
+        silent_s_ = 0;
+        return true;
+    }
+    // A silent source (a camera starting, unplugged, or a stalled reader) says so after a second,
+    // instead of a window that looks frozen.
+    if (!silence_) silence_ = std::make_unique<Timer>();
+    const int seconds = int(silence_->elapsedMs() / 1000.0);
+    if (seconds >= kSilenceShownS && seconds != silent_s_) {
+        status_ = std::string(kWaitingMessage) + " (" + std::to_string(seconds) + " s)";
+        updateTitle();
+    }
+    silent_s_ = seconds;
+    return false;
 }
 
 void ViewerApp::processNextFrame() {

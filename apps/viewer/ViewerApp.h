@@ -12,6 +12,7 @@
 #include "RunRecord.h"
 #include "SequenceRunner.h"
 #include "TextureImage.h"
+#include "voxfuse/core/Timer.h"
 #include "voxfuse/engines/MainEngine.h"
 #include "voxfuse/io/ImageSource.h"
 
@@ -81,6 +82,9 @@ private:
     double last_cursor_x_ = 0.0, last_cursor_y_ = 0.0;
     double smoothed_frame_s_ = 0.0; // wall time per frame (reading, processing, display), smoothed
     std::string status_;            // last action, e.g. "mesh saved to voxfuse_out/mesh.ply"
+    static constexpr int kSilenceShownS = 1;  // a source silent this long is shown as waited for
+    std::unique_ptr<Timer> silence_;  // since the source last had a frame ready, while it has none
+    int silent_s_ = 0;                // whole seconds of that silence shown
 };
 
 }  // namespace voxfuse::viewer
