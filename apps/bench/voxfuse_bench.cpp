@@ -16,7 +16,7 @@
 #include "Interrupt.h"
 #include "JsonFile.h"
 #include "MapOutputBench.h"
-#include "RelocalisationOptions.h"
+#include "EngineOptions.h"
 #include "OptionChecks.h"
 #include "HeapPolicy.h"
 #include "CommandLine.h"
@@ -95,8 +95,7 @@ int main(int argc, char** argv) {
     app::useLongRunHeapPolicy();
     CLI::App cli{"Per-stage timings of the VoxFuse pipeline on a sequence."};
     std::string source_path, json_path = "voxfuse_bench.json", timings_path, trajectory_path, mesh_path;
-    std::string index = "hash", poses = "track", device = "cpu";
-    TrackerOverrides tracker;  // --tracker, --tracker-config
+    app::EngineOptions o;  // the map and tracking options voxfuse takes
 #if VOXFUSE_WITH_IO
     app::LabelInputOptions labels;  // and --voxel
 #else
@@ -107,7 +106,7 @@ int main(int argc, char** argv) {
     float cloud_voxel_m = 0.f;
     OccupancySettings occupancy_settings;
     occupancy_settings.resolution_m = 0.f;  // off unless --occupancy
-    MainEngineSettings s;
+    MainEngineSettings& s = o.engine;
     cli.add_option("source", source_path,
                    "sequence (default: ../shared/data/tum_fr3_teddy_200, else the bundled data), or synthetic[:N] for N frames of the "
                    "synthetic room rendered in memory");
@@ -118,14 +117,8 @@ int main(int argc, char** argv) {
 #else
     cli.add_option("--voxel", voxel, "voxel type")->capture_default_str()->check(CLI::IsMember({"s", "f", "s_rgb", "f_rgb", "s_label", "s_rgb_label"}));
 #endif
-    cli.add_option("--index", index, "voxel index")->capture_default_str()->check(CLI::IsMember({"dense", "hash"}));
-    cli.add_option("--device", device, "where the whole frame loop runs: image processing, tracking, allocation, integration, raycast, and the map outputs")
-        ->capture_default_str()->check(CLI::IsMember({"cpu", "cuda"}));
-    cli.add_option("--voxel-size", s.scene.voxel_size_m, "voxel edge (m)")->capture_default_str()->check(app::floatIn(0.0, 1.0, true));
-    cli.add_option("--mu", s.scene.mu_m, "truncation band (m)")->capture_default_str()->check(app::floatIn(0.0, 10.0, true));
-    cli.add_option("--poses", poses, "track the camera, or use the source's ground truth")
-        ->capture_default_str()->check(CLI::IsMember({"track", "groundtruth"}));
-    app::addRelocalisationOptions(cli, s.relocalisation);
+    app::addMapOptions(cli, o);
+    app::addTrackingOptions(cli, o);
     cli.add_flag("--render", render,
                  "after each frame, render the model from the frame's camera (shaded, the depth camera's resolution, the image "
                  "brought to the host), as the viewer does: timed as stage 'render', outside 'total'");
@@ -138,34 +131,20 @@ int main(int argc, char** argv) {
         ->check(app::floatIn(0.001, 10.0));
     cli.add_option("--occupancy-pixel-step", occupancy_settings.pixel_step, "occupancy: every Nth pixel in x and y")
         ->capture_default_str()->check(app::intIn(1, 64));
-    int active_blocks = 0;
-    cli.add_flag("--swap", s.swap.enabled, "swapping: only the map near the view stays in the voxel array, the rest in memory or --swap-file");
-    cli.add_option("--active-blocks", active_blocks, "swapping: blocks the active voxel array holds at most (implies --swap)")
-        ->check(app::intIn(1, 1 << 22));
-    cli.add_option("--swap-file", s.swap.swap_file, "swapping: keep the swapped-out map in this new file (an existing path is refused; implies --swap)");
-    cli.add_option("--swap-blocks-per-frame", s.swap.blocks_per_frame, "swapping: blocks moved each way per frame at most")
-        ->capture_default_str()->check(app::intIn(1, 1 << 20));
     cli.add_option("--json", json_path, "where to write the JSON report")->capture_default_str();
-    cli.add_option("--tracker", tracker.kind, "icp | color | ren | rgbd (default: ren)")->check(CLI::IsMember({"icp", "color", "ren", "rgbd"}));
-    cli.add_option("--tracker-config", tracker.settings_file, "tracker settings file ('key = value' lines, as voxfuse reads them)")
-        ->check(CLI::ExistingFile);
     cli.add_option("--timings", timings_path, "also write every frame's stage times and visible blocks to this JSON file (as voxfuse's timings.json)");
     cli.add_option("--trajectory", trajectory_path, "also write the frames' poses to this file (TUM format, as voxfuse's trajectory.txt)");
     cli.add_option("--mesh-out", mesh_path, "after the run, also write the map's mesh to this file (.ply, .obj or .stl)")
         ->check(app::meshFileName());
     app::addVersionFlag(cli, "voxfuse_bench");
     if (const auto status = app::parseCommandLine(cli, argc, argv, "voxfuse_bench")) return *status;
+    app::noteGivenOptions(cli, o);
 
     app::interrupt::install("voxfuse_bench");
     return app::runReportingErrors("voxfuse_bench", [&] {
-        if (cli.count("--swap-blocks-per-frame") > 0 && !s.swap.enabled && active_blocks == 0 && s.swap.swap_file.empty())
-            throw ConfigError("--swap-blocks-per-frame needs swapping (--swap, --active-blocks or --swap-file)");
+        app::checkEngineOptions(o);
         if (cli.count("--occupancy-pixel-step") > 0 && !(occupancy_settings.resolution_m > 0.f))
             throw ConfigError("--occupancy-pixel-step needs --occupancy");
-        if ((!tracker.kind.empty() || !tracker.settings_file.empty()) && poses != "track")
-            throw ConfigError("--tracker and --tracker-config set the tracker, which --poses groundtruth does not use");
-        tracker.origin = "the --tracker options";
-        s.tracker = trackerSettingsWith(tracker);
         if (max_frames > 0 && max_frames <= warmup)
             throw ConfigError("--frames " + std::to_string(max_frames) + " leaves no frame after the " + std::to_string(warmup) +
                               " warm-up frames (--warmup)");
@@ -181,17 +160,14 @@ int main(int argc, char** argv) {
 #else
         s.voxel_type = parseVoxelType(voxel);
 #endif
-        s.index_type = parseIndexType(index);
-        s.device = device == "cuda" ? Device::CUDA : Device::CPU;
-        if (active_blocks > 0 || !s.swap.swap_file.empty()) s.swap.enabled = true;
-        if (active_blocks > 0) s.hash.max_block_count = active_blocks;
+        app::applyDeviceAndIndex(o, s);
         auto engine = MainEngine::create(s, source->calib());
         std::unique_ptr<OccupancyMapper> occupancy;
         if (occupancy_settings.resolution_m > 0.f) occupancy = std::make_unique<OccupancyMapper>(occupancy_settings);
         app::RunRecord record;
         record.source = source->description();
         record.settings = engine->settings();
-        record.tracked = poses == "track";
+        record.tracked = o.poses == "track";
         app::SequenceRunner runner(*source, *engine, record.tracked ? app::PoseSource::Tracker : app::PoseSource::GroundTruth, record,
                                    "voxfuse_bench");
         // Per pyramid level of the tracker, coarse to fine: "track L0 160x120", ...

@@ -2,7 +2,8 @@
 // What reads the frames, how the map is built and how the camera is tracked: the options voxfuse and
 // voxfuse_viewer share, defined once with their checks, and what they make (the source, the engine
 // settings). The viewer is the demo people run on a camera, so it takes everything voxfuse takes
-// that shapes the reconstruction; only the outputs differ.
+// that shapes the reconstruction; only the outputs differ. The map and tracking options are
+// EngineOptions, which voxfuse_bench takes as well.
 
 #include <memory>
 #include <string>
@@ -10,6 +11,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "EngineOptions.h"
 #include "LabelInput.h"
 #include "voxfuse/engines/MainEngine.h"
 #include "voxfuse/io/ImageSource.h"
@@ -17,7 +19,7 @@
 
 namespace voxfuse::app {
 
-struct PipelineOptions {
+struct PipelineOptions : EngineOptions {
     // Where the frames come from.
     std::string source;  // SOURCE: a recording, synthetic[:N] / synthetic-corridor[:N]; "" = the bundled sequence
     SourceOptions source_options;
@@ -26,48 +28,23 @@ struct PipelineOptions {
     bool list_devices = false;
     bool threaded = false;          // decode (and undistort) on a reader thread ahead of the engine
     int skip_frames = 0;            // dropped from the start of the source
-    // The map.
-    std::string index = "hash";
-    std::string device = "cpu";
-    int active_blocks = 0;          // > 0: swapping with an active voxel array of this many blocks
+    // The map, beside EngineOptions.
     LabelInputOptions labels;       // and --voxel
-    std::vector<int> dense_size{512, 512, 512};
-    std::vector<int> dense_offset{-256, -256, 0};
     std::string load_map;           // continue this map (its voxel type, index and voxel size); each program adds --load-map
-    // The camera.
-    std::string poses = "track";
-    std::string tracker;            // overrides of the tracker settings, applied in this order:
-    std::string tracker_config;     //   the settings file, then the single options
-    std::string tracker_levels;
-    std::vector<int> tracker_iterations;
-    std::vector<float> tracker_max_distance;
-
-    MainEngineSettings engine;
-    std::vector<std::string> given;  // options given on the command line, by their long names ("source" for SOURCE)
-    bool wasGiven(const char* option) const;
 };
 
 // SOURCE, --live, --device-uri, --list-devices, --threaded, --min-confidence, --rgb, --depth, --calib, --skip.
 void addSourceOptions(CLI::App& cli, PipelineOptions& o);
-// --voxel-size, --mu, --max-weight, --min-depth, --max-depth, --depth-gap-tolerance, the voxel and label
-// options, --index, --max-blocks, --hash-buckets, --hash-excess, --volume-size, --volume-offset, --device
-// and the swapping options.
+// The engine's map options (EngineOptions.h), then the voxel and label options.
 void addMapOptions(CLI::App& cli, PipelineOptions& o);
-// --poses, the tracker options and the relocalisation options.
-void addTrackingOptions(CLI::App& cli, PipelineOptions& o);
-// After parsing: which options the command line gave (checks and --load-map need to know).
-void noteGivenOptions(const CLI::App& cli, PipelineOptions& o);
 
-// Options that would be silently ignored in this combination are errors instead (ConfigError).
+// Options that would be silently ignored in this combination are errors instead (ConfigError):
+// checkEngineOptions' and the source's.
 void checkPipelineOptions(const PipelineOptions& o);
 // With --load-map the map decides the voxel type, the index and its table, the voxel size and mu;
 // another one given on the command line is a ConfigError. The block ceiling is the map's unless
 // --max-blocks gives one: a map that filled its ceiling elsewhere must be able to go on.
 void adoptMapSettings(PipelineOptions& o, const MapFileInfo& map);
-// The engine settings the options make, beside those the options write directly (index, device,
-// swapping, dense volume, tracker). The voxel type is attachLabelInput's.
-void applyDeviceAndIndex(const PipelineOptions& o, MainEngineSettings& s);
-
 // --list-devices: prints the OpenNI2 cameras on stdout.
 void listCameras();
 
