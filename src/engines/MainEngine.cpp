@@ -296,6 +296,11 @@ private:
         const int factor = settings_.tracking_raycast_downsample;
         raycast_->raycast(scene_, factor > 1 ? view_.calib.depth.downsampled(factor) : view_.calib.depth, tracking_.T_world_camera, model_,
                           RaycastNormals::FromPoints, fused_depth);
+        // rgbd aligns the next frame's colours to the map's (frame to model), not to the last frame's:
+        // the map holds still while the camera's estimate drifts (DESIGN_NOTES "rgbd is ren plus colour").
+        const TrackerSettings& tracker = tracker_->settings();
+        if (TVoxel::hasColor && tracker.kind == TrackerKind::Rgbd && tracker.color_from_map)
+            raycast_->renderIntensity(scene_, model_, model_.intensity);
         model_depth_view_ = fused_depth ? views_converted_ : -1;
         ++model_version_;
     }

@@ -17,8 +17,9 @@ public:
     // has no colour image (or the calibration no colour camera).
     bool prepare(const View& view, int level_count);
     // Colours the model points (every `step`-th pixel of the depth camera's resolution, so that a
-    // coarser model raycast gives the same points) with the previous frame. False when there is no
-    // previous frame. After prepare().
+    // coarser model raycast gives the same points) with the map's colours where the model carries
+    // them (RenderState::intensity: frame to model), else with the previous frame (frame to frame).
+    // False when it has neither. After prepare().
     bool colorModel(const RenderState& model, int step);
     // The prepared frame becomes the previous one, its depth camera at T_world_camera.
     void rememberCurrent(const Mat4f& T_world_camera);

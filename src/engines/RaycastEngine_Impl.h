@@ -71,6 +71,16 @@ public:
         image.memory().updateHost();
     }
 
+    void renderIntensity(const Scene<TVoxel, TIndex>& scene, const RenderState& rs, Image<float>& intensity) override {
+        requireSceneOn(kDevice, scene, "the raycast engine");
+        if (!rs.points_world.memory().isCurrent(kDevice))
+            throw DeviceError(std::string("renderIntensity: the raycast was not made on ") + deviceName(kDevice));
+        intensity.resize(rs.points_world.size(), kDevice == Device::CPU, kDevice == Device::CUDA);
+        const RenderIntensityPixel<TVoxel, typename TIndex::Data> pixel{scene.voxelData(), scene.index().data(), 1.f / scene.params().voxel_size_m,
+                                                                        rs.points_world.memory().data(kDevice), intensity.memory().data(kDevice)};
+        TDevice::parallelFor(int(intensity.pixelCount()), pixel);
+    }
+
 private:
     RaycastDepthHint depthHint(const SceneParams& params, const Intrinsics& intr, const Image<float>* depth_m) {
         if (depth_m == nullptr || depth_m->empty()) return RaycastDepthHint{};

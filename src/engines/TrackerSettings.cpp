@@ -211,6 +211,7 @@ TrackerSettings parseTrackerSettingsText(const std::string& text, const std::str
         {"color_kernel", setKernel(s.color_kernel)},
         {"color_kernel_scale", setFloat(s.color_kernel_scale)},
         {"color_weight", setFloat(s.color_weight)},
+        {"color_from_map", setBool(s.color_from_map)},
         {"good_inlier_ratio", setFloat(s.good_inlier_ratio)},
         {"failed_inlier_ratio", setFloat(s.failed_inlier_ratio)},
         {"good_condition", setFloat(s.good_condition)},

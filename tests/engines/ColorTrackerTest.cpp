@@ -107,6 +107,28 @@ TEST_P(ColorTrackerTest, WithoutAnEarlierColourFrameThePoseIsKeptAsPoor) {
     EXPECT_EQ(state.quality, TrackingQuality::Poor);
 }
 
+// A model that carries the map's colours (RenderState::intensity: what MainEngine gives the rgbd
+// tracker) is aligned to them: no earlier frame is needed, as after a reset or a relocalisation.
+TEST_P(ColorTrackerTest, AModelCarryingTheMapsColoursNeedsNoEarlierFrame) {
+    const Intrinsics intr = test::kinectIntrinsics();
+    const View first = test::renderView(room(), intr, startPose());
+    const Mat4f moved = test::moveInCamera(startPose(), {0.4f, 1.f, 0.1f}, 1.5f, {0.015f, -0.01f, 0.01f});
+    RenderState model = test::modelFromView(first, startPose());
+    TrackingState state;
+    state.T_world_camera = startPose();
+    makeTracker(colorSettings(), GetParam())->track(state, test::renderView(room(), intr, moved), model);
+    EXPECT_NE(state.quality, TrackingQuality::Good) << "no earlier frame and no map colours: nothing to align to";
+    EXPECT_EQ(test::translationErrorM(state.T_world_camera, startPose()), 0.f);
+
+    model.intensity.resize(intr.size());
+    for (std::size_t i = 0; i < model.intensity.pixelCount(); ++i) model.intensity.host()[i] = intensityFromRgb(first.rgb.host()[i]);
+    state.T_world_camera = startPose();
+    makeTracker(colorSettings(), GetParam())->track(state, test::renderView(room(), intr, moved), model);
+    EXPECT_EQ(state.quality, TrackingQuality::Good);
+    EXPECT_LT(test::translationErrorM(state.T_world_camera, moved), 0.003f);
+    EXPECT_LT(test::rotationErrorDeg(state.T_world_camera, moved), 0.1f);
+}
+
 INSTANTIATE_TEST_SUITE_P(Devices, ColorTrackerTest, test::kAllDevices, test::DeviceName());
 
 TEST(ColorTrackerTermsTest, JacobianMatchesFiniteDifferences) {

@@ -31,6 +31,7 @@ TEST(TrackerSettingsTest, ParsesEveryKindOfValue) {
         "bilateral_filter = off\n"
         "robust_kernel = huber\n"
         "color_weight = 0.5\n"
+        "color_from_map = false\n"
         "poor_translation_constraint = 0\n"
         "max_tracking_depth_m = 2.5\n"
         "min_inliers = 50\n",
@@ -49,6 +50,7 @@ TEST(TrackerSettingsTest, ParsesEveryKindOfValue) {
     EXPECT_FALSE(s.bilateral_filter);
     EXPECT_EQ(s.robust_kernel, RobustKernel::Huber);
     EXPECT_FLOAT_EQ(s.color_weight, 0.5f);
+    EXPECT_FALSE(s.color_from_map);
     EXPECT_EQ(s.poor_translation_constraint, 0.f);
     EXPECT_FLOAT_EQ(s.max_tracking_depth_m, 2.5f);
     EXPECT_EQ(s.min_inliers, 50);

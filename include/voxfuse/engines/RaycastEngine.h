@@ -34,6 +34,9 @@ public:
     // An RGBA image of the last raycast (a raycast of this engine's device), with its host copy up to date.
     virtual void render(const Scene<TVoxel, TIndex>& scene, const RenderState& render_state, RenderMode mode,
                         Image<Vec4u8>& image) = 0;
+    // The map's colours at the last raycast's hits as intensities in [0, 1], -1 where there is none
+    // (RenderIntensityPixel), on the engine's device; all -1 for voxels without colour.
+    virtual void renderIntensity(const Scene<TVoxel, TIndex>& scene, const RenderState& render_state, Image<float>& intensity) = 0;
 };
 
 // Depth (metres along the optical axis of the raycast camera) of each raycast pixel; 0 where nothing was hit.

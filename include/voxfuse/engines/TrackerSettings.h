@@ -90,6 +90,11 @@ struct TrackerSettings {
     // squared intensity unit), per term: the colour sum is scaled to the number of depth terms, so the
     // weight means the same at every level. 1e-3 makes an intensity error of 0.03 count like 1 mm.
     float color_weight = 1e-3f;
+    // rgbd: what the colour term aligns a frame's intensities to. The map's fused colours (frame to
+    // model, the default) hold still while the estimate drifts, as the depth terms' model does; the
+    // previous frame's (frame to frame) follows the drift, and needs no colour voxels or steady
+    // exposure. Voxels without colour always fall back to the previous frame.
+    bool color_from_map = true;
 
     // Quality (see assessTrackingQuality): inlier ratio = inliers / valid pixels at full resolution;
     // condition = smallest / largest eigenvalue of the full-resolution normal matrix scaled to a unit
@@ -127,7 +132,7 @@ void validateTrackerSettings(const TrackerSettings& settings);
 //   pixel_step = 1 1 1              per level, coarse to fine (one value: every level)
 //   max_normal_angle_deg, min_rotation_step_rad, min_translation_step_m, max_normal_edge_m, max_tracking_depth_m,
 //   predict_motion and bilateral_filter (true/false/on/off/1/0), robust_kernel (none/huber/tukey), robust_scale_m,
-//   color_point_step, color_kernel, color_kernel_scale, color_weight,
+//   color_point_step, color_kernel, color_kernel_scale, color_weight, color_from_map (true/false),
 //   good_inlier_ratio, failed_inlier_ratio, good_condition, failed_condition, poor_translation_constraint, poor_residual_m,
 //   failed_color_residual, min_inliers, max_motion_m, max_motion_deg
 // Throws IoError when the file cannot be read and ParseError(file, line, reason) for an unknown key,

@@ -1,8 +1,9 @@
 #pragma once
-// Turning one raycast pixel into a display colour.
+// Turning one raycast pixel into a display colour (or the intensity the rgbd tracker aligns to).
 
 #include "voxfuse/core/Math.h"
 #include "voxfuse/objects/ClassLabel.h"
+#include "voxfuse/shared/ColorTracker.h"  // intensityFromRgb
 #include "voxfuse/shared/Raycast.h"
 
 namespace voxfuse {
@@ -108,6 +109,28 @@ struct RenderRaycastPixel {
                 else
                     image[i] = renderShaded(n, normalize(camera_world - p));
                 break;
+        }
+    }
+};
+
+// The map's colour at one raycast pixel as an intensity in [0, 1] (the luma intensityFromRgb gives a
+// frame's pixels), -1 where nothing was hit or none of the voxels around the hit saw colour: the
+// reference the rgbd tracker aligns a frame's intensities to (frame-to-model colour).
+template <class TVoxel, class TIndexData>
+struct RenderIntensityPixel {
+    const TVoxel* voxels;
+    TIndexData index;
+    float inv_voxel_size;
+    const Vec4f* points_world;
+    float* intensity;
+
+    VF_HOST_DEVICE void operator()(int i) const {
+        intensity[i] = -1.f;
+        if constexpr (TVoxel::hasColor) {
+            if (points_world[i].w <= 0.f) return;
+            bool coloured;
+            const Vec3f c = readColorInterpolated(voxels, index, points_world[i].xyz() * inv_voxel_size, coloured);
+            if (coloured) intensity[i] = intensityFromRgb(renderColor(c));
         }
     }
 };

@@ -92,9 +92,10 @@ VF_HOST_DEVICE inline float readSdfInterpolated(const TVoxel* voxels, const TInd
     return observed ? result / weight : 1.f;
 }
 
-// Trilinear interpolation of colour (0..255 per channel) over the corners that have colour.
+// Trilinear interpolation of colour (0..255 per channel) over the corners that have colour;
+// `coloured` false (and black) where none has.
 template <class TVoxel, class TIndexData>
-VF_HOST_DEVICE inline Vec3f readColorInterpolated(const TVoxel* voxels, const TIndexData& index, Vec3f p) {
+VF_HOST_DEVICE inline Vec3f readColorInterpolated(const TVoxel* voxels, const TIndexData& index, Vec3f p, bool& coloured) {
     const Vec3i base = floorToInt(p);
     const Vec3f c = p - toFloat(base);
     Vec3f sum{0.f, 0.f, 0.f};
@@ -108,7 +109,13 @@ VF_HOST_DEVICE inline Vec3f readColorInterpolated(const TVoxel* voxels, const TI
         sum += Vec3f{float(v.clr.x), float(v.clr.y), float(v.clr.z)} * w;
         weight_sum += w;
     }
-    return weight_sum > 0.f ? sum / weight_sum : Vec3f{0.f, 0.f, 0.f};
+    coloured = weight_sum > 0.f;
+    return coloured ? sum / weight_sum : Vec3f{0.f, 0.f, 0.f};
+}
+template <class TVoxel, class TIndexData>
+VF_HOST_DEVICE inline Vec3f readColorInterpolated(const TVoxel* voxels, const TIndexData& index, Vec3f p) {
+    bool coloured;
+    return readColorInterpolated(voxels, index, p, coloured);
 }
 
 // Class at `p` (grid units): the label of the nearest labelled corner of the cell around p, or
