@@ -40,11 +40,12 @@ struct TrajectoryError {
 
     // The clock offset that fits best: of the offsets (added to the estimated timestamps) within
     // max_time_offset_s of time_offset_s, in 1 ms steps, that leave at most 2% (at least one) of the
-    // pairs without a partner (ground truth has gaps), the one with the least ATE RMSE (the middle of the run of offsets that pair alike, since poses pair
-    // by nearest timestamp), and that RMSE. A camera whose timestamps lag or lead the ground truth's
-    // clock (a driver's delivery delay, another machine's clock) shows here, and how much of the ATE
-    // it accounts for: the error of a pose grows with the camera's speed times the offset. NaN
-    // without a search or with fewer than 3 pairs.
+    // pairs without a partner (ground truth has gaps), the one with the least ATE RMSE, and that
+    // RMSE. Poses pair by nearest timestamp, so neighbouring offsets often pair alike: the middle of
+    // such a run is taken. A camera whose timestamps lag or lead the ground truth's clock (a
+    // driver's delivery delay, another machine's clock) shows here, and how much of the ATE it
+    // accounts for: a pose's error grows with the camera's speed times the offset. NaN without a
+    // search or with fewer than 3 pairs.
     double best_time_offset_s = 0.0;
     double ate_rmse_at_best_offset_m = 0.0;
 };
