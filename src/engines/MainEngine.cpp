@@ -417,8 +417,9 @@ private:
             return ColourAgreement{};
         } else {
             if (view_.rgb.empty()) return ColourAgreement{};
-            raycast_->render(scene_, candidate_model_, RenderMode::Color, candidate_colour_);
-            return compareColour(view_, candidate_depth_, candidate_colour_, settings_.relocalisation.agreement_tolerance_m,
+            raycast_->renderIntensity(scene_, candidate_model_, candidate_intensity_);
+            if (onGpu()) candidate_intensity_.memory().updateHost();
+            return compareColour(view_, candidate_depth_, candidate_intensity_, settings_.relocalisation.agreement_tolerance_m,
                                  settings_.scene.voxel_size_m);
         }
     }
@@ -554,7 +555,7 @@ private:
     RenderState candidate_coarse_model_;        // the model raycast from a relocalisation candidate, as tracking sees it
     RenderState candidate_model_;               // and from its refined pose at full resolution, for the check
     Image<float> candidate_depth_;
-    Image<Vec4u8> candidate_colour_;            // its colour render (colour voxel types)
+    Image<float> candidate_intensity_;          // the map's colours seen from it (colour voxel types)
     std::unique_ptr<SwappingEngine<TVoxel>> swapping_;  // with SwapSettings::enabled (hash only)
     std::unique_ptr<GlobalCache> cache_;
     StageClock clock_;

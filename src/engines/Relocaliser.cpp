@@ -79,13 +79,13 @@ private:
 
 }  // namespace
 
-ColourAgreement compareColour(const View& view, const Image<float>& model_depth_m, const Image<Vec4u8>& model_colour, float tolerance_m,
+ColourAgreement compareColour(const View& view, const Image<float>& model_depth_m, const Image<float>& model_intensity, float tolerance_m,
                               float voxel_size_m, int min_textured_cells) {
     ColourAgreement a;
     const Image<float>& frame_depth_m = view.depth;
-    if (view.rgb.empty() || model_colour.empty() || !view.calib.rgb.valid()) return a;
-    if (frame_depth_m.size() != model_depth_m.size() || model_colour.size() != model_depth_m.size())
-        throw ConfigError("compareColour: the frame's depth, the model's depth and the model's colour differ in size");
+    if (view.rgb.empty() || model_intensity.empty() || !view.calib.rgb.valid()) return a;
+    if (frame_depth_m.size() != model_depth_m.size() || model_intensity.size() != model_depth_m.size())
+        throw ConfigError("compareColour: the frame's depth, the model's depth and the model's intensities differ in size");
     const Intrinsics& depth_camera = view.calib.depth;
     const Intrinsics rgb_camera = view.colourCamera();  // at the colour image's resolution
     const Mat4f T_rgb_depth = rigidInverse(view.calib.T_depth_rgb);
@@ -95,7 +95,7 @@ ColourAgreement compareColour(const View& view, const Image<float>& model_depth_
     std::vector<CorrelationSums> cells(std::size_t(cells_x) * std::size_t(cells_y));
     const float* frame = frame_depth_m.host();
     const float* model = model_depth_m.host();
-    const Vec4u8* model_rgb = model_colour.host();
+    const float* model_grey = model_intensity.host();
     const BoxIntensity frame_intensity(view.rgb);
     // Half the footprint, in colour pixels, of the model's colour at one metre.
     const float half_footprint_px_m = 0.5f * kColourFootprintVoxels * voxel_size_m * 0.5f * (rgb_camera.fx + rgb_camera.fy);
@@ -105,14 +105,13 @@ ColourAgreement compareColour(const View& view, const Image<float>& model_depth_
             if (!(frame[i] > 0.f) || !(model[i] > 0.f) || !(std::fabs(frame[i] - model[i]) < tolerance_m)) continue;
             const Vec3f p_rgb = transformPoint(T_rgb_depth, depth_camera.unproject(float(u), float(v), frame[i]));
             if (!(p_rgb.z > 0.f)) continue;
-            // Voxels that never saw colour (fused from frames without it, or outside the colour
-            // camera's view) render exactly black: no colour to compare, not a black surface.
-            const Vec4u8 m = model_rgb[i];
-            if (m.x == 0 && m.y == 0 && m.z == 0) continue;
+            // -1: voxels that never saw colour (fused from frames without it, or outside the colour
+            // camera's view): nothing to compare.
+            if (!(model_grey[i] >= 0.f)) continue;
             const Vec2f px = rgb_camera.project(p_rgb);
             const double f = frame_intensity.mean(px.x, px.y, half_footprint_px_m / p_rgb.z);
             if (f < 0.0) continue;
-            cells[std::size_t(u / cell + (v / cell) * cells_x)].add(f, 255.0 * double(intensityFromRgb(m)));
+            cells[std::size_t(u / cell + (v / cell) * cells_x)].add(f, 255.0 * double(model_grey[i]));
         }
     // Each cell's correlation, weighed by its pixels; cells with few pixels, or plain on either side
     // (less than 3 grey levels of deviation: a wall, or sensor noise on one), have no say.

@@ -9,6 +9,7 @@
 
 #include "voxfuse/core/Error.h"
 #include "voxfuse/engines/Relocaliser.h"
+#include "voxfuse/shared/ColorTracker.h"  // intensityFromRgb
 
 namespace voxfuse {
 namespace {
@@ -60,6 +61,13 @@ Image<Vec4u8> modelColour(const View& registered, F grey) {
     return colour;
 }
 
+// What RaycastEngine::renderIntensity gives for a map of these colours.
+Image<float> intensities(const Image<Vec4u8>& colour) {
+    Image<float> grey(colour.size());
+    for (std::size_t i = 0; i < colour.pixelCount(); ++i) grey.host()[i] = intensityFromRgb(colour.host()[i]);
+    return grey;
+}
+
 Image<float> constantDepth(float depth_m) {
     Image<float> depth(Vec2i{160, 120});
     std::fill(depth.host(), depth.host() + depth.pixelCount(), depth_m);
@@ -70,12 +78,12 @@ TEST(RelocaliserTest, ColourAgreementIsTheCorrelationOfIntensitiesWhereDepthsAgr
     const View view = colourView();
     Image<float> model_depth = constantDepth(1.005f);
     // Another exposure of the same surface: gain and offset do not count.
-    ColourAgreement a = compareColour(view, model_depth, modelColour(view, [](int g) { return g / 2 + 30; }), 0.02f, 0.f);
+    ColourAgreement a = compareColour(view, model_depth, intensities(modelColour(view, [](int g) { return g / 2 + 30; })), 0.02f, 0.f);
     ASSERT_TRUE(a.compared);
     EXPECT_EQ(a.cells, 16 * 12);
     EXPECT_EQ(a.pixels, 160 * 120);
     EXPECT_GT(a.correlation, 0.99f);
-    a = compareColour(view, model_depth, modelColour(view, [](int g) { return 250 - g; }), 0.02f, 0.f);
+    a = compareColour(view, model_depth, intensities(modelColour(view, [](int g) { return 250 - g; })), 0.02f, 0.f);
     ASSERT_TRUE(a.compared);
     EXPECT_LT(a.correlation, -0.99f) << "the negative";
     // Pixels whose depths disagree (an occluder) are not compared, whatever their colour.
@@ -85,12 +93,12 @@ TEST(RelocaliserTest, ColourAgreementIsTheCorrelationOfIntensitiesWhereDepthsAgr
             model_depth.at(u, v) = 1.1f;
             spoilt.at(u, v) = Vec4u8{(unsigned char)(u * v % 7 * 30), 0, 255, 255};
         }
-    a = compareColour(view, model_depth, spoilt, 0.02f, 0.f);
+    a = compareColour(view, model_depth, intensities(spoilt), 0.02f, 0.f);
     ASSERT_TRUE(a.compared);
     EXPECT_EQ(a.pixels, 120 * 120);
     EXPECT_GT(a.correlation, 0.99f);
     // Colour at twice the calibrated resolution is the same camera, sampled at its pixels.
-    a = compareColour(colourView(2), model_depth, spoilt, 0.02f, 0.f);
+    a = compareColour(colourView(2), model_depth, intensities(spoilt), 0.02f, 0.f);
     ASSERT_TRUE(a.compared);
     EXPECT_GT(a.correlation, 0.99f);
 }
@@ -116,10 +124,10 @@ TEST(RelocaliserTest, ColourFinerThanTheMapIsAveragedOverTheMapsFootprint) {
                     view.rgb.at(4 * x + dx, 4 * y + dy) = Vec4u8{(unsigned char)fine, (unsigned char)fine, (unsigned char)fine, 255};
                 }
         }
-    const ColourAgreement points = compareColour(view, constantDepth(1.f), map_colour, 0.02f, 0.f);
+    const ColourAgreement points = compareColour(view, constantDepth(1.f), intensities(map_colour), 0.02f, 0.f);
     ASSERT_TRUE(points.compared);
     EXPECT_LT(points.correlation, 0.7f) << "a colour pixel on its own carries the finer texture: the test shows something";
-    const ColourAgreement footprint = compareColour(view, constantDepth(1.f), map_colour, 0.02f, 1.f / (1.5f * 160.f));
+    const ColourAgreement footprint = compareColour(view, constantDepth(1.f), intensities(map_colour), 0.02f, 1.f / (1.5f * 160.f));
     ASSERT_TRUE(footprint.compared);
     EXPECT_GT(footprint.correlation, 0.99f);
     EXPECT_EQ(footprint.pixels, 160 * 120);
@@ -134,22 +142,22 @@ TEST(RelocaliserTest, ColourIsSampledThroughTheDepthToColourExtrinsics) {
     view.calib.T_depth_rgb.m[3] = 0.025f;  // rgb -> depth: x + 2.5 cm
     for (int v = 0; v < 120; ++v)
         for (int u = 0; u < 160; ++u) view.rgb.at(u, v) = u + 4 < 160 ? at_depth_pixels.at(u + 4, v) : Vec4u8{0, 0, 0, 255};
-    ColourAgreement a = compareColour(view, constantDepth(1.f), at_depth_pixels, 0.02f, 0.f);
+    ColourAgreement a = compareColour(view, constantDepth(1.f), intensities(at_depth_pixels), 0.02f, 0.f);
     ASSERT_TRUE(a.compared);
     EXPECT_GT(a.correlation, 0.99f);
     EXPECT_EQ(a.pixels, 156 * 120) << "the 4 right columns lie outside the colour image";
     view.calib.T_depth_rgb.m[3] = -0.025f;  // the extrinsics taken the wrong way round
-    a = compareColour(view, constantDepth(1.f), at_depth_pixels, 0.02f, 0.f);
+    a = compareColour(view, constantDepth(1.f), intensities(at_depth_pixels), 0.02f, 0.f);
     ASSERT_TRUE(a.compared);
     EXPECT_LT(a.correlation, 0.5f);
 }
 
 TEST(RelocaliserTest, MapPixelsWithoutColourAreNotCompared) {
-    // Voxels that never saw colour render exactly black: half of each cell so, and the rest agreeing.
+    // Voxels that never saw colour have no intensity (-1): half of each cell so, and the rest agreeing.
     const View view = colourView();
-    Image<Vec4u8> half = modelColour(view, [](int g) { return g; });
+    Image<float> half = intensities(modelColour(view, [](int g) { return g; }));
     for (int v = 0; v < 120; ++v)
-        for (int u = 0; u < 160; u += 2) half.at(u, v) = Vec4u8{0, 0, 0, 255};
+        for (int u = 0; u < 160; u += 2) half.at(u, v) = -1.f;
     const ColourAgreement a = compareColour(view, constantDepth(1.f), half, 0.02f, 0.f);
     ASSERT_TRUE(a.compared);
     EXPECT_EQ(a.pixels, 80 * 120);
@@ -169,7 +177,7 @@ TEST(RelocaliserTest, ColourComparesTextureNotWhereBrightAndDarkRegionsLie) {
             const int h = (u * u * 13 + v * 29) % 50 + (bright ? 180 : 20);
             other.at(u, v) = Vec4u8{(unsigned char)h, (unsigned char)h, (unsigned char)h, 255};
         }
-    const ColourAgreement a = compareColour(view, constantDepth(1.f), other, 0.02f, 0.f);
+    const ColourAgreement a = compareColour(view, constantDepth(1.f), intensities(other), 0.02f, 0.f);
     ASSERT_TRUE(a.compared);
     EXPECT_LT(std::fabs(a.correlation), 0.3f);
 }
@@ -177,18 +185,18 @@ TEST(RelocaliserTest, ColourComparesTextureNotWhereBrightAndDarkRegionsLie) {
 TEST(RelocaliserTest, ColourGivesNoVerdictWithoutColourOrTexture) {
     const View view = colourView();
     const Image<float> model_depth = constantDepth(1.f);
-    const Image<Vec4u8> same = modelColour(view, [](int g) { return g; });
+    const Image<float> same = intensities(modelColour(view, [](int g) { return g; }));
     EXPECT_TRUE(compareColour(view, model_depth, same, 0.02f, 0.f).compared);
     EXPECT_FALSE(compareColour(view, model_depth, same, 0.02f, 0.f, 16 * 12 + 1).compared) << "fewer cells than asked for";
-    const Image<Vec4u8> plain = modelColour(view, [](int) { return 128; });
+    const Image<float> plain = intensities(modelColour(view, [](int) { return 128; }));
     EXPECT_FALSE(compareColour(view, model_depth, plain, 0.02f, 0.f, 0).compared) << "no textured cell: no verdict, whatever the least asked for";
-    EXPECT_FALSE(compareColour(view, model_depth, modelColour(view, [](int) { return 128; }), 0.02f, 0.f).compared)
+    EXPECT_FALSE(compareColour(view, model_depth, intensities(modelColour(view, [](int) { return 128; })), 0.02f, 0.f).compared)
         << "a plain surface correlates with nothing";
     View grey = colourView();
     grey.rgb = Image<Vec4u8>();
     EXPECT_FALSE(compareColour(grey, model_depth, same, 0.02f, 0.f).compared) << "a frame without colour";
-    EXPECT_FALSE(compareColour(view, model_depth, Image<Vec4u8>(), 0.02f, 0.f).compared) << "a map without colour";
-    EXPECT_THROW(compareColour(view, model_depth, Image<Vec4u8>(Vec2i{20, 15}), 0.02f, 0.f), ConfigError);
+    EXPECT_FALSE(compareColour(view, model_depth, Image<float>(), 0.02f, 0.f).compared) << "a map without colour";
+    EXPECT_THROW(compareColour(view, model_depth, Image<float>(Vec2i{20, 15}), 0.02f, 0.f), ConfigError);
 }
 
 RelocalisationCheck passingCheck() {

@@ -62,17 +62,18 @@ DepthAgreement compareDepth(const Image<float>& frame_depth_m, const Image<float
 // image is cut into cells (kColourCellsAcross across); in each, the normalised cross-correlation
 // (zero mean, so that exposure and gain do not count) of the two intensities over the frame's depth
 // pixels whose depth agrees with the model's within `tolerance_m` (no occluders), which the colour
-// camera sees and whose model colour is not exactly black (voxels that never saw colour render so);
-// then the mean over the cells, weighed by their pixels. Cells compare texture, not where bright and
-// dark regions lie, which the same shape under other colours often shares.
-// `model_colour` is a colour render (RenderMode::Color) of the raycast that gave `model_depth_m`, in
-// the depth camera. It holds no detail finer than the map's voxels (`voxel_size_m`; 0 compares
-// single colour pixels): the render interpolates between voxels. So the frame's intensity is its
-// mean over the footprint of kColourFootprintVoxels voxels at the pixel's depth (the nearest colour
-// pixel where that is narrower than one), and texture that only the frame resolves (a colour camera
-// finer than the map) is not taken for disagreement. No verdict (`compared` false) without colour
-// on either side, or with fewer than `min_textured_cells` cells that have both pixels and texture
-// on both sides (plain walls correlate with nothing).
+// camera sees and where the map has colour; then the mean over the cells, weighed by their pixels.
+// Cells compare texture, not where bright and dark regions lie, which the same shape under other
+// colours often shares.
+// `model_intensity` is the map's colour as intensities in [0, 1] (RaycastEngine::renderIntensity) at
+// the raycast that gave `model_depth_m`, in the depth camera; -1 where no voxel saw colour. It holds
+// no detail finer than the map's voxels (`voxel_size_m`; 0 compares single colour pixels): the
+// render interpolates between voxels. So the frame's intensity is its mean over the footprint of
+// kColourFootprintVoxels voxels at the pixel's depth (the nearest colour pixel where that is
+// narrower than one), and texture that only the frame resolves (a colour camera finer than the map)
+// is not taken for disagreement. No verdict (`compared` false) without colour on either side, or
+// with fewer than `min_textured_cells` cells that have both pixels and texture on both sides (plain
+// walls correlate with nothing).
 constexpr int kColourCellsAcross = 16;
 constexpr int kColourCellMinPixels = 8;
 constexpr float kColourFootprintVoxels = 1.5f;  // a trilinear read's spread, as a box (measured best of 0-3)
@@ -82,7 +83,7 @@ struct ColourAgreement {
     int cells = 0;            // that had their say
     int pixels = 0;           // in them
 };
-ColourAgreement compareColour(const View& view, const Image<float>& model_depth_m, const Image<Vec4u8>& model_colour, float tolerance_m,
+ColourAgreement compareColour(const View& view, const Image<float>& model_depth_m, const Image<float>& model_intensity, float tolerance_m,
                               float voxel_size_m, int min_textured_cells = 8);
 
 // What acceptance looks at for one candidate.
