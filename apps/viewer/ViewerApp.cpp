@@ -63,6 +63,7 @@ float meanDepth(const Image<float>& depth_m) {
 ViewerApp::ViewerApp(const ViewerOptions& options, std::unique_ptr<ImageSource> source, std::unique_ptr<MainEngine> engine)
     : options_(options),
       source_(std::move(source)),
+      read_ahead_(dynamic_cast<ThreadedImageSource*>(source_.get())),
       engine_(std::move(engine)),
       window_(options.window_width, options.window_height, "VoxFuse viewer") {
     record_.source = source_->description();
@@ -142,9 +143,8 @@ void ViewerApp::saveScreenshot(const std::string& path) {
 }
 
 bool ViewerApp::frameArrives() {
-    auto* threaded = dynamic_cast<ThreadedImageSource*>(source_.get());
-    if (!threaded) return true;
-    if (threaded->waitForFrame(std::chrono::milliseconds(50))) {
+    if (!read_ahead_) return true;
+    if (read_ahead_->waitForFrame(std::chrono::milliseconds(50))) {
         if (status_.rfind(kWaitingMessage, 0) == 0) status_.clear();
         silence_.reset();
         silent_s_ = 0;

@@ -16,6 +16,10 @@
 #include "voxfuse/engines/MainEngine.h"
 #include "voxfuse/io/ImageSource.h"
 
+namespace voxfuse {
+class ThreadedImageSource;
+}
+
 namespace voxfuse::viewer {
 
 struct ViewerOptions {
@@ -63,6 +67,7 @@ private:
 
     ViewerOptions options_;
     std::unique_ptr<ImageSource> source_;
+    ThreadedImageSource* read_ahead_;  // source_, when frames are read ahead (a camera's): waited for a moment at a time
     std::unique_ptr<MainEngine> engine_;
     app::RunRecord record_;
     std::unique_ptr<app::SequenceRunner> runner_;
