@@ -152,13 +152,27 @@ private:
         const Timer level_time;
         NormalEquations<double> depth_eq = NormalEquations<double>::zero();
         // rgbd: photometric terms have a basin of a few pixels, so they join only once depth alone has
-        // converged on this level, and then refine together with it until both agree.
+        // converged on this level, and then refine together with it until both agree. While they do,
+        // the depth terms are the quadratic Gauss-Newton model of their cost about the pose where they
+        // converged (colour moves the pose a millimetre or two, too little to change which model
+        // points they meet or their weights): colour iterations cost the colour terms alone. Measured
+        // against evaluating the depth terms at every colour iteration: teddy 6.70 against 6.69 mm,
+        // kinfu sample 2.26 against 2.21, bundled room 0.48 against 0.44, tracking in 19 ms against 27.
         bool with_color = false;
+        pose::StepExtrapolation extrapolation;
+        NormalEquations<double> converged_depth = NormalEquations<double>::zero();
+        pose::Vector6d moved_since = pose::Vector6d::Zero();  // the steps taken since the depth terms were evaluated
         for (int it = 0; it < ls.max_iterations; ++it) {
             const Mat4f T_f = pose::toMat4f(T);
             const DepthTermParams params{T_f, T_model_world, model.intrinsics, ls.max_distance_m, min_normal_cos_};
-            depth_eq = kernels_->accumulate(level, model, params, robust ? final_kernel : RobustKernel::None, settings_.robust_scale_m,
-                                            ls.pixel_step);
+            if (with_color) {
+                depth_eq = depthSystemMovedBy(converged_depth, moved_since);
+            } else {
+                depth_eq = kernels_->accumulate(level, model, params, robust ? final_kernel : RobustKernel::None, settings_.robust_scale_m,
+                                                ls.pixel_step);
+                converged_depth = depth_eq;
+                moved_since.setZero();
+            }
             stats.iterations = it + 1;
             NormalEquations<double> system = depth_eq;
             if (with_color) {
@@ -172,12 +186,15 @@ private:
             }
             pose::Vector6d x;
             if (system.count < 6 || !pose::solveUpdate(system, ls.motion, 0.0, x)) break;
-            T = pose::applyUpdate(T, x);
+            const pose::Vector6d taken = settings_.extrapolate_steps ? extrapolation.stretch(x) : x;
+            T = pose::applyUpdate(T, taken);
+            moved_since += taken;
             // Least squares only has to reach the kernel's basin: it hands over at ten times the final step.
             // A level's pixels are 2^pi times the finest's: it stops at steps that much larger (the finer
-            // levels refine what it leaves).
+            // levels refine what it leaves). The test takes the Gauss-Newton step, not the stretched one.
             const double step_scale = (robust ? 1.0 : 10.0) * double(1 << pi);
             if (x.head<3>().norm() < step_scale * settings_.min_rotation_step_rad && x.tail<3>().norm() < step_scale * settings_.min_translation_step_m) {
+                extrapolation.restart();  // the kernel or colour joins: another cost
                 if (!robust) {
                     robust = true;
                     continue;
@@ -191,6 +208,15 @@ private:
         stats.rms_residual = depth_eq.count > 0 ? float(std::sqrt(depth_eq.squared_sum / depth_eq.count)) : 0.f;
         stats_.levels.push_back(stats);
         return depth_eq;
+    }
+
+    // The depth system of `at` evaluated after the pose moved by `moved` (small): the Gauss-Newton
+    // model keeps J^T W J and moves the gradient to J^T W (r + J moved).
+    static NormalEquations<double> depthSystemMovedBy(const NormalEquations<double>& at, const pose::Vector6d& moved) {
+        NormalEquations<double> eq = at;
+        const pose::Vector6d shift = pose::fullMatrix(at) * moved;
+        for (int k = 0; k < 6; ++k) eq.gradient[k] += shift(k);
+        return eq;
     }
 
     static void reportFailed(TrackingState& state) {

@@ -95,6 +95,38 @@ inline bool solveUpdate(const NormalEquations<double>& eq, LevelMotion motion, d
     return true;
 }
 
+// Gauss-Newton on a robust (reweighted) cost with projective association converges linearly, not
+// quadratically: the reweighting uses w(r) = rho'(r) / r where Newton would use rho''(r), which is
+// smaller for Tukey's kernel, so each step is a roughly constant fraction q of the one before (teddy:
+// 0.5-0.8). The steps then form a geometric series, and the pose still has x q / (1 - q) to go after
+// step x: a step that continues the one before it (q = x . x_prev / |x_prev|^2 in (0, 1)) is taken
+// 1 / (1 - q) times as long, at most kMaxStretch (Aitken's extrapolation of a linearly converging
+// sequence). A step that turns back (q <= 0) or grows (q >= 1) is taken as it is. The optimum is the
+// same; fewer iterations reach it (ren on teddy: 2.3 instead of 3.5 on the finest level). Rotation
+// and translation share the product (radians and metres: the scenes lie about a metre away).
+class StepExtrapolation {
+public:
+    static constexpr double kMaxStretch = 3.0;
+
+    // A new cost (another level, the kernel or colour joining): the earlier steps say nothing of it.
+    void restart() { has_previous_ = false; }
+    // The step to take for the Gauss-Newton step x.
+    Vector6d stretch(const Vector6d& x) {
+        Vector6d taken = x;
+        if (has_previous_) {
+            const double q = x.dot(previous_) / previous_.squaredNorm();
+            if (q > 0.0 && q < 1.0) taken = x * std::min(kMaxStretch, 1.0 / (1.0 - q));
+        }
+        previous_ = x;
+        has_previous_ = previous_.squaredNorm() > 0.0;
+        return taken;
+    }
+
+private:
+    Vector6d previous_ = Vector6d::Zero();
+    bool has_previous_ = false;
+};
+
 // Smallest / largest eigenvalue of H after scaling it to a unit diagonal (D^-1/2 H D^-1/2), 0 for an
 // empty or degenerate system. The scaling makes the ratio free of units (radians vs metres, depth vs
 // intensity residuals): it measures how close some combination of motions comes to being

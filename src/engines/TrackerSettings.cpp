@@ -203,6 +203,7 @@ TrackerSettings parseTrackerSettingsText(const std::string& text, const std::str
         {"min_translation_step_m", setFloat(s.min_translation_step_m)},
         {"bilateral_filter", setBool(s.bilateral_filter)},
         {"predict_motion", setBool(s.predict_motion)},
+        {"extrapolate_steps", setBool(s.extrapolate_steps)},
         {"max_normal_edge_m", setFloat(s.max_normal_edge_m)},
         {"max_tracking_depth_m", setFloat(s.max_tracking_depth_m)},
         {"robust_kernel", setKernel(s.robust_kernel)},

@@ -59,6 +59,10 @@ struct TrackerSettings {
     // 9.8 and 6.2, with the same ATE there, on the bundled room, the kinfu sample and the corridor).
     float min_rotation_step_rad = 1e-4f;
     float min_translation_step_m = 1e-4f;
+    // Stretch a Gauss-Newton step that continues the one before it by what the geometric series of
+    // the remaining steps adds (see pose::StepExtrapolation): the same optimum in fewer iterations
+    // (teddy's finest two levels: 2.3 instead of 4.1 and 3.5, tracking 18% faster, the same ATE).
+    bool extrapolate_steps = true;
     // Start from the pose the last two frames' motion predicts (constant velocity, scaled to the time
     // between frames) instead of the last pose: the tracker then only corrects the change of motion.
     bool predict_motion = true;
@@ -131,7 +135,7 @@ void validateTrackerSettings(const TrackerSettings& settings);
 //   max_distance_m = 0.1 0.05 0.02  per level, coarse to fine (one value: every level)
 //   pixel_step = 1 1 1              per level, coarse to fine (one value: every level)
 //   max_normal_angle_deg, min_rotation_step_rad, min_translation_step_m, max_normal_edge_m, max_tracking_depth_m,
-//   predict_motion and bilateral_filter (true/false/on/off/1/0), robust_kernel (none/huber/tukey), robust_scale_m,
+//   predict_motion, extrapolate_steps and bilateral_filter (true/false/on/off/1/0), robust_kernel (none/huber/tukey), robust_scale_m,
 //   color_point_step, color_kernel, color_kernel_scale, color_weight, color_from_map (true/false),
 //   good_inlier_ratio, failed_inlier_ratio, good_condition, failed_condition, poor_translation_constraint, poor_residual_m,
 //   failed_color_residual, min_inliers, max_motion_m, max_motion_deg
