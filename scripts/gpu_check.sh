@@ -42,7 +42,8 @@ if [ -d "$bundle/teddy_pack" ]; then
   # The meshes (70 MB each) stay out of $OUT, which comes back.
   work=$(mktemp -d)
   for dev in cpu cuda; do
-    step teddy_$dev 180 "$bundle/bin/voxfuse_bench" "$bundle/teddy_pack" --device $dev --mesh --repeats 1 --json teddy_$dev.json \
+    # Depth only (the pack has no colour): ren, as named in the summary, whatever the default tracker.
+    step teddy_$dev 180 "$bundle/bin/voxfuse_bench" "$bundle/teddy_pack" --device $dev --tracker ren --voxel s --mesh --repeats 1 --json teddy_$dev.json \
       --trajectory "$work/teddy_${dev}_trajectory.txt" --mesh-out "$work/teddy_${dev}_mesh.ply"
     cp "teddy_$dev.json" "$work/" 2>/dev/null
   done

@@ -99,7 +99,7 @@ int main(int argc, char** argv) {
 #if VOXFUSE_WITH_IO
     app::LabelInputOptions labels;  // and --voxel
 #else
-    std::string voxel = "s";
+    std::string voxel = "s_rgb";
 #endif
     int max_frames = 0, warmup = 3, repeats = 3;
     bool mesh = false, cloud = false, render = false;
@@ -113,7 +113,7 @@ int main(int argc, char** argv) {
     cli.add_option("--frames", max_frames, "at most N frames (0 = all)")->check(app::nonNegativeInt());
     cli.add_option("--warmup", warmup, "frames left out of the statistics")->capture_default_str()->check(app::nonNegativeInt());
 #if VOXFUSE_WITH_IO
-    app::addVoxelAndLabelOptions(cli, labels, "s");
+    app::addVoxelAndLabelOptions(cli, labels, "s_rgb");  // voxfuse's default: the rgbd tracker aligns to the map's colours
 #else
     cli.add_option("--voxel", voxel, "voxel type")->capture_default_str()->check(CLI::IsMember({"s", "f", "s_rgb", "f_rgb", "s_label", "s_rgb_label"}));
 #endif

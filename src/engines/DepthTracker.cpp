@@ -186,7 +186,13 @@ private:
             }
             pose::Vector6d x;
             if (system.count < 6 || !pose::solveUpdate(system, ls.motion, 0.0, x)) break;
-            const pose::Vector6d taken = settings_.extrapolate_steps ? extrapolation.stretch(x) : x;
+            // Only where the depth terms pin every translation (the frame would not be poor): along a
+            // direction they barely constrain (a corridor's length) successive steps are slides, not a
+            // converging series, and stretching them sent the synthetic corridor walk 0.26 m astray.
+            const bool stretch = settings_.extrapolate_steps &&
+                                 pose::translationConstraint(depth_eq).share(0) >= double(settings_.poor_translation_constraint);
+            if (!stretch) extrapolation.restart();
+            const pose::Vector6d taken = stretch ? extrapolation.stretch(x) : x;
             T = pose::applyUpdate(T, taken);
             moved_since += taken;
             // Least squares only has to reach the kernel's basin: it hands over at ten times the final step.

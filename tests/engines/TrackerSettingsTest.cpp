@@ -22,13 +22,14 @@ TEST(TrackerSettingsTest, DefaultsAreValidAndDocumented) {
 TEST(TrackerSettingsTest, ParsesEveryKindOfValue) {
     const TrackerSettings s = parseTrackerSettings(
         "# comment line\n"
-        "tracker = rgbd   # trailing comment\n"
+        "tracker = icp   # trailing comment (the default is rgbd)\n"
         "\n"
         "levels = rrtb\n"
         "iterations = 20 10 5 3\n"
         "max_distance_m = 0.2\n"
         "pixel_step = 1 1 2 4\n"
         "bilateral_filter = off\n"
+        "extrapolate_steps = false\n"
         "robust_kernel = huber\n"
         "color_weight = 0.5\n"
         "color_from_map = false\n"
@@ -36,7 +37,7 @@ TEST(TrackerSettingsTest, ParsesEveryKindOfValue) {
         "max_tracking_depth_m = 2.5\n"
         "min_inliers = 50\n",
         "test.txt");
-    EXPECT_EQ(s.kind, TrackerKind::Rgbd);
+    EXPECT_EQ(s.kind, TrackerKind::Icp);
     ASSERT_EQ(s.levels.size(), 4u);
     EXPECT_EQ(s.levels[0].motion, LevelMotion::Rotation);
     EXPECT_EQ(s.levels[2].motion, LevelMotion::Translation);
@@ -48,6 +49,7 @@ TEST(TrackerSettingsTest, ParsesEveryKindOfValue) {
     EXPECT_EQ(s.levels[2].pixel_step, 2);
     EXPECT_EQ(s.levels[3].pixel_step, 4);
     EXPECT_FALSE(s.bilateral_filter);
+    EXPECT_FALSE(s.extrapolate_steps);
     EXPECT_EQ(s.robust_kernel, RobustKernel::Huber);
     EXPECT_FLOAT_EQ(s.color_weight, 0.5f);
     EXPECT_FALSE(s.color_from_map);

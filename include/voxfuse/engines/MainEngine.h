@@ -45,7 +45,8 @@ inline VoxelBlockHashSettings hashWithAutomaticBlockCount() {
 
 struct MainEngineSettings {
     SceneParams scene;
-    VoxelType voxel_type = VoxelType::S;
+    // Colour voxels: the default tracker (rgbd) aligns each frame's colours to the map's.
+    VoxelType voxel_type = VoxelType::SRgb;
     IndexType index_type = IndexType::Hash;
     // Where the frame loop runs and the scene lives. With Device::CUDA only the raw images go up;
     // image processing, tracking, allocation, integration, raycast, renders, meshes and clouds run on

@@ -32,13 +32,18 @@ struct TrackerLevel {
     int pixel_step = 1;           // ICP terms from every pixel_step-th row and column of the level
 };
 
-// Defaults measured on TUM fr3/teddy (193 frames, frame-to-model, 5 mm voxels; ATE RMSE): ren 7.1 mm,
-// with 3.4 Gauss-Newton iterations on the finest level (8.4 mm and 9.4 iterations while its kernel
-// was on the finest level only). Much of what is left is a ~25 ms lag of the depth timestamps behind
-// the motion capture: the same trajectory scored against ground truth 25 ms earlier gives 5.5 mm.
-// The normal test is what lets an 8 cm / 8 degree jump converge.
+// Defaults measured on TUM fr3/teddy (193 frames, frame-to-model, 5 mm voxels; ATE RMSE): rgbd 6.7 mm,
+// ren 7.2 mm with 2.3 Gauss-Newton iterations on the finest level (8.4 mm and 9.4 iterations while
+// its kernel was on the finest level only). Much of what is left is a ~25 ms lag of the depth
+// timestamps behind the motion capture: the same trajectories scored against ground truth 25 ms
+// earlier give 5.3 and 5.4 mm. The normal test is what lets an 8 cm / 8 degree jump converge.
 struct TrackerSettings {
-    TrackerKind kind = TrackerKind::Ren;
+    // rgbd: ren's depth terms plus colour aligned to the map's fused colours. Where depth leaves a
+    // motion weakly constrained (a corridor, a wall, a round object) the map's texture pins it: the
+    // synthetic corridor walk's ATE 49 mm against ren's 141; teddy 6.7 against 7.2, the kinfu sample
+    // 2.3 against 2.8. It tracks in about 1.8 times ren's time on the CPU. With a voxel type without
+    // colour it aligns to the previous frame's colours; without a colour image it is ren.
+    TrackerKind kind = TrackerKind::Rgbd;
     // Pyramid levels, COARSE TO FINE: with n levels, levels[i] works on images downsampled by
     // 2^(n-1-i) (the last level is full resolution). Settings file: levels, iterations, max_distance_m.
     // The finest level takes every second row and column: the model it is aligned to is raycast at
@@ -61,7 +66,8 @@ struct TrackerSettings {
     float min_translation_step_m = 1e-4f;
     // Stretch a Gauss-Newton step that continues the one before it by what the geometric series of
     // the remaining steps adds (see pose::StepExtrapolation): the same optimum in fewer iterations
-    // (teddy's finest two levels: 2.3 instead of 4.1 and 3.5, tracking 18% faster, the same ATE).
+    // (teddy's finest two levels: 2.3 instead of 4.1 and 3.5, tracking 15% faster, the same ATE).
+    // Only while the depth terms pin every translation (poor_translation_constraint below).
     bool extrapolate_steps = true;
     // Start from the pose the last two frames' motion predicts (constant velocity, scaled to the time
     // between frames) instead of the last pose: the tracker then only corrects the change of motion.
