@@ -162,6 +162,11 @@ private:
         pose::StepExtrapolation extrapolation;
         NormalEquations<double> converged_depth = NormalEquations<double>::zero();
         pose::Vector6d moved_since = pose::Vector6d::Zero();  // the steps taken since the depth terms were evaluated
+        // Steps are stretched only where the depth terms pin every translation (the frame would not be
+        // poor): along a direction they barely constrain (a corridor's length) successive steps are
+        // slides, not a converging series, and stretching them sent the synthetic corridor walk 0.26 m
+        // astray. Decided when the depth terms are evaluated; the colour phase keeps their J^T W J.
+        bool depth_pins_translation = false;
         for (int it = 0; it < ls.max_iterations; ++it) {
             const Mat4f T_f = pose::toMat4f(T);
             const DepthTermParams params{T_f, T_model_world, model.intrinsics, ls.max_distance_m, min_normal_cos_};
@@ -172,6 +177,8 @@ private:
                                                 ls.pixel_step);
                 converged_depth = depth_eq;
                 moved_since.setZero();
+                depth_pins_translation = settings_.extrapolate_steps && pose::translationConstraint(depth_eq).share(0) >=
+                                                                            double(settings_.poor_translation_constraint);
             }
             stats.iterations = it + 1;
             NormalEquations<double> system = depth_eq;
@@ -186,13 +193,8 @@ private:
             }
             pose::Vector6d x;
             if (system.count < 6 || !pose::solveUpdate(system, ls.motion, 0.0, x)) break;
-            // Only where the depth terms pin every translation (the frame would not be poor): along a
-            // direction they barely constrain (a corridor's length) successive steps are slides, not a
-            // converging series, and stretching them sent the synthetic corridor walk 0.26 m astray.
-            const bool stretch = settings_.extrapolate_steps &&
-                                 pose::translationConstraint(depth_eq).share(0) >= double(settings_.poor_translation_constraint);
-            if (!stretch) extrapolation.restart();
-            const pose::Vector6d taken = stretch ? extrapolation.stretch(x) : x;
+            if (!depth_pins_translation) extrapolation.restart();
+            const pose::Vector6d taken = depth_pins_translation ? extrapolation.stretch(x) : x;
             T = pose::applyUpdate(T, taken);
             moved_since += taken;
             // Least squares only has to reach the kernel's basin: it hands over at ten times the final step.
