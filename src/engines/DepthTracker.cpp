@@ -18,6 +18,10 @@ namespace {
 
 // Pyramid downsampling averages only depths within this of each other (no surfaces across edges).
 constexpr float kPyramidMaxDepthDiffM = 0.05f;
+// rgbd's automatic colour weight takes the residuals' noise as at least this: a tenth of a millimetre
+// of depth, one grey level of an 8-bit intensity.
+constexpr double kDepthNoiseFloorM = 1e-4;
+constexpr double kIntensityNoiseFloor = 1.0 / 255.0;
 
 class DepthTracker final : public Tracker {
 public:
@@ -159,6 +163,7 @@ private:
         // against evaluating the depth terms at every colour iteration: teddy 6.70 against 6.69 mm,
         // kinfu sample 2.26 against 2.21, bundled room 0.48 against 0.44, tracking in 19 ms against 27.
         bool with_color = false;
+        double color_weight = -1.0;  // of a colour term against a depth term on this level; < 0: not yet known
         pose::StepExtrapolation extrapolation;
         NormalEquations<double> converged_depth = NormalEquations<double>::zero();
         pose::Vector6d moved_since = pose::Vector6d::Zero();  // the steps taken since the depth terms were evaluated
@@ -186,10 +191,18 @@ private:
                 const NormalEquations<double> color_eq =
                     color_kernels_->accumulate(photometric_->points(), photometric_->level(pi), photometric_->termParams(pi, T_f),
                                                settings_.color_kernel, settings_.color_kernel_scale);
-                // Per term: the colour points are fixed by the model while the depth pixels shrink 4x per
-                // level, so the colour sum is scaled to the depth term count.
-                if (color_eq.count > 0 && depth_eq.count > 0)
-                    system.add(color_eq, double(settings_.color_weight) * depth_eq.count / color_eq.count);
+                if (color_eq.count > 0 && depth_eq.count > 0) {
+                    // Fixed for the level at its first colour iteration with terms: a weight that moved
+                    // with every step's residuals would make a different cost at each iteration.
+                    if (color_weight < 0.0)
+                        color_weight = settings_.color_weight_auto
+                                           ? pose::inverseVarianceWeight(depth_eq, kDepthNoiseFloorM * kDepthNoiseFloorM, color_eq,
+                                                                         kIntensityNoiseFloor * kIntensityNoiseFloor)
+                                           : double(settings_.color_weight);
+                    // Per term: the colour points are fixed by the model while the depth pixels shrink 4x
+                    // per level, so the colour sum is scaled to the depth term count.
+                    system.add(color_eq, color_weight * depth_eq.count / color_eq.count);
+                }
             }
             pose::Vector6d x;
             if (system.count < 6 || !pose::solveUpdate(system, ls.motion, 0.0, x)) break;

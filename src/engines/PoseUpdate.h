@@ -165,6 +165,21 @@ inline TranslationConstraint translationConstraint(const NormalEquations<double>
     return c;
 }
 
+// The robust variance of a system's residuals: sum of w r^2 over the terms it took, per term. For
+// residuals well inside the kernel's scale it is their variance; outliers count by the kernel's
+// weight (Huber: linearly; Tukey: not at all), so a few do not inflate it.
+inline double robustVariance(const NormalEquations<double>& eq) { return eq.count > 0 ? eq.weighted_cost / eq.count : 0.0; }
+
+// Inverse-variance weighting of two kinds of terms: the weight of a term of `b` against a term of `a`
+// when each counts by the inverse of its own noise (maximum likelihood for Gaussian noise), the noise
+// being each system's robust variance, but at least its floor (a system whose residuals vanish, e.g.
+// a model seen in exactly the frame that built it, must not take all the weight). 0 when either has
+// no terms.
+inline double inverseVarianceWeight(const NormalEquations<double>& a, double a_floor, const NormalEquations<double>& b, double b_floor) {
+    if (a.count == 0 || b.count == 0) return 0.0;
+    return std::max(robustVariance(a), a_floor) / std::max(robustVariance(b), b_floor);
+}
+
 // The translation (metres) and rotation angle (degrees) between two poses.
 inline void motionBetween(const Eigen::Matrix4d& a, const Eigen::Matrix4d& b, float& metres, float& degrees) {
     const Eigen::Matrix4d d = a.inverse() * b;

@@ -211,7 +211,19 @@ TrackerSettings parseTrackerSettingsText(const std::string& text, const std::str
         {"color_point_step", setInt(s.color_point_step)},
         {"color_kernel", setKernel(s.color_kernel)},
         {"color_kernel_scale", setFloat(s.color_kernel_scale)},
-        {"color_weight", setFloat(s.color_weight)},
+        {"color_weight",
+         [&](const std::string& v) -> std::string {
+             double d;
+             if (v == "auto") {
+                 s.color_weight_auto = true;
+             } else if (number(v, d)) {
+                 s.color_weight_auto = false;
+                 s.color_weight = float(d);
+             } else {
+                 return "expected auto or a number, got '" + v + "'";
+             }
+             return {};
+         }},
         {"color_from_map", setBool(s.color_from_map)},
         {"good_inlier_ratio", setFloat(s.good_inlier_ratio)},
         {"failed_inlier_ratio", setFloat(s.failed_inlier_ratio)},

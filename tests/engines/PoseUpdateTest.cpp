@@ -1,5 +1,6 @@
 // The trackers' host algebra on systems built by hand: how much of the terms' weight constrains each
-// translation direction, and the stretching of linearly converging steps.
+// translation direction, the stretching of linearly converging steps, and the weight that balances
+// two kinds of terms by their noise.
 
 #include <gtest/gtest.h>
 
@@ -7,6 +8,7 @@
 #include <random>
 
 #include "engines/PoseUpdate.h"
+#include "voxfuse/shared/RobustKernel.h"
 
 namespace voxfuse {
 namespace {
@@ -85,6 +87,34 @@ TEST(PoseUpdateTest, OnlyAStepThatContinuesAShrinkingSeriesIsStretched) {
     const pose::Vector6d across = (pose::Vector6d() << 0.0, 0.001, 0.0, 0.0, 0.0, 0.003).finished();
     ASSERT_NEAR(across.dot(-0.1 * x), 0.0, 1e-15);
     EXPECT_EQ(e.stretch(across), across) << "a step at right angles continues nothing";
+}
+
+// Depth residuals of +-2 mm and colour residuals of +-0.05 (within their kernels' scales: weight 1):
+// a colour term weighs (2e-3)^2 / 0.05^2 = 1.6e-3 of a depth term. Colour residuals at half the
+// brightness weigh four times as much; the floors hold for residuals that vanish.
+TEST(PoseUpdateTest, InverseVarianceWeightIsTheRatioOfTheResidualsRobustVariances) {
+    auto system = [](double residual, RobustKernel kernel, double scale, int n) {
+        NormalEquations<double> eq = NormalEquations<double>::zero();
+        const float J[6] = {1.f, 0.f, 0.f, 0.f, 0.f, 0.f};
+        for (int i = 0; i < n; ++i) {
+            const float r = float(i % 2 ? residual : -residual);
+            eq.addTerm(J, r, robustWeight(kernel, r, float(scale)));
+        }
+        return eq;
+    };
+    const auto depth = system(2e-3, RobustKernel::Tukey, 1.0, 100), color = system(0.05, RobustKernel::Huber, 0.1, 300);
+    const double floor_d = 1e-8, floor_i = 1e-5;
+    EXPECT_NEAR(pose::robustVariance(color), 0.05 * 0.05, 1e-9);
+    EXPECT_NEAR(pose::robustVariance(depth), 4e-6 * (1 - 4e-6) * (1 - 4e-6), 1e-12) << "Tukey's weight at 2 mm of 1 m";
+    EXPECT_NEAR(pose::inverseVarianceWeight(depth, floor_d, color, floor_i), 4e-6 / 2.5e-3, 1e-7);
+    const auto dim = system(0.025, RobustKernel::Huber, 0.1, 300);
+    EXPECT_NEAR(pose::inverseVarianceWeight(depth, floor_d, dim, floor_i), 4 * pose::inverseVarianceWeight(depth, floor_d, color, floor_i), 1e-7);
+    const auto huge = system(1.0, RobustKernel::Huber, 0.1, 300);
+    EXPECT_NEAR(pose::robustVariance(huge), 0.1, 1e-7) << "an outlier counts by the kernel's weight (Huber: scale / |r|)";
+    EXPECT_NEAR(pose::inverseVarianceWeight(system(0.0, RobustKernel::Tukey, 1.0, 10), floor_d, system(0.0, RobustKernel::Huber, 0.1, 10), floor_i),
+                floor_d / floor_i, 1e-12)
+        << "residuals that vanish count as the floors";
+    EXPECT_EQ(pose::inverseVarianceWeight(depth, floor_d, NormalEquations<double>::zero(), floor_i), 0.0) << "no colour terms";
 }
 
 }  // namespace

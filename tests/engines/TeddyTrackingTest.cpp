@@ -116,9 +116,10 @@ TEST(TeddyTrackingTest, StretchedStepsReachTheSamePosesInFewerIterations) {
 }
 
 // The pipeline as voxfuse runs it (5 mm s_rgb voxels) with the rgbd tracker, the default, whose colour
-// term aligns each frame to the map's fused colours (frame to model): on teddy 6.70 mm ATE, against
-// 7.05 mm with the previous frame's colours (frame to frame, `color_from_map = false`) and 7.17 mm for
-// ren (depth alone); InfiniTAM v3's CPU build 6.61 mm on the same frames (DESIGN_NOTES).
+// term aligns each frame to the map's fused colours (frame to model), weighted against depth by the
+// two residuals' noise: on teddy 6.57 mm ATE, against 6.70 mm with the fixed weight 1e-3, 7.05 mm with
+// the previous frame's colours (frame to frame, `color_from_map = false`) and 7.17 mm for ren (depth
+// alone); InfiniTAM v3's CPU build 6.61 mm on the same frames (DESIGN_NOTES).
 TEST(TeddyTrackingTest, DefaultPipelineAlignedToTheMapsColoursBeatsDepthAlone) {
     const std::string dir = std::string(VOXFUSE_SHARED_DATA_DIR) + "/tum_fr3_teddy_200";
     if (!std::filesystem::exists(dir + "/rgb.txt")) GTEST_SKIP() << "../shared/data not found at " << dir << ": skipping the teddy test";
@@ -138,7 +139,7 @@ TEST(TeddyTrackingTest, DefaultPipelineAlignedToTheMapsColoursBeatsDepthAlone) {
     std::printf("[ teddy    ] rgbd, map colours, 5 mm: ATE RMSE %.2f mm (max %.2f), RPE %.2f mm/s; %.2f mm at the best clock offset\n",
                 1000 * e.ate_rmse_m, 1000 * e.ate_max_m, 1000 * e.rpe_trans_m_per_s, 1000 * e.ate_rmse_at_best_offset_m);
     EXPECT_EQ(trajectory.size(), 193u);
-    EXPECT_LT(e.ate_rmse_m, 0.0068);
+    EXPECT_LT(e.ate_rmse_m, 0.0066);
     EXPECT_LT(e.rpe_trans_m_per_s, 0.0080);
 }
 

@@ -17,6 +17,7 @@ TEST(TrackerSettingsTest, DefaultsAreValidAndDocumented) {
     EXPECT_NO_THROW(validateTrackerSettings(s));
     EXPECT_EQ(s.levels.size(), 3u);
     EXPECT_EQ(s.levels.back().motion, LevelMotion::Both);
+    EXPECT_TRUE(s.color_weight_auto);
 }
 
 TEST(TrackerSettingsTest, ParsesEveryKindOfValue) {
@@ -52,6 +53,7 @@ TEST(TrackerSettingsTest, ParsesEveryKindOfValue) {
     EXPECT_FALSE(s.extrapolate_steps);
     EXPECT_EQ(s.robust_kernel, RobustKernel::Huber);
     EXPECT_FLOAT_EQ(s.color_weight, 0.5f);
+    EXPECT_FALSE(s.color_weight_auto) << "a number fixes the colour weight";
     EXPECT_FALSE(s.color_from_map);
     EXPECT_EQ(s.poor_translation_constraint, 0.f);
     EXPECT_FLOAT_EQ(s.max_tracking_depth_m, 2.5f);
@@ -91,10 +93,19 @@ TEST(TrackerSettingsTest, BadLinesNameFileLineAndReason) {
     expectParseError("bilateral_filter = maybe\n", 1, "true or false");
     expectParseError("just some words\n", 1, "key = value");
     expectParseError("color_weight =\n", 1, "no value");
+    expectParseError("color_weight = automatic\n", 1, "expected auto or a number, got 'automatic'");
     expectParseError("good_inlier_ratio = 0.3\n\nfailed_inlier_ratio = 0.5\n", 3, "must not exceed");
     expectParseError("poor_translation_constraint = 0.34\n", 1, "must be in [0, 1/3)");
     expectParseError("max_tracking_depth_m = -1\n", 1, "must be >= 0");
     expectParseError("tracker = icp\n# later\ntracker = ren\n", 3, "'tracker' is set twice (first on line 1)");
+}
+
+TEST(TrackerSettingsTest, ColourWeightIsAutomaticOrANumber) {
+    EXPECT_TRUE(parseTrackerSettings("color_weight = auto\n", "test.txt").color_weight_auto);
+    const TrackerSettings fixed = parseTrackerSettings("color_weight = 2e-3\n", "test.txt");
+    EXPECT_FALSE(fixed.color_weight_auto);
+    EXPECT_FLOAT_EQ(fixed.color_weight, 2e-3f);
+    EXPECT_THROW(parseTrackerSettings("color_weight = -1\n", "test.txt"), ParseError) << "a fixed weight is >= 0";
 }
 
 // A file's key may be overridden by a front-end's single value (the file said it once); the conflict
