@@ -105,7 +105,7 @@ TEST(PoseUpdateTest, InverseVarianceWeightIsTheRatioOfTheResidualsRobustVariance
     const auto depth = system(2e-3, RobustKernel::Tukey, 1.0, 100), color = system(0.05, RobustKernel::Huber, 0.1, 300);
     const double floor_d = 1e-8, floor_i = 1e-5;
     EXPECT_NEAR(pose::robustVariance(color), 0.05 * 0.05, 1e-9);
-    EXPECT_NEAR(pose::robustVariance(depth), 4e-6 * (1 - 4e-6) * (1 - 4e-6), 1e-12) << "Tukey's weight at 2 mm of 1 m";
+    EXPECT_NEAR(pose::robustVariance(depth), 4e-6 * (1 - 4e-6) * (1 - 4e-6), 1e-12) << "Tukey at a 1 m scale weighs 2 mm by (1 - 4e-6)^2";
     EXPECT_NEAR(pose::inverseVarianceWeight(depth, floor_d, color, floor_i), 4e-6 / 2.5e-3, 1e-7);
     const auto dim = system(0.025, RobustKernel::Huber, 0.1, 300);
     EXPECT_NEAR(pose::inverseVarianceWeight(depth, floor_d, dim, floor_i), 4 * pose::inverseVarianceWeight(depth, floor_d, color, floor_i), 1e-7);
