@@ -8,6 +8,7 @@
 #include <random>
 #include <string>
 #include <tuple>
+#include <vector>
 
 #include "DeviceTestSupport.h"
 #include "TrackingTestSupport.h"
@@ -168,6 +169,23 @@ struct RoomStep {
         model = test::modelFromView(first, start);
         second = test::renderView(room, intr, moved);
     }
+    // Far depths that a sensor gets wrong: bias_m added to the second frame's depths beyond their
+    // median. Returns that median and how many depths the frame has.
+    struct FarBias {
+        float median_m;
+        std::size_t depths;
+    };
+    FarBias biasFarDepths(float bias_m) {
+        Image<float>& depth = second.depth;
+        std::vector<float> depths;
+        for (std::size_t i = 0; i < depth.pixelCount(); ++i)
+            if (depth.host()[i] > 0.f) depths.push_back(depth.host()[i]);
+        std::nth_element(depths.begin(), depths.begin() + depths.size() / 2, depths.end());
+        const float median_m = depths[depths.size() / 2];
+        for (std::size_t i = 0; i < depth.pixelCount(); ++i)
+            if (depth.host()[i] > median_m) depth.host()[i] += bias_m;
+        return {median_m, depths.size()};
+    }
     // A new tracker with settings `s` on the step; the state it ends in.
     TrackingState track(const TrackerSettings& s) const {
         auto tracker = makeTracker(s, Device::CPU);
@@ -213,15 +231,9 @@ TEST(DepthTrackerRobustnessTest, APatchTheModelLacksPullsOnlyTheNonRobustTracker
 // Measured: 8.3 mm every depth, 0.19 mm limited.
 TEST(DepthTrackerRobustnessTest, DepthsBeyondTheTrackingLimitDoNotPullThePose) {
     RoomStep step;
-    Image<float>& depth = step.second.depth;
-    std::vector<float> depths;
-    for (std::size_t i = 0; i < depth.pixelCount(); ++i)
-        if (depth.host()[i] > 0.f) depths.push_back(depth.host()[i]);
-    ASSERT_GT(depths.size(), depth.pixelCount() / 2);
-    std::nth_element(depths.begin(), depths.begin() + depths.size() / 2, depths.end());
-    const float median_m = depths[depths.size() / 2];
-    for (std::size_t i = 0; i < depth.pixelCount(); ++i)
-        if (depth.host()[i] > median_m) depth.host()[i] += 0.006f;
+    const RoomStep::FarBias bias = step.biasFarDepths(0.006f);
+    ASSERT_GT(bias.depths, step.second.depth.pixelCount() / 2);
+    const float median_m = bias.median_m;
     float error_m[2] = {};
     for (int limited = 0; limited < 2; ++limited) {
         TrackerSettings s;
@@ -242,18 +254,9 @@ TEST(DepthTrackerRobustnessTest, DepthsBeyondTheTrackingLimitDoNotPullThePose) {
 // the true motion): ren 8.33 mm; automatic 7.61 mm bright, 7.65 dimmed to a quarter (integer grey
 // levels: not exactly the same images); fixed 8.10 and 8.31.
 TEST(DepthTrackerRobustnessTest, RgbdBalancesColourAgainstDepthWhateverTheImagesBrightness) {
-    auto biasFarDepths = [](Image<float>& depth) {
-        std::vector<float> depths;
-        for (std::size_t i = 0; i < depth.pixelCount(); ++i)
-            if (depth.host()[i] > 0.f) depths.push_back(depth.host()[i]);
-        std::nth_element(depths.begin(), depths.begin() + depths.size() / 2, depths.end());
-        const float median_m = depths[depths.size() / 2];
-        for (std::size_t i = 0; i < depth.pixelCount(); ++i)
-            if (depth.host()[i] > median_m) depth.host()[i] += 0.006f;
-    };
     RoomStep step, dim;
-    biasFarDepths(step.second.depth);
-    biasFarDepths(dim.second.depth);
+    step.biasFarDepths(0.006f);
+    dim.biasFarDepths(0.006f);
     for (Image<Vec4u8>* rgb : {&dim.first.rgb, &dim.second.rgb})
         for (std::size_t i = 0; i < rgb->pixelCount(); ++i) {
             Vec4u8& c = rgb->host()[i];

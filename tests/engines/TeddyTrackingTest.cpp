@@ -121,9 +121,8 @@ TEST(TeddyTrackingTest, StretchedStepsReachTheSamePosesInFewerIterations) {
 // the previous frame's colours (frame to frame, `color_from_map = false`) and 7.17 mm for ren (depth
 // alone); InfiniTAM v3's CPU build 6.61 mm on the same frames (DESIGN_NOTES).
 TEST(TeddyTrackingTest, DefaultPipelineAlignedToTheMapsColoursBeatsDepthAlone) {
-    const std::string dir = std::string(VOXFUSE_SHARED_DATA_DIR) + "/tum_fr3_teddy_200";
-    if (!std::filesystem::exists(dir + "/rgb.txt")) GTEST_SKIP() << "../shared/data not found at " << dir << ": skipping the teddy test";
-    auto source = openImageSource(dir);
+    if (!std::filesystem::exists(teddyDir() + "/rgb.txt")) GTEST_SKIP() << "../shared/data not found at " << teddyDir() << ": skipping the teddy test";
+    auto source = openImageSource(teddyDir());
     MainEngineSettings s;
     ASSERT_EQ(s.voxel_type, VoxelType::SRgb) << "the default map has colours";
     ASSERT_EQ(s.tracker.kind, TrackerKind::Rgbd);
