@@ -69,6 +69,32 @@ public:
         TDevice::parallelFor(size.x * size.y, body);
     }
 
+    void farFieldPoints(const Image<float>& far_depth, const Intrinsics& depth_camera, int step, const Mat4f& T_world_camera,
+                        const ColorFrameLevel& color, const Mat4f& T_rgb_world, Image<ColorPoint>& points, Image<float>& gradient_sq) override {
+        const Vec2i size{far_depth.width() / step, far_depth.height() / step};
+        const FarFieldPoints body{imageOn(kDevice, far_depth, far_depth_),
+                                  far_depth.size(),
+                                  step,
+                                  size.x,
+                                  depth_camera,
+                                  T_world_camera,
+                                  imageOn(kDevice, color.intensity, floats_),
+                                  imageOn(kDevice, color.gradient, gradients_),
+                                  color.intensity.size(),
+                                  T_rgb_world,
+                                  color.intrinsics,
+                                  outputOn(kDevice, points, size),
+                                  outputOn(kDevice, gradient_sq, size)};
+        TDevice::parallelFor(size.x * size.y, body);
+    }
+
+    void unhiddenFarFieldPoints(const Image<ColorPoint>& points, const Image<float>& depth, const Intrinsics& depth_camera,
+                                const Mat4f& T_camera_world, Image<ColorPoint>& unhidden) override {
+        const UnhiddenFarFieldPoints body{imageOn(kDevice, points, points_), imageOn(kDevice, depth, far_depth_), depth.size(), T_camera_world,
+                                          depth_camera, outputOn(kDevice, unhidden, points.size())};
+        TDevice::parallelFor(int(points.pixelCount()), body);
+    }
+
     NormalEquations<double> accumulate(const Image<ColorPoint>& points, const ColorFrameLevel& level, const ColorTermParams& params,
                                        RobustKernel kernel, float kernel_scale) override {
         const PhotometricTerms terms{imageOn(kDevice, points, points_), imageOn(kDevice, level.intensity, floats_),
@@ -88,6 +114,7 @@ private:
     MemoryBlock<Vec2f> gradients_;
     MemoryBlock<Vec4f> model_points_;
     MemoryBlock<ColorPoint> points_;
+    MemoryBlock<float> far_depth_;
 };
 
 }  // namespace voxfuse

@@ -55,6 +55,10 @@ bool findInvalidSetting(const TrackerSettings& s, std::vector<std::string>& keys
     if (s.color_point_step < 1 || s.color_point_step > 16) return fail({"color_point_step"}, "must be in 1..16");
     if (!(s.color_kernel_scale > 0.f)) return fail({"color_kernel_scale"}, "must be > 0");
     if (!(s.color_weight >= 0.f && std::isfinite(s.color_weight))) return fail({"color_weight"}, "must be >= 0");
+    if (s.far_field_keyframes < 0 || s.far_field_keyframes > 16) return fail({"far_field_keyframes"}, "must be in 0..16 (0: off)");
+    if (!(s.far_field_spacing_m >= 0.f && std::isfinite(s.far_field_spacing_m))) return fail({"far_field_spacing_m"}, "must be >= 0");
+    if (!(s.far_field_spacing_deg >= 0.f && std::isfinite(s.far_field_spacing_deg))) return fail({"far_field_spacing_deg"}, "must be >= 0");
+    if (!(s.far_field_point_share > 0.f && s.far_field_point_share <= 1.f)) return fail({"far_field_point_share"}, "must be in (0, 1]");
     for (auto [key, v] : {std::pair{"good_inlier_ratio", s.good_inlier_ratio}, {"failed_inlier_ratio", s.failed_inlier_ratio},
                           {"good_condition", s.good_condition}, {"failed_condition", s.failed_condition}})
         if (!(v >= 0.f && v <= 1.f)) return fail({key}, "must be in [0, 1]");
@@ -225,6 +229,10 @@ TrackerSettings parseTrackerSettingsText(const std::string& text, const std::str
              return {};
          }},
         {"color_from_map", setBool(s.color_from_map)},
+        {"far_field_keyframes", setInt(s.far_field_keyframes)},
+        {"far_field_spacing_m", setFloat(s.far_field_spacing_m)},
+        {"far_field_spacing_deg", setFloat(s.far_field_spacing_deg)},
+        {"far_field_point_share", setFloat(s.far_field_point_share)},
         {"good_inlier_ratio", setFloat(s.good_inlier_ratio)},
         {"failed_inlier_ratio", setFloat(s.failed_inlier_ratio)},
         {"good_condition", setFloat(s.good_condition)},

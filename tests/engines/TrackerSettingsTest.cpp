@@ -18,6 +18,7 @@ TEST(TrackerSettingsTest, DefaultsAreValidAndDocumented) {
     EXPECT_EQ(s.levels.size(), 3u);
     EXPECT_EQ(s.levels.back().motion, LevelMotion::Both);
     EXPECT_TRUE(s.color_weight_auto);
+    EXPECT_EQ(s.far_field_keyframes, 3) << "rgbd aligns to the far field too";
 }
 
 TEST(TrackerSettingsTest, ParsesEveryKindOfValue) {
@@ -36,6 +37,10 @@ TEST(TrackerSettingsTest, ParsesEveryKindOfValue) {
         "color_from_map = false\n"
         "poor_translation_constraint = 0\n"
         "max_tracking_depth_m = 2.5\n"
+        "far_field_keyframes = 0\n"
+        "far_field_spacing_m = 0.1\n"
+        "far_field_spacing_deg = 5\n"
+        "far_field_point_share = 1\n"
         "min_inliers = 50\n",
         "test.txt");
     EXPECT_EQ(s.kind, TrackerKind::Icp);
@@ -57,6 +62,10 @@ TEST(TrackerSettingsTest, ParsesEveryKindOfValue) {
     EXPECT_FALSE(s.color_from_map);
     EXPECT_EQ(s.poor_translation_constraint, 0.f);
     EXPECT_FLOAT_EQ(s.max_tracking_depth_m, 2.5f);
+    EXPECT_EQ(s.far_field_keyframes, 0);
+    EXPECT_FLOAT_EQ(s.far_field_spacing_m, 0.1f);
+    EXPECT_FLOAT_EQ(s.far_field_spacing_deg, 5.f);
+    EXPECT_FLOAT_EQ(s.far_field_point_share, 1.f);
     EXPECT_EQ(s.min_inliers, 50);
 }
 
@@ -97,6 +106,9 @@ TEST(TrackerSettingsTest, BadLinesNameFileLineAndReason) {
     expectParseError("good_inlier_ratio = 0.3\n\nfailed_inlier_ratio = 0.5\n", 3, "must not exceed");
     expectParseError("poor_translation_constraint = 0.34\n", 1, "must be in [0, 1/3)");
     expectParseError("max_tracking_depth_m = -1\n", 1, "must be >= 0");
+    expectParseError("far_field_keyframes = -1\n", 1, "must be in 0..16");
+    expectParseError("far_field_spacing_m = -0.1\n", 1, "must be >= 0");
+    expectParseError("far_field_point_share = 0\n", 1, "must be in (0, 1]");
     expectParseError("tracker = icp\n# later\ntracker = ren\n", 3, "'tracker' is set twice (first on line 1)");
 }
 

@@ -40,6 +40,16 @@ public:
     // coloured from `intensity`, an image taken by a colour camera `rgb` at T_rgb_world.
     virtual void colorModelPoints(const RenderState& model, int step, const Image<float>& intensity, const Intrinsics& rgb,
                                   const Mat4f& T_rgb_world, Image<ColorPoint>& points) = 0;
+    // The far-field points of every `step`-th pixel of `far_depth` (points and gradient_sq images of
+    // size far_depth / step; see shared farFieldPoint): a keyframe of depth camera `depth_camera` at
+    // T_world_camera, coloured by its colour pyramid's finest level `color` (camera at T_rgb_world).
+    virtual void farFieldPoints(const Image<float>& far_depth, const Intrinsics& depth_camera, int step, const Mat4f& T_world_camera,
+                                const ColorFrameLevel& color, const Mat4f& T_rgb_world, Image<ColorPoint>& points,
+                                Image<float>& gradient_sq) = 0;
+    // `points` as a frame with depths `depth` (within the map's range) at T_camera_world sees them: a
+    // point outside its view or behind a surface it measured loses its colour (unhiddenFarFieldPoint).
+    virtual void unhiddenFarFieldPoints(const Image<ColorPoint>& points, const Image<float>& depth, const Intrinsics& depth_camera,
+                                        const Mat4f& T_camera_world, Image<ColorPoint>& unhidden) = 0;
     // The photometric normal equations of every coloured point against `level`.
     virtual NormalEquations<double> accumulate(const Image<ColorPoint>& points, const ColorFrameLevel& level,
                                                const ColorTermParams& params, RobustKernel kernel, float kernel_scale) = 0;

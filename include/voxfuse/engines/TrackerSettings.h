@@ -112,6 +112,17 @@ struct TrackerSettings {
     // previous frame's (frame to frame) follows the drift, and needs no colour voxels or steady
     // exposure. Voxels without colour always fall back to the previous frame.
     bool color_from_map = true;
+    // rgbd: the far field (FarFieldKeyframes). The map holds no depth beyond its range (SceneParams::
+    // view_frustum_max_m), but a room's far walls pin the camera's rotation through their texture:
+    // every far_field_spacing_m of camera motion (or far_field_spacing_deg of turn) a well tracked
+    // frame's far depths, with its colours, become a keyframe, and the last far_field_keyframes
+    // keyframes' points join the photometric terms (with a colour term's weight each). A keyframe
+    // keeps the far_field_point_share of its points where its image is most textured. Teddy's last
+    // third sees the room beyond 3 m in 60% of its pixels: ATE 6.57 -> 5.5 mm. 0 keyframes: off.
+    int far_field_keyframes = 3;
+    float far_field_spacing_m = 0.05f;
+    float far_field_spacing_deg = 10.f;
+    float far_field_point_share = 1.f / 3.f;
 
     // Quality (see assessTrackingQuality): inlier ratio = inliers / valid pixels at full resolution;
     // condition = smallest / largest eigenvalue of the full-resolution normal matrix scaled to a unit
@@ -150,6 +161,7 @@ void validateTrackerSettings(const TrackerSettings& settings);
 //   max_normal_angle_deg, min_rotation_step_rad, min_translation_step_m, max_normal_edge_m, max_tracking_depth_m,
 //   predict_motion, extrapolate_steps and bilateral_filter (true/false/on/off/1/0), robust_kernel (none/huber/tukey), robust_scale_m,
 //   color_point_step, color_kernel, color_kernel_scale, color_weight (auto or a number), color_from_map (true/false),
+//   far_field_keyframes, far_field_spacing_m, far_field_spacing_deg, far_field_point_share,
 //   good_inlier_ratio, failed_inlier_ratio, good_condition, failed_condition, poor_translation_constraint, poor_residual_m,
 //   failed_color_residual, min_inliers, max_motion_m, max_motion_deg
 // Throws IoError when the file cannot be read and ParseError(file, line, reason) for an unknown key,

@@ -102,6 +102,44 @@ VF_HOST_DEVICE inline bool photometricTerm(const ColorPoint& point, const float*
     return true;
 }
 
+// A far-field point: the depth `depth_m` at pixel (x, y) of a keyframe's depth camera (a depth beyond
+// the map's range, which the map does not hold) placed in the world and coloured by the keyframe's
+// colour image (`intensity`, `gradient` of `size`, taken by `rgb` at T_rgb_world). Its squared
+// intensity gradient there goes to `gradient_sq` (the keyframe keeps its best textured points); -1
+// for a point without colour.
+VF_HOST_DEVICE inline ColorPoint farFieldPoint(float depth_m, int x, int y, const Intrinsics& depth_camera, const Mat4f& T_world_camera,
+                                               const float* intensity, const Vec2f* gradient, Vec2i size, const Mat4f& T_rgb_world,
+                                               const Intrinsics& rgb, float& gradient_sq) {
+    gradient_sq = -1.f;
+    ColorPoint c{Vec3f{0.f, 0.f, 0.f}, -1.f};
+    if (!(depth_m > 0.f)) return c;
+    const Vec3f p_world = transformPoint(T_world_camera, depth_camera.unproject(float(x), float(y), depth_m));
+    c = colorPointFromModel(Vec4f{p_world.x, p_world.y, p_world.z, 1.f}, intensity, size, T_rgb_world, rgb);
+    if (c.intensity < 0.f) return c;
+    const Vec2f px = rgb.project(transformPoint(T_rgb_world, p_world));
+    const Vec2f g = sampleBilinear(gradient, size.x, px.x, px.y);
+    gradient_sq = g.x * g.x + g.y * g.y;
+    return c;
+}
+
+// A far-field point as the current frame sees it: without colour (-1) where it falls outside the
+// depth image or where the frame measured depth within the map's range at its pixel, a surface in
+// front of it (`depth` holds only those).
+VF_HOST_DEVICE inline ColorPoint unhiddenFarFieldPoint(const ColorPoint& point, const float* depth, Vec2i size, const Mat4f& T_camera_world,
+                                                       const Intrinsics& depth_camera) {
+    ColorPoint c = point;
+    if (c.intensity < 0.f) return c;
+    const Vec3f p = transformPoint(T_camera_world, c.p_world);
+    bool seen = p.z > 0.f;
+    if (seen) {
+        const Vec2f px = depth_camera.project(p);
+        const int x = int(floorf(px.x + 0.5f)), y = int(floorf(px.y + 0.5f));
+        seen = x >= 0 && y >= 0 && x < size.x && y < size.y && !(depth[x + y * size.x] > 0.f);
+    }
+    if (!seen) c.intensity = -1.f;
+    return c;
+}
+
 // ---- Loop bodies of the device layers ----
 
 struct IntensityPixels {
@@ -140,6 +178,39 @@ struct ColorModelPoints {
         const int x = i % out_width, y = i / out_width;
         points[i] = colorPointFromModel(model_points[x * step + y * step * model_width], intensity, size, T_rgb_world, rgb);
     }
+};
+
+// Element i: the far-field point of pixel (x * step, y * step) of a keyframe's far depths, on the
+// (size / step) grid.
+struct FarFieldPoints {
+    const float* far_depth;
+    Vec2i depth_size;
+    int step;
+    int out_width;
+    Intrinsics depth_camera;
+    Mat4f T_world_camera;
+    const float* intensity;
+    const Vec2f* gradient;
+    Vec2i size;
+    Mat4f T_rgb_world;
+    Intrinsics rgb;
+    ColorPoint* points;
+    float* gradient_sq;
+    VF_HOST_DEVICE void operator()(int i) const {
+        const int x = (i % out_width) * step, y = (i / out_width) * step;
+        points[i] = farFieldPoint(far_depth[x + y * depth_size.x], x, y, depth_camera, T_world_camera, intensity, gradient, size, T_rgb_world,
+                                  rgb, gradient_sq[i]);
+    }
+};
+
+struct UnhiddenFarFieldPoints {
+    const ColorPoint* points;
+    const float* depth;
+    Vec2i size;
+    Mat4f T_camera_world;
+    Intrinsics depth_camera;
+    ColorPoint* out;
+    VF_HOST_DEVICE void operator()(int i) const { out[i] = unhiddenFarFieldPoint(points[i], depth, size, T_camera_world, depth_camera); }
 };
 
 // The terms for the launchers' sumNormalEquations: element i is point i.
