@@ -178,6 +178,8 @@ void writeSummaryJson(const std::string& path, const RunRecord& run) {
         settings["tracker_levels"] = levels;
         // It changes the poses without changing max_depth_m: a run must say which depths it tracked on.
         settings["max_tracking_depth_m"] = double(run.settings.tracker.max_tracking_depth_m);
+        // rgbd reads depths beyond max_depth_m too (its far field): 0 keyframes means it did not.
+        if (run.settings.tracker.kind == TrackerKind::Rgbd) settings["far_field_keyframes"] = run.settings.tracker.far_field_keyframes;
         settings["relocalisation"] = run.settings.relocalisation.enabled;
     }
     j["outputs"] = run.outputs;

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "FarFieldKeyframes.h"
 #include "PhotometricFrames.h"
 #include "MotionPredictor.h"
 #include "PoseUpdate.h"
@@ -30,6 +31,7 @@ public:
         if (settings.kind == TrackerKind::Rgbd) {
             color_kernels_ = makeColorTrackerKernels(device);
             photometric_ = std::make_unique<PhotometricFrames>(*color_kernels_);
+            if (settings.far_field_keyframes > 0) far_field_ = std::make_unique<FarFieldKeyframes>(*color_kernels_, settings, device);
         }
         pyramid_.resize(settings.levels.size());
         min_normal_cos_ = settings.max_normal_angle_deg >= 180.f ? -2.f : std::cos(settings.max_normal_angle_deg * float(EIGEN_PI) / 180.f);
@@ -41,8 +43,8 @@ public:
         const Timer prepare;
         const bool frame_ok = preparePyramid(view);
         const bool model_ok = hasTrackableSurface(model, *low_level_);
-        bool color_ok = photometric_ && photometric_->prepare(view, levelCount());
-        color_ok = color_ok && model_ok && photometric_->colorModel(model, settings_.color_point_step);
+        const bool color_prepared = photometric_ && photometric_->prepare(view, levelCount());
+        const bool color_ok = color_prepared && model_ok && photometric_->colorModel(model, settings_.color_point_step);
         stats_.prepare_ms = prepare.elapsedMs();
 
         if (frame_ok && !model_ok && !seen_model_) {
@@ -60,6 +62,13 @@ public:
         seen_model_ = seen_model_ || model_ok;
         if (state.quality == TrackingQuality::Failed) motion_.forget();
         else motion_.record(state.T_world_camera, view.clock());
+        if (far_field_) {
+            // Before rememberCurrent, which hands the colour pyramid's finest level on.
+            if (state.quality == TrackingQuality::Failed)
+                far_field_->forget();
+            else if (state.quality == TrackingQuality::Good && color_prepared)
+                far_field_->offer(view, state.T_world_camera, photometric_->level(0), photometric_->termParams(0, state.T_world_camera).T_rgb_depth);
+        }
         if (photometric_) {
             if (state.quality == TrackingQuality::Failed)
                 photometric_->forget();  // its pose is unknown: it must not colour the next model
@@ -76,6 +85,7 @@ public:
     void forgetLastPose() override {
         motion_.forget();
         if (photometric_) photometric_->forget();
+        if (far_field_) far_field_->forget();
     }
     const TrackerStats& lastStats() const override { return stats_; }
     const TrackerSettings& settings() const override { return settings_; }
@@ -113,7 +123,9 @@ private:
         Eigen::Matrix4d T = settings_.predict_motion ? motion_.predict(state.T_world_camera, view.clock()) : T_start;
         NormalEquations<double> finest = NormalEquations<double>::zero();
         bool robust = false;  // ren and rgbd: least squares has handed over to the kernel
-        for (int li = 0; li < levelCount(); ++li) finest = refineOnLevel(li, model, use_color, T, robust);
+        // Which far-field points the frame sees, judged once at the predicted pose.
+        const Image<ColorPoint>* far_points = use_color && far_field_ ? far_field_->unhiddenPoints(view, pose::toMat4f(T)) : nullptr;
+        for (int li = 0; li < levelCount(); ++li) finest = refineOnLevel(li, model, use_color, far_points, T, robust);
 
         // Quality from the last full-resolution system (evaluated just before the last, small, update).
         TrackingMeasures m;
@@ -133,7 +145,8 @@ private:
 
     // Gauss-Newton on settings level `li` (coarse to fine), updating T and `robust` (see below). Returns
     // the depth system of the last iteration.
-    NormalEquations<double> refineOnLevel(int li, const RenderState& model, bool use_color, Eigen::Matrix4d& T, bool& robust) {
+    NormalEquations<double> refineOnLevel(int li, const RenderState& model, bool use_color, const Image<ColorPoint>* far_points, Eigen::Matrix4d& T,
+                                          bool& robust) {
         const TrackerLevel& ls = settings_.levels[std::size_t(li)];
         const int pi = levelCount() - 1 - li;
         const DepthFrameLevel& level = pyramid_[std::size_t(pi)];
@@ -202,6 +215,12 @@ private:
                     // Per term: the colour points are fixed by the model while the depth pixels shrink 4x
                     // per level, so the colour sum is scaled to the depth term count.
                     system.add(color_eq, color_weight * depth_eq.count / color_eq.count);
+                    // The far field's terms count as the model's colour terms do, one for one: they
+                    // add constraints, not another colour term to share the weight with.
+                    if (far_points)
+                        system.add(color_kernels_->accumulate(*far_points, photometric_->level(pi), photometric_->termParams(pi, T_f),
+                                                              settings_.color_kernel, settings_.color_kernel_scale),
+                                   color_weight * depth_eq.count / color_eq.count);
                 }
             }
             pose::Vector6d x;
@@ -253,6 +272,7 @@ private:
     std::unique_ptr<DepthTrackerKernels> kernels_;
     std::unique_ptr<ColorTrackerKernels> color_kernels_;  // rgbd only
     std::unique_ptr<PhotometricFrames> photometric_;      // rgbd only
+    std::unique_ptr<FarFieldKeyframes> far_field_;        // rgbd with far_field_keyframes > 0
     std::vector<DepthFrameLevel> pyramid_;
     int valid_pixels_ = 0;
     float min_normal_cos_ = -2.f;

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <climits>
 #include <cmath>
+#include <limits>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -27,6 +28,8 @@
 
 namespace voxfuse {
 namespace {
+
+constexpr float kInfinity = std::numeric_limits<float>::infinity();
 
 // A pose given from outside must be a camera's (a rotation and a plausible position): a scaled or
 // sheared matrix would be fused as if it were one, into an empty or garbled map.
@@ -118,6 +121,9 @@ public:
         low_level_->convertDepthToMetres(frame.depth_raw, view_.calib.disparity, view_.calib.depth.fx,
                                          settings_.scene.view_frustum_min_m, settings_.scene.view_frustum_max_m,
                                          settings_.depth_gap_tolerance, view_.depth);
+        if (settings_.tracker.kind == TrackerKind::Rgbd && settings_.tracker.far_field_keyframes > 0)
+            low_level_->convertDepthToMetres(frame.depth_raw, view_.calib.disparity, view_.calib.depth.fx,
+                                             std::nextafter(settings_.scene.view_frustum_max_m, kInfinity), kInfinity, 0.f, view_.far_depth);
         copyColor(frame);
         copyLabels(frame);
         view_.frame_index = frame.index;

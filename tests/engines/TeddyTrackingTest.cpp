@@ -116,10 +116,12 @@ TEST(TeddyTrackingTest, StretchedStepsReachTheSamePosesInFewerIterations) {
 }
 
 // The pipeline as voxfuse runs it (5 mm s_rgb voxels) with the rgbd tracker, the default, whose colour
-// term aligns each frame to the map's fused colours (frame to model), weighted against depth by the
-// two residuals' noise: on teddy 6.57 mm ATE, against 6.70 mm with the fixed weight 1e-3, 7.05 mm with
-// the previous frame's colours (frame to frame, `color_from_map = false`) and 7.17 mm for ren (depth
-// alone); InfiniTAM v3's CPU build 6.61 mm on the same frames (DESIGN_NOTES).
+// term aligns each frame to the map's fused colours (frame to model) and to the far field's keyframes
+// (the room beyond the map's 3 m), weighted against depth by the two residuals' noise: on teddy
+// 5.39 mm ATE, against 6.57 mm without the far field (`far_field_keyframes = 0`), 6.70 mm with the
+// fixed weight 1e-3 too, 7.05 mm with the previous frame's colours (frame to frame,
+// `color_from_map = false`) and 7.17 mm for ren (depth alone); InfiniTAM v3's CPU build 6.61 mm on the
+// same frames (DESIGN_NOTES).
 TEST(TeddyTrackingTest, DefaultPipelineAlignedToTheMapsColoursBeatsDepthAlone) {
     if (!std::filesystem::exists(teddyDir() + "/rgb.txt")) GTEST_SKIP() << "../shared/data not found at " << teddyDir() << ": skipping the teddy test";
     auto source = openImageSource(teddyDir());
@@ -135,11 +137,11 @@ TEST(TeddyTrackingTest, DefaultPipelineAlignedToTheMapsColoursBeatsDepthAlone) {
         trajectory.push_back({frame.timestamp_s, r.T_world_camera});
     }
     const TrajectoryError e = evaluateTrajectory(trajectory, source->groundTruth());
-    std::printf("[ teddy    ] rgbd, map colours, 5 mm: ATE RMSE %.2f mm (max %.2f), RPE %.2f mm/s; %.2f mm at the best clock offset\n",
+    std::printf("[ teddy    ] rgbd, map colours and far field, 5 mm: ATE RMSE %.2f mm (max %.2f), RPE %.2f mm/s; %.2f mm at the best clock offset\n",
                 1000 * e.ate_rmse_m, 1000 * e.ate_max_m, 1000 * e.rpe_trans_m_per_s, 1000 * e.ate_rmse_at_best_offset_m);
     EXPECT_EQ(trajectory.size(), 193u);
-    EXPECT_LT(e.ate_rmse_m, 0.0066);
-    EXPECT_LT(e.rpe_trans_m_per_s, 0.0080);
+    EXPECT_LT(e.ate_rmse_m, 0.0058);
+    EXPECT_LT(e.rpe_trans_m_per_s, 0.0075);
 }
 
 }  // namespace
