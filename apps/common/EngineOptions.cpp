@@ -49,7 +49,7 @@ void addMapOptions(CLI::App& cli, EngineOptions& o) {
 void addTrackingOptions(CLI::App& cli, EngineOptions& o) {
     cli.add_option("--poses", o.poses, "track the camera, or take the source's ground truth")
         ->capture_default_str()->check(CLI::IsMember({"track", "groundtruth"}));
-    cli.add_option("--tracker", o.tracker, "icp | color | ren | rgbd (default: rgbd, robust ICP plus colour aligned to the map's colours; ren: the same without colour)")
+    cli.add_option("--tracker", o.tracker, "icp | color | ren | rgbd (default: rgbd, robust ICP plus colour aligned to the map's colours and, beyond --max-depth, to keyframes of the far depths; ren: the same without colour)")
         ->check(CLI::IsMember({"icp", "color", "ren", "rgbd"}));
     cli.add_option("--tracker-config", o.tracker_config, "tracker settings file ('key = value' lines)")->check(CLI::ExistingFile);
     cli.add_option("--tracker-levels", o.tracker_levels, "pyramid levels coarse to fine: r rotation, t translation, b both (e.g. rbb)")

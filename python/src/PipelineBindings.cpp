@@ -244,7 +244,7 @@ void bindPipeline(py::module_& m) {
         .def_readwrite("hash_excess", &PipelineSettings::hash_excess, "hash: entries of the excess list")
         .def_readwrite("volume_size", &PipelineSettings::volume_size, "dense: the box's size in voxels [x, y, z]")
         .def_readwrite("volume_offset", &PipelineSettings::volume_offset, "dense: the box's first voxel [x, y, z] (grid units)")
-        .def_readwrite("tracker", &PipelineSettings::tracker, "icp | color | ren | rgbd ('' = rgbd, robust ICP plus colour aligned to the map's colours)")
+        .def_readwrite("tracker", &PipelineSettings::tracker, "icp | color | ren | rgbd ('' = rgbd, robust ICP plus colour aligned to the map's colours and, beyond max_depth, to keyframes of the far depths)")
         .def_readwrite("tracker_config", &PipelineSettings::tracker_config, "a tracker settings file ('key = value' lines)")
         .def_readwrite("tracker_levels", &PipelineSettings::tracker_levels, "pyramid levels coarse to fine: r rotation, t translation, b both")
         .def_readwrite("tracker_iterations", &PipelineSettings::tracker_iterations, "iterations per level, coarse to fine")
