@@ -214,13 +214,14 @@ private:
                                            : double(settings_.color_weight);
                     // Per term: the colour points are fixed by the model while the depth pixels shrink 4x
                     // per level, so the colour sum is scaled to the depth term count.
-                    system.add(color_eq, color_weight * depth_eq.count / color_eq.count);
+                    const double per_color_term = color_weight * depth_eq.count / color_eq.count;
+                    system.add(color_eq, per_color_term);
                     // The far field's terms count as the model's colour terms do, one for one: they
                     // add constraints, not another colour term to share the weight with.
                     if (far_points)
                         system.add(color_kernels_->accumulate(*far_points, photometric_->level(pi), photometric_->termParams(pi, T_f),
                                                               settings_.color_kernel, settings_.color_kernel_scale),
-                                   color_weight * depth_eq.count / color_eq.count);
+                                   per_color_term);
                 }
             }
             pose::Vector6d x;

@@ -7,15 +7,11 @@
 #include "PoseUpdate.h"
 
 namespace voxfuse {
-namespace {
-// A keyframe takes every second pixel in x and y of the depth camera (a quarter of them), as the
-// model's colour points do (color_point_step 2).
-constexpr int kFarPointStep = 2;
-}  // namespace
 
 FarFieldKeyframes::FarFieldKeyframes(ColorTrackerKernels& kernels, const TrackerSettings& settings, Device device)
     : kernels_(kernels),
       keep_(settings.far_field_keyframes),
+      point_step_(settings.color_point_step),
       spacing_m_(settings.far_field_spacing_m),
       spacing_deg_(settings.far_field_spacing_deg),
       point_share_(settings.far_field_point_share),
@@ -34,7 +30,7 @@ void FarFieldKeyframes::offer(const View& view, const Mat4f& T_world_camera, con
         pose::motionBetween(pose::toEigenD(T_world_newest_), pose::toEigenD(T_world_camera), moved_m, turned_deg);
         if (moved_m < spacing_m_ && turned_deg < spacing_deg_) return;
     }
-    kernels_.farFieldPoints(view.far_depth, view.calib.depth, kFarPointStep, T_world_camera, color, T_rgb_depth * rigidInverse(T_world_camera),
+    kernels_.farFieldPoints(view.far_depth, view.calib.depth, point_step_, T_world_camera, color, T_rgb_depth * rigidInverse(T_world_camera),
                             candidates_, gradient_sq_);
     candidates_.memory().updateHost();
     gradient_sq_.memory().updateHost();

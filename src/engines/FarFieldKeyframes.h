@@ -44,6 +44,7 @@ private:
 
     ColorTrackerKernels& kernels_;
     int keep_;
+    int point_step_;  // a keyframe's points: every point_step_-th pixel in x and y, as the model's colour points
     float spacing_m_, spacing_deg_, point_share_;
     Device device_;
     std::deque<std::vector<ColorPoint>> keyframes_;  // newest first

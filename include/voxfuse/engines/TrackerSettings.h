@@ -32,17 +32,18 @@ struct TrackerLevel {
     int pixel_step = 1;           // ICP terms from every pixel_step-th row and column of the level
 };
 
-// Defaults measured on TUM fr3/teddy (193 frames, frame-to-model, 5 mm voxels; ATE RMSE): rgbd 6.57 mm,
+// Defaults measured on TUM fr3/teddy (193 frames, frame-to-model, 5 mm voxels; ATE RMSE): rgbd 5.39 mm,
 // ren 7.2 mm with 2.3 Gauss-Newton iterations on the finest level (8.4 mm and 9.4 iterations while
 // its kernel was on the finest level only). Much of what is left is a ~25 ms lag of the depth
 // timestamps behind the motion capture: the same trajectories scored against ground truth 25 ms
-// earlier give 5.16 and 5.4 mm. The normal test is what lets an 8 cm / 8 degree jump converge.
+// earlier give 4.07 and 5.4 mm. The normal test is what lets an 8 cm / 8 degree jump converge.
 struct TrackerSettings {
     // rgbd: ren's depth terms plus colour aligned to the map's fused colours. Where depth leaves a
     // motion weakly constrained (a corridor, a wall, a round object) the map's texture pins it: the
-    // synthetic corridor walk's ATE 23 mm against ren's 141; teddy 6.6 against 7.2, the kinfu sample
-    // 2.3 against 2.8. It tracks in about 1.8 times ren's time on the CPU. With a voxel type without
-    // colour it aligns to the previous frame's colours; without a colour image it is ren.
+    // synthetic corridor walk's ATE 14 mm against ren's 141; teddy 5.4 against 7.2 (with the far
+    // field below), the kinfu sample 2.3 against 2.8. It tracks in about twice ren's time on the CPU.
+    // With a voxel type without colour it aligns to the previous frame's colours; without a colour
+    // image it is ren.
     TrackerKind kind = TrackerKind::Rgbd;
     // Pyramid levels, COARSE TO FINE: with n levels, levels[i] works on images downsampled by
     // 2^(n-1-i) (the last level is full resolution). Settings file: levels, iterations, max_distance_m.
