@@ -15,6 +15,7 @@ namespace {
 
 TEST(CpuDeviceTest, ParallelForVisitsEveryElementOnce) { test::checkParallelForVisitsEveryElementOnce<CpuDevice>(); }
 TEST(CpuDeviceTest, AtomicsCombineExactly) { test::checkAtomicsCombineExactly<CpuDevice>(); }
+TEST(CpuDeviceTest, CompareAndSwapClaimsOncePerSlot) { test::checkCompareAndSwapClaimsOncePerSlot<CpuDevice>(); }
 TEST(CpuDeviceTest, ExclusiveScan) { test::checkExclusiveScan<CpuDevice>(); }
 TEST(CpuDeviceTest, SelectIndicesKeepsOrder) { test::checkSelectIndices<CpuDevice>(); }
 TEST(CpuDeviceTest, SortUnique) { test::checkSortUnique<CpuDevice>(); }

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <cstring>
 #include <random>
 #include <vector>
 
@@ -54,6 +55,17 @@ struct FloatMinMax {
         atomicMaxFloat(&min_max[1], values[i]);
     }
 };
+// Element i claims slot i % slots for itself where the slot is still empty; wins[i] says whether it did.
+struct ClaimEmptySlot {
+    std::uint64_t* slots;
+    int slot_count;
+    int* wins;
+    VF_HOST_DEVICE void operator()(int i) const {
+        constexpr std::uint64_t kEmpty = ~std::uint64_t(0);
+        const std::uint64_t mine = std::uint64_t(i) << 32 | 0x5a5aull;  // high bits used
+        wins[i] = atomicCasU64(&slots[i % slot_count], kEmpty, mine) == kEmpty ? 1 : 0;
+    }
+};
 struct IsMultipleOf {
     int k;
     VF_HOST_DEVICE bool operator()(int i) const { return i % k == 0; }
@@ -97,6 +109,54 @@ void checkAtomicsCombineExactly() {
         EXPECT_EQ(r[0], std::min(start[0], *std::min_element(values.begin(), values.end())));
         EXPECT_EQ(r[1], std::max(start[1], *std::max_element(values.begin(), values.end())));
     }
+
+    // Signed zeros: -0 orders below +0 on both devices, so both keep the same bits. The reference
+    // orders floats by the classic total-order key of their bits, independently of Atomics.h.
+    auto order_key = [](float f) {
+        std::uint32_t bits;
+        std::memcpy(&bits, &f, sizeof bits);
+        return (bits >> 31) ? ~bits : bits | 0x80000000u;
+    };
+    auto bits_of = [](float f) {
+        std::uint32_t bits;
+        std::memcpy(&bits, &f, sizeof bits);
+        return bits;
+    };
+    const std::vector<std::vector<float>> value_sets = {{-0.f}, {0.f}, {-0.f, 0.f}, {0.f, -0.f, 0.f}, {-1.f, -0.f}, {1.f, -0.f}, {-0.f, 2.f, 0.f}};
+    for (float start : {0.f, -0.f, -1.f, 1.f, 1e30f, -1e30f}) {
+        for (const std::vector<float>& set : value_sets) {
+            float expected_min = start, expected_max = start;
+            for (float v : set) {
+                if (order_key(v) < order_key(expected_min)) expected_min = v;
+                if (order_key(v) > order_key(expected_max)) expected_max = v;
+            }
+            MemoryBlock<float> in = blockOn(where, set), min_max = blockOn(where, std::vector<float>{start, start});
+            TDevice::parallelFor(int(set.size()), FloatMinMax{in.data(where), min_max.data(where)});
+            const std::vector<float> r = valuesOf(where, min_max, 2);
+            EXPECT_EQ(bits_of(r[0]), bits_of(expected_min)) << "min from " << start << " over " << set.size() << " values, first " << set[0];
+            EXPECT_EQ(bits_of(r[1]), bits_of(expected_max)) << "max from " << start << " over " << set.size() << " values, first " << set[0];
+        }
+    }
+}
+
+// One claim per slot wins, and the slot holds the winner's value.
+template <class TDevice>
+void checkCompareAndSwapClaimsOncePerSlot() {
+    constexpr Device where = TDevice::kind;
+    const int n = 100000, slot_count = 211;
+    MemoryBlock<std::uint64_t> slots = blockOn(where, std::vector<std::uint64_t>(slot_count, ~std::uint64_t(0)));
+    MemoryBlock<int> wins = blockOn(where, std::vector<int>(n, -1));
+    TDevice::parallelFor(n, ClaimEmptySlot{slots.data(where), slot_count, wins.data(where)});
+    const std::vector<std::uint64_t> s = valuesOf(where, slots, slot_count);
+    const std::vector<int> w = valuesOf(where, wins, n);
+    std::vector<int> winners(slot_count, 0);
+    for (int i = 0; i < n; ++i) {
+        ASSERT_TRUE(w[std::size_t(i)] == 0 || w[std::size_t(i)] == 1);
+        if (!w[std::size_t(i)]) continue;
+        ++winners[std::size_t(i % slot_count)];
+        EXPECT_EQ(s[std::size_t(i % slot_count)], std::uint64_t(i) << 32 | 0x5a5aull) << "the slot holds its winner";
+    }
+    for (int k = 0; k < slot_count; ++k) ASSERT_EQ(winners[std::size_t(k)], 1) << "slot " << k;
 }
 
 template <class TDevice>

@@ -24,6 +24,7 @@ protected:
 
 TEST_F(CudaDeviceTest, ParallelForVisitsEveryElementOnce) { test::checkParallelForVisitsEveryElementOnce<CudaDevice>(); }
 TEST_F(CudaDeviceTest, AtomicsCombineExactly) { test::checkAtomicsCombineExactly<CudaDevice>(); }
+TEST_F(CudaDeviceTest, CompareAndSwapClaimsOncePerSlot) { test::checkCompareAndSwapClaimsOncePerSlot<CudaDevice>(); }
 TEST_F(CudaDeviceTest, ExclusiveScan) { test::checkExclusiveScan<CudaDevice>(); }
 TEST_F(CudaDeviceTest, SelectIndicesKeepsOrder) { test::checkSelectIndices<CudaDevice>(); }
 TEST_F(CudaDeviceTest, SortUnique) { test::checkSortUnique<CudaDevice>(); }
