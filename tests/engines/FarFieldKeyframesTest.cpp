@@ -69,6 +69,13 @@ TEST(FarFieldPointTest, AFrameSeesAPointOnlyWhereItMeasuredNothingNearer) {
     EXPECT_LT(unhiddenFarFieldPoint(behind, depth.data(), {kW, kH}, T_camera_world, cam).intensity, 0.f);
     EXPECT_LT(unhiddenFarFieldPoint(outside, depth.data(), {kW, kH}, T_camera_world, cam).intensity, 0.f);
     EXPECT_LT(unhiddenFarFieldPoint(uncoloured, depth.data(), {kW, kH}, T_camera_world, cam).intensity, 0.f);
+    // Just in front of the camera's plane a point projects some 1e31 pixels out, beyond any int: unseen,
+    // and judged without converting that coordinate (undefined behaviour, which UBSan reports).
+    // (At the identity pose, so that the depth stays exactly 1e-30 m.)
+    for (float side : {1.f, -1.f}) {
+        const ColorPoint grazing{Vec3f{side, side, 1e-30f}, 0.5f};
+        EXPECT_LT(unhiddenFarFieldPoint(grazing, depth.data(), {kW, kH}, Mat4f::identity(), cam).intensity, 0.f) << side;
+    }
 }
 
 class FarFieldKeyframesTest : public ::testing::TestWithParam<Device> {

@@ -18,7 +18,9 @@ struct Intrinsics {
     // Index (x + y * width) of the pixel nearest to pixel coordinates `px`, or -1 outside the image
     // (NaN included). Branch-free (& rather than &&, selects rather than an early return), so that
     // loops over voxels or pixels that look pixels up vectorise; the casts see in-range values only.
-    VF_HOST_DEVICE int nearestPixelIndex(Vec2f px) const {
+    VF_HOST_DEVICE int nearestPixelIndex(Vec2f px) const { return nearestPixelIndexIn(px, width, height); }
+    // The same for an image of width x height pixels.
+    VF_HOST_DEVICE static int nearestPixelIndexIn(Vec2f px, int width, int height) {
         const bool inside = (px.x >= -0.5f) & (px.y >= -0.5f) & (px.x < float(width) - 0.5f) & (px.y < float(height) - 0.5f);
         const int u = int((inside ? px.x : 0.f) + 0.5f), v = int((inside ? px.y : 0.f) + 0.5f);
         return inside & (u < width) & (v < height) ? u + v * width : -1;

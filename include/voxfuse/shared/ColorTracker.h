@@ -132,9 +132,11 @@ VF_HOST_DEVICE inline ColorPoint unhiddenFarFieldPoint(const ColorPoint& point, 
     const Vec3f p = transformPoint(T_camera_world, c.p_world);
     bool seen = p.z > 0.f;
     if (seen) {
-        const Vec2f px = depth_camera.project(p);
-        const int x = int(floorf(px.x + 0.5f)), y = int(floorf(px.y + 0.5f));
-        seen = x >= 0 && y >= 0 && x < size.x && y < size.y && !(depth[x + y * size.x] > 0.f);
+        // Bounds are tested on the float pixel coordinates, before any conversion: a point just in
+        // front of the camera projects far outside any int's range (a conversion that is undefined
+        // behaviour, and that x86 and CUDA answer differently).
+        const int i = Intrinsics::nearestPixelIndexIn(depth_camera.project(p), size.x, size.y);
+        seen = i >= 0 && !(depth[i] > 0.f);
     }
     if (!seen) c.intensity = -1.f;
     return c;
