@@ -63,7 +63,12 @@ private:
         const int count = TDevice::selectIndices(hash.entryCount(), meshing::EntryHasVoxelBlock{view.entries}, entry_ids_.data(kDevice), scratch_);
         grow(codes_, std::size_t(count));
         TDevice::parallelFor(count, meshing::MortonCodeOfEntry{view.entries, entry_ids_.data(kDevice), codes_.data(kDevice)});
-        TDevice::sortUnique(codes_.data(kDevice), count, scratch_);  // codes are unique, as blocks are
+        // A hash holds each block once, so every code is distinct; a repeat means a damaged table, whose
+        // surface would come out twice (and the lists below would be read past what sortUnique kept).
+        const int distinct = TDevice::sortUnique(codes_.data(kDevice), count, scratch_);
+        if (distinct != count)
+            throw Error("meshing: the hash table holds " + std::to_string(count - distinct) + " of its " + std::to_string(count) +
+                        " blocks more than once (a damaged table)");
         grow(positions_, std::size_t(count));
         grow(ptrs_, std::size_t(count));
         // Only blocks in the list are ever looked up: the entries of other voxel blocks need no value.

@@ -11,12 +11,14 @@
 #include <functional>
 #include <map>
 #include <set>
+#include <string>
 #include <tuple>
 #include <utility>
 #include <vector>
 
 #include "SyntheticViews.h"
 #include "voxfuse/core/CpuThreads.h"
+#include "voxfuse/core/Error.h"
 #include "voxfuse/engines/AllocationEngine.h"
 #include "voxfuse/engines/IntegrationEngine.h"
 #include "voxfuse/engines/MeshingEngine.h"
@@ -698,6 +700,28 @@ TEST(MeshingEngine, ResultDoesNotDependOnTheThreadCount) {
         ASSERT_EQ(one.labels[i], many.labels[i]);
     }
     for (std::size_t i = 0; i < one.triangles.size(); ++i) ASSERT_EQ(one.triangles[i], many.triangles[i]);
+}
+
+// A table that holds a block twice (damaged: by a bad map file or a bug) is refused, not meshed twice
+// over lists that end early.
+TEST(MeshingEngine, ATableHoldingABlockTwiceIsRefused) {
+    Scene<VoxelS, VoxelBlockHash> scene(testParams(), VoxelBlockHash(smallHash()), Device::CPU);
+    fillHash(scene, Vec3i{-30, -30, -30}, Vec3i{30, 30, 30}, sphereSdf);
+    Mesh mesh;
+    makeMeshingEngine<VoxelS, VoxelBlockHash>(Device::CPU)->extractMesh(scene, mesh);
+    ASSERT_GT(mesh.triangles.size(), 1000u);
+    HashEntry* entries = scene.index().state().entries;
+    int first = -1, second = -1;
+    for (int i = 0; i < scene.index().entryCount() && second < 0; ++i)
+        if (entries[i].ptr >= 0) (first < 0 ? first : second) = i;
+    ASSERT_GE(second, 0);
+    entries[second].pos = entries[first].pos;
+    try {
+        makeMeshingEngine<VoxelS, VoxelBlockHash>(Device::CPU)->extractMesh(scene, mesh);
+        FAIL() << "meshed a table that holds a block twice";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("1 of its"), std::string::npos) << e.what();
+    }
 }
 
 TEST(MeshingEngine, EmptySceneGivesAnEmptyMesh) {
