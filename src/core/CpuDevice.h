@@ -23,8 +23,10 @@
 #include <algorithm>
 #include <atomic>
 #include <cstdint>
+#include <cstring>
 #include <memory>
 #include <mutex>
+#include <type_traits>
 #include <vector>
 
 #include "core/DeviceScratch.h"
@@ -39,8 +41,7 @@ namespace voxfuse {
 // Element loops are compiled twice, for the x86-64 baseline and for AVX2, and the loader picks the one
 // the CPU runs (GCC function multiversioning); `flatten` inlines the loop body and all it calls into
 // each. AVX2 without FMA: a fused multiply-add rounds once where the baseline and the CUDA layer
-// (-fmad=false) round twice, so every result keeps its bits on every CPU. Measured on teddy against
-// the baseline alone: raycast 0.90, allocate 0.95, integrate 0.98.
+// (-fmad=false) round twice, so every result keeps its bits on every CPU.
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
 #define VF_CPU_CLONES __attribute__((target_clones("avx2", "default"), flatten))
 #else
@@ -114,6 +115,24 @@ VF_CPU_CLONES NormalEquations<double> sumTermShare(const Terms& terms, RobustKer
     return sums;
 }
 
+// A team's shared memory as the GPU hands it out: uninitialised. Filled with a byte pattern that no
+// loop body reads as a meaningful value (ints about -8.4e8, floats about -4.3e8), so that a body
+// reading shared memory it has not written gives wrong results on the CPU too, not zeros that happen
+// to pass.
+constexpr unsigned char kUnwrittenSharedByte = 0xCD;
+template <class Shared>
+void poisonShared(Shared& shared) {
+    std::memset(static_cast<void*>(&shared), kUnwrittenSharedByte, sizeof(Shared));
+}
+template <class Shared>
+std::unique_ptr<Shared> uninitialisedShared() {
+    static_assert(std::is_trivially_default_constructible<Shared>::value && std::is_trivially_copyable<Shared>::value,
+                  "team shared memory holds plain data, constructed by no one (as on the GPU)");
+    std::unique_ptr<Shared> shared(new Shared);  // default-initialised: not zeroed
+    poisonShared(*shared);
+    return shared;
+}
+
 }  // namespace cpu_detail
 
 struct CpuDevice {
@@ -134,7 +153,8 @@ struct CpuDevice {
     }
 
     // A team is one thread; its shared memory is allocated once per task (one task per thread) and
-    // reused for every item the task claims.
+    // reused for every item the task claims. It starts poisoned (uninitialisedShared), as the GPU's
+    // starts undefined; the GPU-shaped test launcher poisons it before every item.
     template <class Shared, class Body>
     static void parallelForTeams(int n, const Body& body) {
         if (n <= 0) return;
@@ -142,7 +162,7 @@ struct CpuDevice {
         const int chunk = std::max(1, n / (32 * threads));
         std::atomic<int> next{0};
         forEachCpuTask(std::min(threads, (n + chunk - 1) / chunk), [&](int) {
-            const auto shared = std::make_unique<Shared>();
+            const std::unique_ptr<Shared> shared = cpu_detail::uninitialisedShared<Shared>();
             for (int begin = next.fetch_add(chunk); begin < n; begin = next.fetch_add(chunk))
                 for (int i = begin; i < std::min(n, begin + chunk); ++i) body(Team{0, 1}, i, *shared);
         });

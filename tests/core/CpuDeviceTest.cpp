@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <random>
 #include <vector>
 
@@ -41,6 +42,35 @@ TEST(CpuDeviceTest, NormalEquationsDoNotDependOnTheThreadCount) {
     }
 }
 TEST(CpuDeviceTest, ReadAndWriteOneElement) { test::checkReadAndWrite<CpuDevice>(); }
+
+// A team's shared memory starts unwritten (poisoned), as on the GPU, never zeroed: an item reads the
+// poison, or what an earlier item of the same task left, and nothing else.
+struct TeamScratch {
+    int values[64];
+    float weights[8];
+};
+struct RecordWhatTheTeamFinds {
+    int* found;
+    void operator()(Team team, int item, TeamScratch& shared) const {
+        if (team.rank == 0) found[item] = shared.values[63];
+        shared.values[63] = 1000 + item;
+    }
+};
+TEST(CpuDeviceTest, TeamSharedMemoryStartsPoisoned) {
+    int poison;
+    std::memset(&poison, cpu_detail::kUnwrittenSharedByte, sizeof poison);
+    ASSERT_NE(poison, 0);
+    const int n = 5000;
+    std::vector<int> found(n, 0);
+    CpuDevice::parallelForTeams<TeamScratch>(n, RecordWhatTheTeamFinds{found.data()});
+    int poisoned = 0;
+    for (int i = 0; i < n; ++i) {
+        const int f = found[std::size_t(i)];
+        poisoned += f == poison;
+        ASSERT_TRUE(f == poison || (f >= 1000 && f < 1000 + n)) << "item " << i << " found " << f;
+    }
+    EXPECT_GE(poisoned, 1) << "every task's first item finds the poison";
+}
 
 }  // namespace
 }  // namespace voxfuse

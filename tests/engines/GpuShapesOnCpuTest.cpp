@@ -30,12 +30,15 @@ struct CpuDeviceWithGpuShapes : CpuDevice {
     static constexpr bool kOneThreadPerItem = true;
 
     // Teams of five threads (an odd size, so that the loops' strides end unevenly), one item at a time:
-    // every thread runs the body, splits the work by its rank and waits at each team.sync().
+    // every thread runs the body, splits the work by its rank and waits at each team.sync(). Shared
+    // memory is poisoned before every item: a body that reads what no thread of its team wrote for
+    // this item fails here as it would on the GPU.
     static constexpr int kThreadsPerTeam = 5;
     template <class Shared, class Body>
     static void parallelForTeams(int n, const Body& body) {
-        const auto shared = std::make_unique<Shared>();
+        const std::unique_ptr<Shared> shared = cpu_detail::uninitialisedShared<Shared>();
         for (int i = 0; i < n; ++i) {
+            cpu_detail::poisonShared(*shared);
 #pragma omp parallel num_threads(kThreadsPerTeam)
             body(Team{omp_get_thread_num(), omp_get_num_threads()}, i, *shared);
         }
