@@ -6,6 +6,7 @@
 #include <unordered_map>
 
 #include "core/CudaCheck.h"
+#include "core/EnvironmentSwitch.h"
 #include "voxfuse/core/DeviceMemory.h"
 
 namespace voxfuse {
@@ -36,6 +37,13 @@ AllocationLedger& ledger() {
 }
 
 }  // namespace
+
+namespace cuda {
+bool syncAfterEveryLaunch() {
+    static const bool on = switchFromEnvironment("VOXFUSE_CUDA_SYNC");
+    return on;
+}
+}  // namespace cuda
 
 const char* deviceName(Device d) { return d == Device::CPU ? "cpu" : "cuda"; }
 

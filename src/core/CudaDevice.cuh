@@ -92,7 +92,7 @@ struct CudaDevice {
     static void parallelFor(int n, const Body& body) {
         if (n <= 0) return;
         cuda_detail::parallelForKernel<<<unsigned((n + kThreadsPerBlock - 1) / kThreadsPerBlock), kThreadsPerBlock>>>(n, body);
-        VF_CUDA_CHECK_LAUNCH();
+        VF_CUDA_CHECK_LAUNCH_OF(Body);
     }
 
     // Teams of kThreadsPerTeam threads: enough to hide memory latency while a block of shared memory of
@@ -104,7 +104,7 @@ struct CudaDevice {
         static_assert(sizeof(Shared) <= 48 * 1024, "a team's shared memory must fit the static 48 KB");
         if (n <= 0) return;
         cuda_detail::parallelForTeamsKernel<Shared><<<unsigned(n), kThreadsPerTeam>>>(body);
-        VF_CUDA_CHECK_LAUNCH();
+        VF_CUDA_CHECK_LAUNCH_OF(Body);
     }
 
     template <class T>
@@ -182,7 +182,7 @@ struct CudaDevice {
         auto* partials = static_cast<NormalEquations<double>*>(scratch.get(sizeof(NormalEquations<double>) * kNormalEquationBlocks));
         cuda_detail::sumNormalEquationsKernel<<<kNormalEquationBlocks, cuda_detail::kNormalEquationThreads>>>(n, terms, kernel, kernel_scale,
                                                                                                               partials);
-        VF_CUDA_CHECK_LAUNCH();
+        VF_CUDA_CHECK_LAUNCH_OF(Terms);
         auto* host = static_cast<NormalEquations<double>*>(scratch.hostResult(sizeof(NormalEquations<double>) * kNormalEquationBlocks));
         VF_CUDA_CHECK(cudaMemcpy(host, partials, sizeof(NormalEquations<double>) * kNormalEquationBlocks, cudaMemcpyDeviceToHost));
         NormalEquations<double> total = NormalEquations<double>::zero();

@@ -5,10 +5,12 @@
 
 #include <cstring>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "DevicePrimitiveChecks.h"
 #include "core/CpuDevice.h"
+#include "core/EnvironmentSwitch.h"
 #include "voxfuse/core/CpuThreads.h"
 
 namespace voxfuse {
@@ -70,6 +72,21 @@ TEST(CpuDeviceTest, TeamSharedMemoryStartsPoisoned) {
         ASSERT_TRUE(f == poison || (f >= 1000 && f < 1000 + n)) << "item " << i << " found " << f;
     }
     EXPECT_GE(poisoned, 1) << "every task's first item finds the poison";
+}
+
+TEST(EnvironmentSwitchTest, OnlyZeroAndOneAreValues) {
+    std::string reported;
+    auto report = [&](const std::string& m) { reported = m; };
+    EXPECT_FALSE(switchFromText("VOXFUSE_CUDA_SYNC", nullptr, report));
+    EXPECT_FALSE(switchFromText("VOXFUSE_CUDA_SYNC", "", report));
+    EXPECT_FALSE(switchFromText("VOXFUSE_CUDA_SYNC", "0", report));
+    EXPECT_TRUE(switchFromText("VOXFUSE_CUDA_SYNC", "1", report));
+    EXPECT_TRUE(reported.empty());
+    for (const char* garbage : {"yes", "2", "1 ", "\xff", "on"}) {
+        reported.clear();
+        EXPECT_FALSE(switchFromText("VOXFUSE_CUDA_SYNC", garbage, report)) << garbage;
+        EXPECT_NE(reported.find("VOXFUSE_CUDA_SYNC=\"" + std::string(garbage) + "\""), std::string::npos) << reported;
+    }
 }
 
 }  // namespace
