@@ -3,8 +3,8 @@
 // on the device type (CpuDevice or CudaDevice), instantiated by src/cpu/AllocationEngine_CPU.cpp and
 // cuda/AllocationEngine_CUDA.cu. Each stage is a launch of a loop body from shared/Allocation.h or
 // shared/HashUpdate.h, or a primitive of the device (scan, selection, sort). Only the shape of
-// stage 1 differs between the devices: the CPU runs a row per element with a cache of the blocks
-// already handled, the GPU a pixel per thread.
+// stage 1 differs between the devices: the CPU runs a tile per element with a cache of the blocks
+// already handled, the GPU a tile per team of threads that share the set of blocks handled.
 
 #include <algorithm>
 #include <climits>
@@ -41,6 +41,7 @@ public:
         AllocationStats& stats = hash.stats();
         stats.blocks_allocated_this_frame = 0;
         stats.allocation_failures_this_frame = stats.failures_hash_full_this_frame = stats.failures_blocks_full_this_frame = 0;
+        stats.missing_block_appends_this_frame = stats.stage1_passes_this_frame = 0;
 
         DepthSegmentFrame frame = makeDepthSegmentFrame(scene.params(), view, T_world_camera);
         frame.depth = imageOn(kDevice, view.depth, depth_staging_);
@@ -48,7 +49,7 @@ public:
         // One pass, unless the list of missing blocks overflowed its bound: then the blocks it held go
         // in, and the pass repeats for the rest while that makes progress.
         for (;;) {
-            const int appended = markBlocks(hash, frame);
+            const int appended = markBlocks(hash, frame, stats);
             const int stored = std::min(appended, int(missing_.size()));
             int distinct = TDevice::sortUnique(on(missing_), stored, scratch_);
             if (distinct > 0 && TDevice::read(on(missing_) + distinct - 1, scratch_) == kOutOfRangeBlockKey) {
@@ -114,7 +115,7 @@ private:
     // Stage 1. Returns the appends attempted; the missing list holds the first min(that, its size).
     // The list starts at two blocks per depth pixel and grows to eight when a frame needs more (the
     // pass is then repeated: it only marks and lists).
-    int markBlocks(VoxelBlockHash& hash, const DepthSegmentFrame& frame) {
+    int markBlocks(VoxelBlockHash& hash, const DepthSegmentFrame& frame, AllocationStats& stats) {
         const int pixels = frame.intrinsics.width * frame.intrinsics.height;
         const int bound = 8 * pixels;
         grow(missing_, std::size_t(2) * std::size_t(pixels));
@@ -128,10 +129,14 @@ private:
                                                     Vec2i{32, 32}};
                 TDevice::parallelFor(mark.elementCount(), mark);
             } else {
-                const MarkBlocksForPixels<1> mark{frame, table, visibility, on(missing_), on(missing_count_), int(missing_.size()), Vec2i{1, 1}};
-                TDevice::parallelFor(mark.elementCount(), mark);
+                const MarkBlocksForPixelTeams mark{frame, {table, visibility, on(missing_), on(missing_count_), int(missing_.size()), kMaxCountedAppends}};
+                TDevice::template parallelForTeams<TileBlockSet>(mark.itemCount(), mark);
             }
             const int appended = TDevice::read(on(missing_count_), scratch_);
+            ++stats.stage1_passes_this_frame;
+            stats.missing_block_appends_this_frame = appended > INT_MAX - stats.missing_block_appends_this_frame
+                                                         ? INT_MAX
+                                                         : stats.missing_block_appends_this_frame + appended;
             if (appended <= int(missing_.size()) || int(missing_.size()) >= bound) return appended;
             missing_.allocate(std::size_t(std::min<long long>(bound, appended + appended / 4ll)), kDevice == Device::CPU, kDevice == Device::CUDA);
         }

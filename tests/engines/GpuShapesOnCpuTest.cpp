@@ -9,6 +9,7 @@
 
 #include <omp.h>
 
+#include <cstdio>
 #include <cstring>
 #include <memory>
 
@@ -103,6 +104,43 @@ void expectSameRaycast(const RenderState& a, const RenderState& b) {
     int hits = 0;
     for (std::size_t i = 0; i < a.points_world.pixelCount(); ++i) hits += a.points_world.host()[i].w > 0.f;
     EXPECT_GT(hits, 3000);
+}
+
+// Stage 1 at the GPU's shape on a full 640 x 480 frame at 5 mm: each team appends a block once per
+// tile, so the list's first size holds the frame in one pass, and the table is the CPU layer's entry
+// for entry. A pixel per thread without the team's set appended more keys than that size.
+TEST(GpuShapesOnCpuAllocationTest, TeamsAppendEachBlockOncePerTileAndBuildTheCpuTable) {
+    static const synth::SyntheticScene room = synth::SyntheticScene::defaultRoom();
+    SceneParams params = test::centimetreSceneParams(4.f);
+    params.voxel_size_m = 0.005f;
+    params.mu_m = 0.02f;
+    const Intrinsics intr = test::kinectIntrinsics(640, 480);
+    Scene<VoxelS, VoxelBlockHash> wide(params, VoxelBlockHash(), Device::CPU), narrow(params, VoxelBlockHash(), Device::CPU);
+    auto wide_allocation = makeAllocationEngineOn<CpuDevice, VoxelS, VoxelBlockHash>();
+    auto narrow_allocation = makeAllocationEngineOn<CpuDeviceWithGpuShapes, VoxelS, VoxelBlockHash>();
+    const Mat4f poses[2] = {test::lookAt({0.3f, -0.4f, 1.4f}, {0.f, 1.5f, 0.8f}), test::lookAt({0.4f, -0.3f, 1.45f}, {0.2f, 1.5f, 0.7f})};
+    for (const Mat4f& pose : poses) {
+        const View view = test::renderView(room, intr, pose, false);
+        // The shape the GPU ran before: a pixel per thread with a one-block cache, counted without storing.
+        int per_pixel_appends = 0;
+        const MarkBlocksForPixels<1> per_pixel{makeDepthSegmentFrame(params, view, pose), narrow.index().data(), narrow.index().state().entry_visibility,
+                                               nullptr, &per_pixel_appends, 0, Vec2i{1, 1}};
+        CpuDevice::parallelFor(per_pixel.elementCount(), per_pixel);
+        const AllocationStats a = wide_allocation->allocate(wide, view, pose), b = narrow_allocation->allocate(narrow, view, pose);
+        EXPECT_LT(10 * b.missing_block_appends_this_frame, per_pixel_appends) << "the team's set saves most appends";
+        EXPECT_GT(a.blocks_allocated, 2000);
+        EXPECT_EQ(a.blocks_allocated_this_frame, b.blocks_allocated_this_frame);
+        EXPECT_EQ(a.allocation_failures_this_frame, 0);
+        EXPECT_EQ(b.allocation_failures_this_frame, 0);
+        EXPECT_EQ(b.stage1_passes_this_frame, 1) << b.missing_block_appends_this_frame << " appends";
+        // Tiles of 16 x 16 pixels against the CPU's 32 x 32: about four times the repeats at most.
+        EXPECT_LE(b.missing_block_appends_this_frame, 4 * a.missing_block_appends_this_frame + 100);
+        EXPECT_GE(b.missing_block_appends_this_frame, b.blocks_allocated_this_frame);
+        std::printf("stage 1 appends: CPU shape %d, GPU shape %d, a pixel per thread %d; blocks allocated %d (of %d)\n",
+                    a.missing_block_appends_this_frame, b.missing_block_appends_this_frame, per_pixel_appends, b.blocks_allocated_this_frame,
+                    b.blocks_allocated);
+    }
+    ASSERT_EQ(test::firstDifferentEntry(wide.index(), narrow.index()), -1) << "tables differ";
 }
 
 TYPED_TEST(GpuShapesOnCpuTest, HashPipelineGivesTheSameTableVoxelsRaysAndRenders) {

@@ -17,6 +17,12 @@ struct AllocationStats {
     int failures_blocks_full_this_frame = 0;  // ... of which: the voxel block array was at its maximum
     // The rest (failures minus the two above) lay outside the block coordinates an entry can store (int16).
 
+    // Stage 1's work in the last allocation: keys appended to the missing list (a block more than once
+    // where several tiles of pixels need it), and passes over the depth (more than one when the list
+    // had to grow, or overflowed its bound). The same distinct blocks on both devices, whatever these say.
+    int missing_block_appends_this_frame = 0;
+    int stage1_passes_this_frame = 0;
+
     long long allocation_failures_total = 0;
     long long blocks_removed_total = 0;
 

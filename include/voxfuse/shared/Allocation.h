@@ -13,6 +13,7 @@
 
 #include "voxfuse/core/Atomics.h"
 #include "voxfuse/core/Math.h"
+#include "voxfuse/core/Team.h"
 #include "voxfuse/objects/HashTableTypes.h"
 #include "voxfuse/objects/Intrinsics.h"
 #include "voxfuse/shared/BlockProjection.h"
@@ -166,13 +167,35 @@ struct RecentBlocks {
 // billions). Concurrent appends may pass it by one per thread in flight, far below the 2^20 margin.
 constexpr int kMaxCountedAppends = 0x7fffffff - (1 << 20);
 
-// Allocation stage 1 for a tile of `tile.x` x `tile.y` pixels (element e: tile e, row-major): each block
-// the pixels need is marked seen when the hash has it, or its key is appended to the missing list
-// (every block outside the storable coordinates as kOutOfRangeBlockKey). The list may get a block more
-// than once; appends beyond its capacity are counted but not stored (the caller repeats the pass).
-// `RecentSlots` sizes the cache of blocks already handled within the tile: the CPU layer runs square
-// tiles with a large cache (a block covers some 20 x 20 pixels at 1 m, so a tile looks it up once
-// where a row of pixels looked it up once per row), the CUDA layer single pixels.
+// What stage 1 does with each block a pixel needs: the block is marked seen when the hash has it, or
+// its key is appended to the missing list (every block outside the storable coordinates as
+// kOutOfRangeBlockKey). Appends beyond the list's capacity are counted but not stored (the caller
+// repeats the pass).
+struct MarkOrListBlock {
+    HashTableView table;
+    std::uint8_t* entry_visibility;
+    std::uint64_t* missing;
+    int* missing_count;  // appends attempted (may exceed the capacity; saturates at max_counted_appends)
+    int missing_capacity;
+    int max_counted_appends;
+
+    VF_HOST_DEVICE void operator()(Vec3i block) const {
+        const int entry = blockIsAddressable(block) ? findHashEntry(table, block) : -1;
+        if (entry >= 0) {
+            racingStore(&entry_visibility[entry], kEntrySeenThisFrame);
+            return;
+        }
+        if (racingLoad(missing_count) >= max_counted_appends) return;
+        const int slot = atomicAddInt(missing_count, 1);
+        if (slot < missing_capacity) missing[slot] = blockKey(block);
+    }
+};
+
+// Allocation stage 1 for a tile of `tile.x` x `tile.y` pixels (element e: tile e, row-major), for the
+// CPU layer's wide elements: each block the pixels need is handled as MarkOrListBlock says. The list
+// may get a block more than once. `RecentSlots` sizes the cache of blocks already handled within the
+// tile: square tiles with a large cache (a block covers some 20 x 20 pixels at 1 m, so a tile looks it
+// up once where a row of pixels looked it up once per row). The GPU runs MarkBlocksForPixelTeams.
 template <int RecentSlots>
 struct MarkBlocksForPixels {
     DepthSegmentFrame frame;          // depth on the layer's device
@@ -191,20 +214,13 @@ struct MarkBlocksForPixels {
         const int x1 = x0 + tile.x < frame.intrinsics.width ? x0 + tile.x : frame.intrinsics.width;
         const int y1 = y0 + tile.y < frame.intrinsics.height ? y0 + tile.y : frame.intrinsics.height;
         RecentBlocks<RecentSlots> recent;
+        const MarkOrListBlock handle{table, entry_visibility, missing, missing_count, missing_capacity, max_counted_appends};
         auto mark = [&](Vec3i block) {
-            if (recent.checkAndRemember(block)) return;
-            const int entry = blockIsAddressable(block) ? findHashEntry(table, block) : -1;
-            if (entry >= 0) {
-                racingStore(&entry_visibility[entry], kEntrySeenThisFrame);
-                return;
-            }
-            if (racingLoad(missing_count) >= max_counted_appends) return;
-            const int slot = atomicAddInt(missing_count, 1);
-            if (slot < missing_capacity) missing[slot] = blockKey(block);
+            if (!recent.checkAndRemember(block)) handle(block);
         };
 #if defined(__CUDA_ARCH__)
-        // A GPU thread takes single pixels: nothing to vectorise, and the row arrays below would cost
-        // every thread of the kernel a 1.9 KB stack frame even where they are never used.
+        // Not the GPU's shape (MarkBlocksForPixelTeams), but kept valid device code: the row arrays
+        // below would cost every thread a 1.9 KB stack frame.
         for (int y = y0; y < y1; ++y)
             for (int x = x0; x < x1; ++x) forEachBlockOnDepthSegment(frame, x, y, mark);
 #else
@@ -234,6 +250,61 @@ struct MarkBlocksForPixels {
                 }
             }
 #endif
+    }
+};
+
+// ---- Stage 1 as the GPU runs it: a team per tile ----
+
+// The blocks a team has handled for its tile, in its shared memory: an open-addressing set of block
+// keys (4 KB). A 16 x 16 pixel tile needs some tens of blocks at 5 mm voxels and not many more than
+// a hundred at 2 mm, so the set stays at most a quarter full.
+constexpr int kTileBlockSetSlots = 512;  // a power of two
+constexpr int kTileBlockSetProbes = 32;   // beyond this many taken slots a block is handled again (a repeat, never a miss)
+constexpr std::uint64_t kNoBlockKey = std::uint64_t(1) << 63;  // neither a block's key nor kOutOfRangeBlockKey
+struct TileBlockSet {
+    std::uint64_t keys[kTileBlockSetSlots];
+};
+
+// True for the one call per tile that first brings `key` (any thread of the team): that caller
+// handles the block; also true when the set is too full around the key's slot to tell.
+VF_HOST_DEVICE inline bool firstInTile(TileBlockSet& set, std::uint64_t key) {
+    const unsigned hash = unsigned(key ^ (key >> 17) ^ (key >> 34)) * 2654435761u;
+    for (int probe = 0; probe < kTileBlockSetProbes; ++probe) {
+        std::uint64_t* slot = &set.keys[(hash + unsigned(probe)) & unsigned(kTileBlockSetSlots - 1)];
+        std::uint64_t seen = racingLoad(slot);
+        if (seen == kNoBlockKey) seen = atomicCasU64(slot, kNoBlockKey, key);
+        if (seen == kNoBlockKey) return true;  // claimed by this call
+        if (seen == key) return false;
+    }
+    return true;
+}
+
+// Allocation stage 1 for the GPU (TDevice::parallelForTeams<TileBlockSet>): item t is the t-th tile of
+// kMarkTileSide x kMarkTileSide pixels (row-major), its team's threads take its pixels in turn and
+// share the set of blocks the tile has handled, so that each block is looked up and appended once per
+// tile, as the CPU's wide elements do. With a pixel per thread and nothing shared, every pixel
+// appended every missing block it needed: more appends than the list's first size, so the first
+// frame's pass ran twice, and where the list overflowed its bound the keys it kept depended on the
+// order of the atomics, and with them the table. Tiles of 16 x 16 pixels keep a few teams on every
+// multiprocessor at 640 x 480 (1200 tiles).
+constexpr int kMarkTileSide = 16;
+struct MarkBlocksForPixelTeams {
+    DepthSegmentFrame frame;  // depth on the layer's device
+    MarkOrListBlock handle;
+
+    VF_HOST_DEVICE int tilesPerRow() const { return (frame.intrinsics.width + kMarkTileSide - 1) / kMarkTileSide; }
+    VF_HOST_DEVICE int itemCount() const { return tilesPerRow() * ((frame.intrinsics.height + kMarkTileSide - 1) / kMarkTileSide); }
+    VF_HOST_DEVICE void operator()(Team team, int item, TileBlockSet& set) const {
+        for (int k = team.rank; k < kTileBlockSetSlots; k += team.size) set.keys[k] = kNoBlockKey;
+        team.sync();
+        const int x0 = (item % tilesPerRow()) * kMarkTileSide, y0 = (item / tilesPerRow()) * kMarkTileSide;
+        auto mark = [&](Vec3i block) {
+            if (firstInTile(set, blockKey(block))) handle(block);
+        };
+        for (int p = team.rank; p < kMarkTileSide * kMarkTileSide; p += team.size) {
+            const int x = x0 + p % kMarkTileSide, y = y0 + p / kMarkTileSide;
+            if (x < frame.intrinsics.width && y < frame.intrinsics.height) forEachBlockOnDepthSegment(frame, x, y, mark);
+        }
     }
 };
 
