@@ -1,9 +1,13 @@
 // device_memory on the CUDA runtime. A CUDA build still runs on machines without a GPU: every entry
 // point but cudaAvailable() then throws DeviceError.
 
+#include <cuda.h>  // the driver API's types only: its functions come through the runtime (below)
+
 #include <cstring>
 #include <mutex>
 #include <unordered_map>
+#include <utility>
+#include <vector>
 
 #include "core/CudaCheck.h"
 #include "core/EnvironmentSwitch.h"
@@ -30,10 +34,58 @@ struct AllocationLedger {
     std::mutex mutex;
     std::unordered_map<void*, std::size_t> sizes;
     std::size_t in_use = 0, peak = 0;
+    void add(std::size_t bytes) {
+        in_use += bytes;
+        if (in_use > peak) peak = in_use;
+    }
 };
 AllocationLedger& ledger() {
     static AllocationLedger l;
     return l;
+}
+
+// ---- Growable allocations: CUDA's virtual memory management ----
+// The driver API's functions are looked up through the runtime (cudaGetDriverEntryPointByVersion), not
+// linked: a library linked to libcuda would not even load on a machine without the NVIDIA driver,
+// where the CPU layer must still run.
+struct VirtualMemoryCalls {
+    decltype(&cuDeviceGet) deviceGet = nullptr;
+    decltype(&cuDeviceGetAttribute) deviceGetAttribute = nullptr;
+    decltype(&cuMemGetAllocationGranularity) granularity = nullptr;
+    decltype(&cuMemAddressReserve) addressReserve = nullptr;
+    decltype(&cuMemAddressFree) addressFree = nullptr;
+    decltype(&cuMemCreate) create = nullptr;
+    decltype(&cuMemRelease) release = nullptr;
+    decltype(&cuMemMap) map = nullptr;
+    decltype(&cuMemUnmap) unmap = nullptr;
+    decltype(&cuMemSetAccess) setAccess = nullptr;
+    bool usable = false;  // every call found, and the current GPU supports them
+    int device = 0;
+    CUmemAllocationProp prop{};
+    std::size_t granularity_bytes = 0;
+};
+
+template <class F>
+bool lookUp(const char* symbol, F& fn) {
+    void* p = nullptr;
+    cudaDriverEntryPointQueryResult found{};
+    if (!cuda::succeeded(cudaGetDriverEntryPointByVersion(symbol, &p, 12000, cudaEnableDefault, &found)) || found != cudaDriverEntryPointSuccess)
+        return false;
+    fn = reinterpret_cast<F>(p);
+    return p != nullptr;
+}
+
+// A reserved range of GPU addresses, backed from its start by the chunks mapped so far.
+struct GrowableRegion {
+    std::size_t reserved_bytes = 0;
+    std::size_t mapped_bytes = 0;
+    std::vector<std::pair<CUmemGenericAllocationHandle, std::size_t>> chunks;
+};
+std::size_t roundUp(std::size_t bytes, std::size_t granularity) { return (bytes + granularity - 1) / granularity * granularity; }
+// The regions by base address, under the ledger's lock.
+std::unordered_map<void*, GrowableRegion>& growableRegions() {
+    static std::unordered_map<void*, GrowableRegion> regions;
+    return regions;
 }
 
 }  // namespace
@@ -91,9 +143,102 @@ void* allocate(std::size_t bytes) {
         cudaFree(p);
         throw;
     }
-    l.in_use += bytes;
-    if (l.in_use > l.peak) l.peak = l.in_use;
+    l.add(bytes);
     return p;
+}
+
+namespace {
+const VirtualMemoryCalls& virtualMemory() {
+    static const VirtualMemoryCalls calls = [] {
+        VirtualMemoryCalls c;
+        if (!cudaAvailable()) return c;
+        const bool found = lookUp("cuDeviceGet", c.deviceGet) && lookUp("cuDeviceGetAttribute", c.deviceGetAttribute) &&
+                           lookUp("cuMemGetAllocationGranularity", c.granularity) && lookUp("cuMemAddressReserve", c.addressReserve) &&
+                           lookUp("cuMemAddressFree", c.addressFree) && lookUp("cuMemCreate", c.create) && lookUp("cuMemRelease", c.release) &&
+                           lookUp("cuMemMap", c.map) && lookUp("cuMemUnmap", c.unmap) && lookUp("cuMemSetAccess", c.setAccess);
+        CUdevice device = 0;
+        int supported = 0;
+        if (!found || !cuda::succeeded(cudaGetDevice(&c.device)) || c.deviceGet(&device, c.device) != CUDA_SUCCESS ||
+            c.deviceGetAttribute(&supported, CU_DEVICE_ATTRIBUTE_VIRTUAL_MEMORY_MANAGEMENT_SUPPORTED, device) != CUDA_SUCCESS || !supported)
+            return c;
+        c.prop.type = CU_MEM_ALLOCATION_TYPE_PINNED;
+        c.prop.location.type = CU_MEM_LOCATION_TYPE_DEVICE;
+        c.prop.location.id = c.device;
+        c.usable = c.granularity(&c.granularity_bytes, &c.prop, CU_MEM_ALLOC_GRANULARITY_RECOMMENDED) == CUDA_SUCCESS && c.granularity_bytes > 0;
+        return c;
+    }();
+    return calls;
+}
+}  // namespace
+
+void* reserveGrowable(std::size_t capacity_bytes) {
+    const VirtualMemoryCalls& vm = virtualMemory();
+    if (!vm.usable || capacity_bytes == 0) return nullptr;
+    const std::size_t reserved = roundUp(capacity_bytes, vm.granularity_bytes);
+    CUdeviceptr base = 0;
+    if (vm.addressReserve(&base, reserved, 0, 0, 0) != CUDA_SUCCESS) return nullptr;  // the caller copies instead
+    void* p = reinterpret_cast<void*>(base);
+    AllocationLedger& l = ledger();
+    const std::lock_guard<std::mutex> lock(l.mutex);
+    try {
+        growableRegions()[p].reserved_bytes = reserved;
+    } catch (...) {
+        vm.addressFree(base, reserved);
+        throw;
+    }
+    return p;
+}
+
+void growGrowable(void* base, std::size_t bytes) {
+    const VirtualMemoryCalls& vm = virtualMemory();
+    AllocationLedger& l = ledger();
+    const std::lock_guard<std::mutex> lock(l.mutex);
+    const auto it = growableRegions().find(base);
+    if (it == growableRegions().end()) throw DeviceError("growGrowable: not a growable allocation");
+    GrowableRegion& region = it->second;
+    if (bytes <= region.mapped_bytes) return;
+    const std::size_t target = roundUp(bytes, vm.granularity_bytes);
+    if (target > region.reserved_bytes)
+        throw DeviceError("growGrowable: " + std::to_string(bytes) + " bytes exceed the " + std::to_string(region.reserved_bytes) + " reserved");
+    const std::size_t chunk = target - region.mapped_bytes;
+    const CUdeviceptr at = reinterpret_cast<CUdeviceptr>(base) + region.mapped_bytes;
+    CUmemGenericAllocationHandle handle{};
+    CUresult status = vm.create(&handle, chunk, &vm.prop, 0);
+    if (status != CUDA_SUCCESS)
+        throw DeviceError("cuMemCreate of " + std::to_string(chunk >> 20) + " MiB failed (GPU memory exhausted?), CUresult " +
+                          std::to_string(int(status)));
+    status = vm.map(at, chunk, 0, handle, 0);
+    if (status == CUDA_SUCCESS) {
+        CUmemAccessDesc access{};
+        access.location = vm.prop.location;
+        access.flags = CU_MEM_ACCESS_FLAGS_PROT_READWRITE;
+        status = vm.setAccess(at, chunk, &access, 1);
+        if (status != CUDA_SUCCESS) vm.unmap(at, chunk);
+    }
+    if (status != CUDA_SUCCESS) {
+        vm.release(handle);
+        throw DeviceError("mapping " + std::to_string(chunk >> 20) + " MiB of GPU memory failed, CUresult " + std::to_string(int(status)));
+    }
+    region.chunks.emplace_back(handle, chunk);
+    region.mapped_bytes = target;
+    l.add(chunk);
+}
+
+void releaseGrowable(void* base) noexcept {
+    if (!base) return;
+    const VirtualMemoryCalls& vm = virtualMemory();
+    AllocationLedger& l = ledger();
+    const std::lock_guard<std::mutex> lock(l.mutex);
+    const auto it = growableRegions().find(base);
+    if (it == growableRegions().end()) return;
+    const GrowableRegion& region = it->second;
+    // Nothing may still run on the memory: unmapping it under a running kernel faults the kernel.
+    cuda::succeeded(cudaDeviceSynchronize());
+    if (region.mapped_bytes) vm.unmap(reinterpret_cast<CUdeviceptr>(base), region.mapped_bytes);
+    for (const auto& chunk : region.chunks) vm.release(chunk.first);
+    vm.addressFree(reinterpret_cast<CUdeviceptr>(base), region.reserved_bytes);
+    l.in_use -= region.mapped_bytes;
+    growableRegions().erase(it);
 }
 
 void release(void* ptr) noexcept {

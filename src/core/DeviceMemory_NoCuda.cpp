@@ -18,6 +18,9 @@ std::string cudaDescription() { return "built without CUDA"; }
 std::size_t freeDeviceBytes() { return 0; }
 void* allocate(std::size_t) { noCuda(); }
 void release(void*) noexcept {}
+void* reserveGrowable(std::size_t) { return nullptr; }
+void growGrowable(void*, std::size_t) { noCuda(); }
+void releaseGrowable(void*) noexcept {}
 std::size_t bytesInUse() { return 0; }
 std::size_t peakBytesInUse() { return 0; }
 void resetPeakBytes() {}

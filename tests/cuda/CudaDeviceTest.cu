@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <vector>
 
 #include "../core/DevicePrimitiveChecks.h"
 #include "core/CudaDevice.cuh"
@@ -68,6 +69,36 @@ TEST_F(CudaDeviceTest, MemoryBlockFillsCopiesRangesAndKnowsTheCurrentCopy) {
     MemoryBlock<Odd> host(1001, true, false);
     copyAcross(host, Device::CPU, copy, Device::CUDA);
     EXPECT_EQ(host.host()[502].c, 15);
+}
+
+// A device-only block grows in place (virtual memory management): the contents stay at the same
+// address after the first growth, and the memory in use follows the elements, not the reservation.
+TEST_F(CudaDeviceTest, MemoryBlockGrowsOnTheDeviceInPlace) {
+    MemoryBlock<int> m(1000, false, true);
+    std::vector<int> first(1000);
+    for (int i = 0; i < 1000; ++i) first[std::size_t(i)] = 3 * i + 1;
+    m.writeRange(Device::CUDA, 0, first.data(), first.size());
+    const std::size_t before = device_memory::bytesInUse();
+    if (!m.growDevice(5000, std::size_t(1) << 30)) GTEST_SKIP() << "this GPU or driver has no virtual memory management";
+    const int* base = m.device();
+    EXPECT_LT(device_memory::bytesInUse() - before, std::size_t(64) << 20) << "a 4 GiB reservation is not backed whole";
+    m.fill(Device::CUDA, -7, 1000, 4000);
+    for (std::size_t count : {std::size_t(5001), std::size_t(3) << 20, std::size_t(40) << 20}) {
+        ASSERT_TRUE(m.growDevice(count, std::size_t(1) << 30));
+        EXPECT_EQ(m.device(), base) << "grown in place to " << count;
+        EXPECT_EQ(m.size(), count);
+    }
+    std::vector<int> back(5000);
+    m.readRange(Device::CUDA, 0, back.data(), back.size());
+    for (int i = 0; i < 1000; ++i) ASSERT_EQ(back[std::size_t(i)], 3 * i + 1) << i;
+    for (int i = 1000; i < 5000; ++i) ASSERT_EQ(back[std::size_t(i)], -7) << i;
+    m.fill(Device::CUDA, 5, (std::size_t(40) << 20) - 10, 10);  // the last mapped elements are writable
+    int last = 0;
+    m.readRange(Device::CUDA, (std::size_t(40) << 20) - 1, &last, 1);
+    EXPECT_EQ(last, 5);
+    EXPECT_THROW(m.growDevice(10, std::size_t(1) << 30), Error) << "no shrinking";
+    m = MemoryBlock<int>();
+    EXPECT_EQ(device_memory::bytesInUse(), before - 1000 * sizeof(int)) << "released whole";
 }
 
 }  // namespace

@@ -23,6 +23,14 @@ std::string cudaDescription();
 std::size_t freeDeviceBytes();
 void* allocate(std::size_t bytes);
 void release(void* ptr) noexcept;
+// Memory that grows in place: reserveGrowable() reserves GPU addresses for `capacity_bytes` (no memory
+// yet) and returns their start, or nullptr where the GPU or driver cannot (then allocate and copy);
+// growGrowable() backs the first `bytes` of them with memory (throws DeviceError when it runs out),
+// keeping what was there at the same addresses; releaseGrowable() frees the whole range. Counted in
+// bytesInUse() as they are backed.
+void* reserveGrowable(std::size_t capacity_bytes);
+void growGrowable(void* base, std::size_t bytes);
+void releaseGrowable(void* base) noexcept;
 // GPU memory VoxFuse holds through allocate(), now and at most since the last resetPeakBytes() (for
 // benchmarks: what a stage needs on the GPU).
 std::size_t bytesInUse();

@@ -223,6 +223,38 @@ public:
         count_ = count;
     }
 
+    // The same for a block that has only a device copy, on the GPU's virtual memory management: the
+    // first growth reserves GPU addresses for `capacity` elements and moves the contents there once;
+    // every growth within them maps memory behind the data, with neither a copy nor a second array
+    // (a copying growth holds the old and the new array at once, and stalls the frame). Returns false,
+    // changing nothing, where the GPU or driver cannot reserve: the caller reallocates and copies.
+    bool growDevice(std::size_t count, std::size_t capacity) {
+        if (host_) throw DeviceError("MemoryBlock::growDevice: the block has a host copy");
+        if (count < count_) throw Error("MemoryBlock::growDevice: " + std::to_string(count) + " elements would shrink a block of " + std::to_string(count_));
+        if (device_growable_ && count <= device_capacity_) {
+            device_memory::growGrowable(device_, count * sizeof(T));
+            count_ = count;
+            return true;
+        }
+        const std::size_t reserve = std::max(count, capacity);
+        void* base = device_memory::reserveGrowable(reserve * sizeof(T));
+        if (!base) return false;
+        try {
+            device_memory::growGrowable(base, count * sizeof(T));
+            if (device_ && count_) device_memory::copyDeviceToDevice(base, device_, bytes());
+        } catch (...) {
+            device_memory::releaseGrowable(base);
+            throw;
+        }
+        freeDevice();
+        device_ = static_cast<T*>(base);
+        device_growable_ = true;
+        device_capacity_ = reserve;
+        device_current_ = true;
+        count_ = count;
+        return true;
+    }
+
     // Drops one copy (the other must be current); a block that only the GPU uses keeps no host memory.
     void releaseHost() {
         if (!host_) return;
@@ -232,8 +264,7 @@ public:
     void releaseDevice() {
         if (!device_) return;
         if (!host_current_) throw DeviceError("MemoryBlock::releaseDevice: the host copy is stale");
-        device_memory::release(device_);
-        device_ = nullptr;
+        freeDevice();
     }
 
 private:
@@ -262,6 +293,13 @@ private:
         host_pinned_ = false;
         host_current_ = true;
     }
+    void freeDevice() noexcept {
+        if (device_growable_) device_memory::releaseGrowable(device_);
+        else if (device_) device_memory::release(device_);
+        device_ = nullptr;
+        device_growable_ = false;
+        device_capacity_ = 0;
+    }
     void unmapHost() noexcept {
 #if defined(__unix__)
         munmap(static_cast<void*>(host_), host_mapped_bytes_);
@@ -279,8 +317,7 @@ private:
     }
     void release() noexcept {
         freeHost();
-        if (device_) device_memory::release(device_);
-        device_ = nullptr;
+        freeDevice();
         count_ = 0;
         device_current_ = true;
     }
@@ -292,6 +329,8 @@ private:
         std::swap(host_pinned_, o.host_pinned_);
         std::swap(host_capacity_, o.host_capacity_);
         std::swap(host_mapped_bytes_, o.host_mapped_bytes_);
+        std::swap(device_growable_, o.device_growable_);
+        std::swap(device_capacity_, o.device_capacity_);
         std::swap(host_current_, o.host_current_);
         std::swap(device_current_, o.device_current_);
     }
@@ -303,6 +342,8 @@ private:
     bool host_pinned_ = false;     // host_ came from allocatePinned
     std::size_t host_capacity_ = 0;      // elements host_ can hold (more than count_ after growHost)
     std::size_t host_mapped_bytes_ = 0;  // host_ is a mapping of this many bytes (growHost), else 0
+    bool device_growable_ = false;       // device_ came from reserveGrowable (growDevice)
+    std::size_t device_capacity_ = 0;    // elements its reservation holds
     bool host_current_ = true;     // meaningful only while host_ exists
     bool device_current_ = true;   // meaningful only while device_ exists
 };

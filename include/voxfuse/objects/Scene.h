@@ -62,8 +62,9 @@ public:
     // ---- Indexes whose storage grows (VoxelBlockHash); not instantiated for the others ----
 
     // Backs at least `blocks` voxel blocks with memory, as far as the index's maximum allows; the index
-    // picks the new capacity. Voxel contents are kept, but the arrays may move (on the GPU, or where no
-    // address space could be reserved): every pointer into voxels() taken before this call is invalid.
+    // picks the new capacity. Voxel contents are kept, but the arrays may move (at the first growth on
+    // the GPU, or where no address space could be reserved): every pointer into voxels() taken before
+    // this call is invalid.
     // Engines take their voxel pointers at the start of a stage and never keep them, and only the
     // allocation engine calls this, between its stages, before it takes any.
     // The voxels grow first: if their allocation fails (a GPU holds the old and the new array at
@@ -98,11 +99,19 @@ private:
             if (location_ == Device::CPU && !voxels_.onDevice() && count >= voxels_.size()) {
                 // On the host the array grows inside address space reserved for the index's maximum:
                 // the voxels stay where they are, and a growth costs the new blocks' initial values,
-                // not a copy of the whole map (70 ms at teddy's 37k blocks, a stalled frame).
+                // not a copy of the whole map (which stalls the frame that grows it).
                 const std::size_t kept = voxels_.size();
                 voxels_.growHost(count, index_.maxVoxelCount());
                 voxels_.fill(Device::CPU, TVoxel::initial(), kept, count - kept);
                 return;
+            }
+            // On the GPU likewise, where it has virtual memory management (else the copy below).
+            if (location_ == Device::CUDA && !voxels_.onHost() && count >= voxels_.size()) {
+                const std::size_t kept = voxels_.size();
+                if (voxels_.growDevice(count, index_.maxVoxelCount())) {
+                    voxels_.fill(Device::CUDA, TVoxel::initial(), kept, count - kept);
+                    return;
+                }
             }
         }
         MemoryBlock<TVoxel> resized(count, location_ == Device::CPU, location_ == Device::CUDA);
