@@ -190,8 +190,8 @@ int defaultThreadCount() {
     return std::max(1u, std::thread::hardware_concurrency());
 }
 
-// How long idle workers spin before they sleep: 50 us unless VOXFUSE_SPIN_US says otherwise. Measured
-// on teddy (2 cores): see DESIGN_NOTES, "CPU threads that sleep".
+// How long idle workers spin before they sleep: 50 us unless VOXFUSE_SPIN_US says otherwise. The next
+// loop of a frame mostly follows within that; see docs/DESIGN_NOTES.md, "CPU threads that sleep".
 std::chrono::microseconds spinTime() {
     const long us = numberFromEnvironment("VOXFUSE_SPIN_US", 0, 1000000, "a number of microseconds");
     return std::chrono::microseconds(us >= 0 ? us : 50);

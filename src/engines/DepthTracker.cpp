@@ -157,8 +157,8 @@ private:
         // large motion whose path first slides far along a weak direction), the next level goes on
         // with least squares: the kernel's 1 cm basin cannot catch a pose centimetres off, and the
         // hand-over must not depend on how the path's rounding happens to fall on a device.
-        // rgbd adds colour to ren's depth terms: without the kernel its depth terms were icp's, and
-        // teddy's ATE was icp's (12.1-12.6 mm at colour weights 1e-3 to 1e-5), not ren's (7.2 mm).
+        // rgbd adds colour to ren's depth terms: without the kernel its depth terms would be icp's, and
+        // so would its accuracy, whatever the colour weight.
         const bool kernel_on_depth = settings_.kind == TrackerKind::Ren || settings_.kind == TrackerKind::Rgbd;
         const RobustKernel final_kernel = kernel_on_depth ? settings_.robust_kernel : RobustKernel::None;
         if (final_kernel == RobustKernel::None) robust = true;
@@ -172,9 +172,8 @@ private:
         // converged on this level, and then refine together with it until both agree. While they do,
         // the depth terms are the quadratic Gauss-Newton model of their cost about the pose where they
         // converged (colour moves the pose a millimetre or two, too little to change which model
-        // points they meet or their weights): colour iterations cost the colour terms alone. Measured
-        // against evaluating the depth terms at every colour iteration: teddy 6.70 against 6.69 mm,
-        // kinfu sample 2.26 against 2.21, bundled room 0.48 against 0.44, tracking in 19 ms against 27.
+        // points they meet or their weights): colour iterations cost the colour terms alone, and give
+        // the poses that evaluating the depth terms at every colour iteration gives.
         bool with_color = false;
         double color_weight = -1.0;  // of a colour term against a depth term on this level; < 0: not yet known
         pose::StepExtrapolation extrapolation;
@@ -182,8 +181,8 @@ private:
         pose::Vector6d moved_since = pose::Vector6d::Zero();  // the steps taken since the depth terms were evaluated
         // Steps are stretched only where the depth terms pin every translation (the frame would not be
         // poor): along a direction they barely constrain (a corridor's length) successive steps are
-        // slides, not a converging series, and stretching them sent the synthetic corridor walk 0.26 m
-        // astray. Decided when the depth terms are evaluated; the colour phase keeps their J^T W J.
+        // slides, not a converging series, and stretching them sends the pose astray along it.
+        // Decided when the depth terms are evaluated; the colour phase keeps their J^T W J.
         bool depth_pins_translation = false;
         for (int it = 0; it < ls.max_iterations; ++it) {
             const Mat4f T_f = pose::toMat4f(T);

@@ -303,7 +303,8 @@ private:
         raycast_->raycast(scene_, factor > 1 ? view_.calib.depth.downsampled(factor) : view_.calib.depth, tracking_.T_world_camera, model_,
                           RaycastNormals::FromPoints, fused_depth);
         // rgbd aligns the next frame's colours to the map's (frame to model), not to the last frame's:
-        // the map holds still while the camera's estimate drifts (DESIGN_NOTES "rgbd is ren plus colour").
+        // the map holds still while the camera's estimate drifts (docs/DESIGN_NOTES.md, "rgbd is ren plus
+        // colour, aligned to the map's colours").
         const TrackerSettings& tracker = tracker_->settings();
         if (TVoxel::hasColor && tracker.kind == TrackerKind::Rgbd && tracker.color_from_map)
             raycast_->renderIntensity(scene_, model_, model_.intensity);
@@ -390,7 +391,7 @@ private:
         // resized back and forth would be reallocated each time). The check's raycast is at the
         // frame's resolution with SDF normals, valid up to silhouettes, so that inlier ratios are the
         // ones its thresholds were measured with; the gate before it is looser by a fifth, as the
-        // coarse model explains less of the frame (right candidates on teddy: 0.56-0.65 here).
+        // coarse model explains less of the frame, also for right candidates.
         if (!model) {
             const int factor = settings_.tracking_raycast_downsample;
             raycast_->raycast(scene_, factor > 1 ? view_.calib.depth.downsampled(factor) : view_.calib.depth, T_world_start,

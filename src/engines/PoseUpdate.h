@@ -97,13 +97,13 @@ inline bool solveUpdate(const NormalEquations<double>& eq, LevelMotion motion, d
 
 // Gauss-Newton on a robust (reweighted) cost with projective association converges linearly, not
 // quadratically: the reweighting uses w(r) = rho'(r) / r where Newton would use rho''(r), which is
-// smaller for Tukey's kernel, so each step is a roughly constant fraction q of the one before (teddy:
-// 0.5-0.8). The steps then form a geometric series, and the pose still has x q / (1 - q) to go after
-// step x: a step that continues the one before it (q = x . x_prev / |x_prev|^2 in (0, 1)) is taken
-// 1 / (1 - q) times as long, at most kMaxStretch (Aitken's extrapolation of a linearly converging
-// sequence). A step that turns back (q <= 0) or grows (q >= 1) is taken as it is. The optimum is the
-// same; fewer iterations reach it (ren on teddy: 2.3 instead of 3.5 on the finest level). Rotation
-// and translation share the product (radians and metres: the scenes lie about a metre away).
+// smaller for Tukey's kernel, so each step is a roughly constant fraction q of the one before. The
+// steps then form a geometric series, and the pose still has x q / (1 - q) to go after step x: a step
+// that continues the one before it (q = x . x_prev / |x_prev|^2 in (0, 1)) is taken 1 / (1 - q) times
+// as long, at most kMaxStretch (Aitken's extrapolation of a linearly converging sequence). A step that
+// turns back (q <= 0) or grows (q >= 1) is taken as it is. The optimum is the same; fewer iterations
+// reach it. Rotation and translation share the product (radians and metres: the scenes lie about a
+// metre away).
 class StepExtrapolation {
 public:
     static constexpr double kMaxStretch = 3.0;

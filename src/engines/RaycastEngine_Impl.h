@@ -2,8 +2,8 @@
 // The raycast engine's stages, written once for both device layers: a template on the device type
 // (CpuDevice or CudaDevice), instantiated by src/cpu/RaycastEngine_CPU.cpp and cuda/RaycastEngine_CUDA.cu.
 // Loop bodies: shared/Raycast.h (rays, expected depth ranges) and shared/Render.h (renders); one ray
-// per element on both devices (a row per element with a cache shared by its rays was measured within
-// 2% on the CPU, not worth a second shape).
+// per element on both devices (a row per element with a cache shared by its rays was no faster on the
+// CPU, not worth a second shape).
 
 #include <memory>
 #include <type_traits>

@@ -63,10 +63,9 @@ std::vector<unsigned char> readWholeFile(const std::string& path) {
 // What decoding a frame needs besides its image, kept per thread so that reading a sequence makes no
 // megabyte allocation per frame. Buffers made and freed every frame fragment glibc's heap (once one
 // is freed, later ones come from the heap rather than mmap, and the small long-lived allocations
-// between them keep it from shrinking): teddy's peak RSS grew by 100 MB that way. OpenCV decodes into
+// between them keep it from shrinking), so the peak memory of a long run grows. OpenCV decodes into
 // the Mat it is given, reusing its memory when the size and type match, so depth and colour keep one
-// Mat each: sharing one changed its type twice a frame, and 300 teddy frames made 635 allocations of
-// 100 kB or more instead of 37.
+// Mat each: sharing one would change its type, and reallocate it, twice a frame.
 struct DecodeScratch {
     std::vector<unsigned char> bytes;  // the file
     cv::Mat depth;                     // a decoded depth image

@@ -5,10 +5,10 @@
 //      visible (allocated) or to be allocated (plain writes, no critical sections: of two new blocks that
 //      want the same hash entry in one frame only one is marked);
 //   2. allocate the missing blocks from the free stacks (ordered bucket entry if free, else excess list),
-//      growing the voxel block array first when it needs more blocks. Unlike the report, which leaves
-//      a block that lost an intra-frame collision (two new blocks, one insertion target) to the next
-//      frame, every missing block is inserted in the frame that needs it: insertion runs in rounds, one
-//      block per target and round (shared/HashUpdate.h);
+//      growing the voxel block array first when it needs more blocks. Unlike the InfiniTAM report,
+//      which leaves a block that lost an intra-frame collision (two new blocks, one insertion target)
+//      to the next frame, every missing block is inserted in the frame that needs it: insertion runs
+//      in rounds, one block per target and round (shared/HashUpdate.h);
 //   3. build the visible list: blocks marked in stage 1 or 2, plus previously visible blocks that are
 //      still in the view frustum. Integration updates exactly these blocks.
 // A full table or block array is counted in AllocationStats, never silent. For the same frames the CPU

@@ -36,7 +36,7 @@ struct SwapSettings {
     int blocks_per_frame = 4096;    // blocks moved each way per frame at most (the transfer buffers' size)
 };
 
-// DESIGN.md's hash tables with the block ceiling left to the engine (kAutomaticBlockCount).
+// The default hash tables with the block ceiling left to the engine (kAutomaticBlockCount).
 inline VoxelBlockHashSettings hashWithAutomaticBlockCount() {
     VoxelBlockHashSettings s;
     s.max_block_count = kAutomaticBlockCount;
@@ -63,9 +63,9 @@ struct MainEngineSettings {
     // How the pose of each frame is estimated when none is given.
     TrackerSettings tracker;
     // The tracker aligns each frame to a raycast of the model from the last pose, made at the depth
-    // camera's resolution divided by this (1, 2 or 4). Half resolution tracks teddy as well as full
-    // (its finest level still uses every pixel of the frame) at a quarter of the rays; renders and
-    // renderState() are always raycast at full resolution.
+    // camera's resolution divided by this (1, 2 or 4). Half resolution tracks as well as full (the
+    // finest level's pixels then meet the model pixel their area covers) at a quarter of the rays;
+    // renders and renderState() are always raycast at full resolution.
     int tracking_raycast_downsample = 2;
     // A pixel without a depth measurement between two neighbours that agree within this fraction of
     // their depth (left and right, else above and below) takes their mean, for tracking and fusion
@@ -113,9 +113,9 @@ struct FrameResult {
     AllocationStats allocation;  // the index after this frame (all zero for the dense index)
 };
 
-// The block ceiling of a hash map whose settings ask for kAutomaticBlockCount. DESIGN.md's fixed 2^18
-// blocks (1 GiB of s_rgb voxels) ran out on long or large scans while most of a machine's memory lay
-// unused, and a map that cannot grow loses what the camera sees next, and then the camera.
+// The block ceiling of a hash map whose settings ask for kAutomaticBlockCount. A fixed 2^18 blocks
+// (InfiniTAM's size; 1 GiB of s_rgb voxels) ran out on long or large scans while most of a machine's
+// memory lay unused, and a map that cannot grow loses what the camera sees next, and then the camera.
 // As many blocks as the table has entries (each block needs one), at most 2^22, and no more than
 // three quarters of `available_bytes` (the free memory of the device the map lives on when the engine
 // is made: MemAvailable on the CPU, cudaMemGetInfo on the GPU) holds beside the tables, in steps of

@@ -21,7 +21,7 @@ struct RelocalisationSettings {
     bool enabled = true;
     // Loss detection beyond the tracker's own failure: a frame tracked with an inlier ratio below this
     // fraction of the median of the last recent_frames good frames is taken as lost (a jump the tracker
-    // "converged" from into a wrong pose: teddy's inlier ratio falls from ~0.78 to ~0.25 there).
+    // "converged" from into a wrong pose: the inlier ratio then falls to a fraction of its usual value).
     float lost_inlier_ratio_drop = 0.5f;
     int recent_frames = 10;
     FernSettings ferns;
@@ -76,7 +76,7 @@ DepthAgreement compareDepth(const Image<float>& frame_depth_m, const Image<float
 // walls correlate with nothing).
 constexpr int kColourCellsAcross = 16;
 constexpr int kColourCellMinPixels = 8;
-constexpr float kColourFootprintVoxels = 1.5f;  // a trilinear read's spread, as a box (measured best of 0-3)
+constexpr float kColourFootprintVoxels = 1.5f;  // a trilinear read's spread, as a box
 struct ColourAgreement {
     bool compared = false;
     float correlation = 0.f;  // in [-1, 1] when compared

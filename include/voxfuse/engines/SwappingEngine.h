@@ -9,7 +9,7 @@
 //   allocation   blocks the depth needs that are stored get a voxel block again (merge pending: their
 //                stored copy still waits in the cache) and fuse this frame's data from now on;
 //   swapIn       merges up to `max_blocks` waiting stored copies into their blocks, lowest entry first
-//                (the report's secondary integration: never overwriting what was fused meanwhile);
+//                (the InfiniTAM report's secondary integration: never overwriting what was fused meanwhile);
 //   integration, raycast;
 //   swapOut      moves up to `max_blocks` active blocks that are not in the visible list (and wait for
 //                nothing) to the cache, lowest entry first, and frees their voxel blocks.

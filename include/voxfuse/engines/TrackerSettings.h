@@ -32,16 +32,13 @@ struct TrackerLevel {
     int pixel_step = 1;           // ICP terms from every pixel_step-th row and column of the level
 };
 
-// Defaults measured on TUM fr3/teddy (193 frames, frame-to-model, 5 mm voxels; ATE RMSE): rgbd 5.39 mm,
-// ren 7.2 mm with 2.3 Gauss-Newton iterations on the finest level (8.4 mm and 9.4 iterations while
-// its kernel was on the finest level only). Much of what is left is a ~25 ms lag of the depth
-// timestamps behind the motion capture: the same trajectories scored against ground truth 25 ms
-// earlier give 4.07 and 5.4 mm. The normal test is what lets an 8 cm / 8 degree jump converge.
+// The defaults were chosen on recorded and synthetic sequences (docs/BENCHMARKS.md has their
+// accuracy and speed) and are kept only where they hold on all of them, not tuned to one recording.
+// The normal test is what lets an 8 cm / 8 degree jump converge.
 struct TrackerSettings {
     // rgbd: ren's depth terms plus colour aligned to the map's fused colours. Where depth leaves a
-    // motion weakly constrained (a corridor, a wall, a round object) the map's texture pins it: the
-    // synthetic corridor walk's ATE 14 mm against ren's 141; teddy 5.4 against 7.2 (with the far
-    // field below), the kinfu sample 2.3 against 2.8. It tracks in about twice ren's time on the CPU.
+    // motion weakly constrained (a corridor, a wall, a round object) the map's texture pins it, and
+    // the map holds still while the estimate drifts. It tracks in about twice ren's time on the CPU.
     // With a voxel type without colour it aligns to the previous frame's colours; without a colour
     // image it is ren.
     TrackerKind kind = TrackerKind::Rgbd;
@@ -49,9 +46,8 @@ struct TrackerSettings {
     // 2^(n-1-i) (the last level is full resolution). Settings file: levels, iterations, max_distance_m.
     // The finest level takes every second row and column: the model it is aligned to is raycast at
     // half resolution (MainEngineSettings::tracking_raycast_downsample), so four of its pixels met one
-    // model pixel, and the bilateral filter had already made them alike. A quarter of the terms gave
-    // the same ATE on teddy (7.17 against 7.18 mm), the bundled room, the kinfu sample and the
-    // corridor, in a third of the level's time.
+    // model pixel, and the bilateral filter had already made them alike: a quarter of the terms gives
+    // the same poses in a third of the level's time.
     std::vector<TrackerLevel> levels = {
         {LevelMotion::Both, 10, 0.10f, 1},  // 160x120
         {LevelMotion::Both, 10, 0.05f, 1},  // 320x240
@@ -61,13 +57,11 @@ struct TrackerSettings {
     float max_normal_angle_deg = 30.f;
     // A level stops iterating when an update rotates less than this AND translates less than this;
     // a level downsampled by 2^k stops at 2^k times these (its pixels are that much larger, and the
-    // finer levels refine what it leaves: teddy's coarse levels took 7.1 and 4.1 iterations instead of
-    // 9.8 and 6.2, with the same ATE there, on the bundled room, the kinfu sample and the corridor).
+    // finer levels refine what it leaves, so the coarse levels need fewer iterations for the same poses).
     float min_rotation_step_rad = 1e-4f;
     float min_translation_step_m = 1e-4f;
     // Stretch a Gauss-Newton step that continues the one before it by what the geometric series of
-    // the remaining steps adds (see pose::StepExtrapolation): the same optimum in fewer iterations
-    // (teddy's finest two levels: 2.3 instead of 4.1 and 3.5, tracking 15% faster, the same ATE).
+    // the remaining steps adds (see pose::StepExtrapolation): the same optimum in fewer iterations.
     // Only while the depth terms pin every translation (poor_translation_constraint below).
     bool extrapolate_steps = true;
     // Start from the pose the last two frames' motion predicts (constant velocity, scaled to the time
@@ -79,16 +73,16 @@ struct TrackerSettings {
     // resolution, doubled per coarser level): larger gaps are depth edges.
     float max_normal_edge_m = 0.05f;
     // Frame depths beyond this take no part in depth tracking (icp, ren, rgbd) but are still fused;
-    // 0: every depth the view keeps. A sensor's far depths are its noisiest: on teddy (Kinect; the
-    // bear within 1 m, the room behind it from 2 m on) 2.5 m gave an ATE of 6.76 mm against 7.17.
-    // Off by default: which depths are too noisy depends on the sensor, and far surfaces are what pin
-    // the motion along a corridor or across a hall.
+    // 0: every depth the view keeps. A sensor's far depths are its noisiest, and leaving them out can
+    // help a depth-only tracker where the near scene holds enough structure. Off by default: which
+    // depths are too noisy depends on the sensor, and far surfaces are what pin the motion along a
+    // corridor or across a hall.
     float max_tracking_depth_m = 0.f;
 
     // ren and rgbd: the robust cost of every level's depth terms. One cost for all levels gives every
     // level the same optimum: with a kernel on the finest level only, the coarse levels converged to
-    // poses that outliers had pulled some 0.3 degrees away, and the finest level spent 9 of its 10
-    // iterations crawling back.
+    // poses that outliers had pulled away, and the finest level spent most of its iterations crawling
+    // back.
     RobustKernel robust_kernel = RobustKernel::Tukey;
     float robust_scale_m = 0.01f;  // Tukey: residuals beyond this get no weight
 
@@ -103,8 +97,7 @@ struct TrackerSettings {
     // the depth terms have converged, the ratio of their robust variance to the colour terms' (each
     // term counts by the inverse of its noise). The balance then follows the recording: a scene's
     // contrast and a camera's exposure scale the colour residuals, a sensor's depth noise the depth
-    // ones, and neither moves it. On teddy the ratio comes out at 1.1e-3 to 1.4e-3 (the fixed weight
-    // that was tuned there was 1e-3). A number fixes the weight instead (color_weight_auto false;
+    // ones, and neither moves it. A number fixes the weight instead (color_weight_auto false;
     // m^2 per squared intensity unit: 1e-3 makes an intensity error of 0.03 count like 1 mm).
     bool color_weight_auto = true;
     float color_weight = 1e-3f;  // when color_weight_auto is false
@@ -118,8 +111,9 @@ struct TrackerSettings {
     // every far_field_spacing_m of camera motion (or far_field_spacing_deg of turn) a well tracked
     // frame's far depths, with its colours, become a keyframe, and the last far_field_keyframes
     // keyframes' points join the photometric terms (with a colour term's weight each). A keyframe
-    // keeps the far_field_point_share of its points where its image is most textured. Teddy's last
-    // third sees the room beyond 3 m in 48% of its pixels: ATE 6.57 -> 5.39 mm. 0 keyframes: off.
+    // keeps the far_field_point_share of its points where its image is most textured. A camera that
+    // circles a near object cannot tell a turn from a sideways step by the object's depth; the far
+    // texture tells them apart. 0 keyframes: off.
     int far_field_keyframes = 3;
     float far_field_spacing_m = 0.05f;
     float far_field_spacing_deg = 10.f;
@@ -135,14 +129,13 @@ struct TrackerSettings {
     // Below this share of the depth terms' weight along the least constrained translation: Poor (see
     // TrackingState::translation_constraint). Depth cannot tell how far the camera moved along that
     // direction, so the pose there is what noise and a few small structures made of it. The condition
-    // above does not show it: it mixes rotation with translation, and a corridor's weak views (2e-3)
-    // overlap real views that track well (teddy's: 9e-3 and more). The share separates them: teddy's
-    // least is 0.13, the kinfu sample's 0.15, the synthetic room's 0.086; the corridor's walls-only
-    // views 0.002-0.009.
+    // above does not show it: it mixes rotation with translation, and a corridor's weak views
+    // overlap real views that track well. The share separates them: real views that track well stay
+    // several times above this threshold, views of a corridor's walls alone far below it.
     float poor_translation_constraint = 0.02f;
     float poor_residual_m = 0.01f;      // RMS point-to-plane residual above this: Poor
     // Colour tracker: an RMS intensity error above this means the images are not aligned (Failed);
-    // aligned TUM frames stay below 0.06, unaligned ones are above 0.15.
+    // aligned real frames stay well below it, unaligned ones well above.
     float failed_color_residual = 0.1f;
     int min_inliers = 100;              // fewer full-resolution inliers: Failed
     // A frame-to-frame motion beyond these is not believed (Failed): hand-held cameras at 30 Hz move far less.

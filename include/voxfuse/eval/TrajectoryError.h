@@ -30,10 +30,10 @@ struct TrajectoryError {
     // nearest to t_i + delta (within max_time_difference_s of it), both paired with ground truth. With
     // relative motions A = est_i^-1 est_j and B = gt_i^-1 gt_j, the error is E = A B^-1; its
     // translation length and rotation angle, divided by t_j - t_i, are averaged as RMSE.
-    // Checked against the TUM scripts and evo 1.38 on teddy, the kinfu sample and the bundled room:
-    // the ATE agrees to 0.001 mm, the RPE with evaluate_rpe.py to 0.1-5% (which pairs its script keeps).
-    // evo's translational RPE is 1.5-10% higher: it takes E = B^-1 A, whose translation |t_A - t_B|
-    // leaves out the rotation error that E = A B^-1 carries into it; the angles agree.
+    // Checked against the TUM scripts and evo (docs/BENCHMARKS.md); evaluate_rpe.py differs only in
+    // which pairs its script keeps. evo's translational RPE reads higher: it takes E = B^-1 A, whose
+    // translation |t_A - t_B| leaves out the rotation error that E = A B^-1 carries into it; the
+    // angles agree.
     int rpe_pairs = 0;
     double rpe_trans_m_per_s = 0.0;   // NaN when rpe_pairs == 0
     double rpe_rot_deg_per_s = 0.0;

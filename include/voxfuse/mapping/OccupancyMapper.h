@@ -1,8 +1,8 @@
 #pragma once
 // An OctoMap occupancy map (free / occupied / unknown) built beside the TSDF from the same depth
 // frames and camera poses, on its own thread: inserting rays into an octree on the CPU is far slower
-// than fusion, so frames and pixels are subsampled (thesis, Algorithm 5) and a full queue drops
-// frames instead of stalling the fusion loop.
+// than fusion, so frames and pixels are subsampled (Algorithm 5 of the KinectFusion/OctoMap thesis
+// cited in docs/DESIGN_NOTES.md) and a full queue drops frames instead of stalling the fusion loop.
 //
 // The octree lives behind a pimpl, so users of this header need no OctoMap headers. In a build
 // without OctoMap (VOXFUSE_WITH_OCTOMAP undefined) the constructor throws ConfigError.

@@ -46,10 +46,10 @@ constexpr std::uint8_t kEntryVisible = 2;        // in the visible list of the l
 // MainEngineSettings::hash.max_block_count: the engine chooses the ceiling for its device and memory.
 constexpr int kAutomaticBlockCount = 0;
 
-// Sizes of the hash index. Defaults are those of DESIGN.md.
+// Sizes of the hash index. The table's defaults are InfiniTAM's.
 struct VoxelBlockHashSettings {
     int bucket_count = 0x100000;       // buckets of the ordered table (any positive number; powers of two hash faster)
-    int entries_per_bucket = 1;        // ordered entries per bucket: 1 or 2 (the report's buckets hold 2)
+    int entries_per_bucket = 1;        // ordered entries per bucket: 1 or 2 (the InfiniTAM report's buckets hold 2)
     int excess_entry_count = 0x20000;  // entries of the excess list shared by all buckets
     // Voxel blocks the array may grow to (2^18 x 512 voxels), at most 2^22. MainEngineSettings starts
     // from kAutomaticBlockCount instead: the engine then chooses (automaticMaxBlockCount in MainEngine.h).

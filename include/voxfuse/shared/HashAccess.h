@@ -11,7 +11,7 @@ namespace voxfuse {
 VF_HOST_DEVICE inline Vec3i blockOfVoxel(Vec3i p) { return {p.x >> 3, p.y >> 3, p.z >> 3}; }
 VF_HOST_DEVICE inline int voxelIndexInBlock(Vec3i p) { return (p.x & 7) + (p.y & 7) * 8 + (p.z & 7) * 64; }
 
-// The report's hash: ((x * 73856093) ^ (y * 19349669) ^ (z * 83492791)) mod bucket_count, in unsigned
+// The InfiniTAM report's hash: ((x * 73856093) ^ (y * 19349669) ^ (z * 83492791)) mod bucket_count, in unsigned
 // arithmetic (signed overflow would be undefined); a mask when bucket_count is a power of two.
 VF_HOST_DEVICE inline int hashBucket(Vec3i block, int bucket_count) {
     const unsigned h = (unsigned(block.x) * 73856093u) ^ (unsigned(block.y) * 19349669u) ^ (unsigned(block.z) * 83492791u);

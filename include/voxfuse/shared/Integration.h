@@ -239,7 +239,7 @@ struct IntegrateHashVoxels {
 };
 
 // ---- Skipping blocks no voxel of which the frame updates (hash integration) ----
-// Half the voxels of teddy's visible blocks lie more than mu behind the surface the frame sees, and
+// Many voxels of the visible blocks lie more than mu behind the surface the frame sees, and
 // some blocks have no depth in front of them at all: integrateVoxel() would leave all of them as they
 // are. A block is skipped when the largest usable depth among the pixels its voxels can project to,
 // plus mu, lies in front of its nearest voxel. The test is conservative (padded boxes, whole tiles of

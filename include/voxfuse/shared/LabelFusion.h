@@ -1,10 +1,10 @@
 #pragma once
-// Fusing one observed semantic class into a voxel's class (the TUM report, section 3.6), shared by
-// the CPU loop and the CUDA kernel through integrateVoxel().
+// Fusing one observed semantic class into a voxel's class (the TUM KinectFusion report, section 3.6;
+// see docs/DESIGN_NOTES.md), shared by the CPU loop and the CUDA kernel through integrateVoxel().
 //
 // A voxel keeps one class and a weight that counts the observations that agreed with it. An
 // observation of the same class adds one. An observation of another class:
-//  - Probabilistic (the report's rule, the default): the voxel takes the new class with probability
+//  - Probabilistic (that report's rule, the default): the voxel takes the new class with probability
 //    w_new / (w_old + w_new), w_new = 1, and then starts counting again from 1; otherwise nothing
 //    changes. A voxel seen as class A for n_A frames in a row and then as B for n_B frames keeps A
 //    with probability (n_A / (n_A + 1))^n_B: a long-held class is hard to dislodge, but a minority

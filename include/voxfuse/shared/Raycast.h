@@ -1,7 +1,7 @@
 #pragma once
 // Casting one ray through the TSDF (section 4.4 of the InfiniTAM report): steps as long as the SDF
 // allows (never shorter than a voxel), a trilinear refinement at the zero crossing, and no surface
-// reported where a ray enters the band from behind (the report's WRONG_SIDE case).
+// reported where a ray enters the band from behind (the InfiniTAM report's WRONG_SIDE case).
 
 #include "voxfuse/core/Atomics.h"
 #include "voxfuse/core/Math.h"
@@ -86,7 +86,7 @@ VF_HOST_DEVICE inline bool castRay(Vec3f& hit_grid, const TVoxel* voxels, const 
     return true;
 }
 
-// ---- The voxel block hash: the report's state machine ----
+// ---- The voxel block hash: the InfiniTAM report's state machine ----
 
 enum class RayState {
     SearchBlockCoarse,  // in unallocated space: jump to where the ray leaves the current block
@@ -112,7 +112,7 @@ VF_HOST_DEVICE inline float rayBlockExit(Vec3f origin, Vec3f dir, Vec3i block) {
 // The march of castRay() for the voxel block hash (TIndexData: VoxelBlockHash::Data or CachedHashView): the same
 // steps, thresholds and refinement inside allocated blocks, but unallocated blocks are crossed in one
 // go, and a surface counts only when the ray saw its positive side after the last unallocated gap (the
-// report's WRONG_SIDE: the boundary between unallocated space and negative values is no surface).
+// InfiniTAM report's WRONG_SIDE: the boundary between unallocated space and negative values is no surface).
 // Coarse steps are whole multiples of step_scale, the step castRay() takes through unobserved space,
 // and the march starts on the lattice t_anchor + k * step_scale: where the search range starts and how
 // the blocks are laid out never moves the samples, so the surface found depends on the SDF alone.
@@ -243,7 +243,7 @@ struct RaycastCamera {
 // own pose, in an image `factor` times the raycast's resolution along each axis. A ray whose footprint
 // holds depths starts `margin_m` in front of the nearest of them instead of at the start of its
 // expected range: the frame saw free space up to there, and the ray no longer crosses the empty space
-// between the front of its tile's blocks and the surface (on teddy, half of its steps, each a hash
+// between the front of its tile's blocks and the surface (often most of its steps, each a hash
 // lookup that finds nothing). A surface the model holds in front of what the frame saw (something
 // that has moved away, not yet carved) is stepped over. Rays without depths in their footprint search
 // their whole range.
@@ -389,7 +389,7 @@ struct NormalsFromRaycastPoints {
     }
 };
 
-// ---- Expected depth ranges from forward-projected blocks (section 4.4 of the report) ----
+// ---- Expected depth ranges from forward-projected blocks (section 4.4 of the InfiniTAM report) ----
 // The image is covered by tiles of kRangeTile x kRangeTile pixels, each with a [min, max] depth.
 // Every candidate block projects its box into the tile grid; the tiles it covers are split into
 // fragments of up to kRangeFragment x kRangeFragment tiles (16 x 16 pixels), one element each, which

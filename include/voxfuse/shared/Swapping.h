@@ -11,7 +11,7 @@
 
 namespace voxfuse {
 
-// The report's secondary integration: a block that came back into the voxel array while its stored
+// The InfiniTAM report's secondary integration: a block that came back into the voxel array while its stored
 // copy was still in the cache has fused new frames since; the stored copy is merged in as one more
 // weighted observation, never overwriting. With nothing fused since (active weight 0) the stored
 // voxel comes back exactly, so a block swapped out and in again is bit-identical.

@@ -62,8 +62,8 @@ VF_HOST_DEVICE inline void readCellVoxels(const TVoxel* voxels, const CachedHash
 
 // Observed corners must carry at least this share of the trilinear weight for an interpolated SDF to
 // count (below it, `p` is as good as unobserved). 0.25 bridges the single unobserved voxels that depth
-// holes leave; 0.5 does not (kinfu_sample_50 then fails 49 of 50 frames again). Larger shares keep
-// silhouettes of surfaces seen from few views tighter.
+// holes leave; 0.5 does not, and a recording with a regular grid of depth holes then fails to track
+// again. Larger shares keep silhouettes of surfaces seen from few views tighter.
 constexpr float kMinObservedWeight = 0.25f;
 
 // Trilinear interpolation of the SDF at `p` (grid units) over the observed corners, their weights
