@@ -20,6 +20,7 @@ packages=(
   xvfb xauth libgl1-mesa-dri   # the viewer's screenshot test under a virtual display
   pybind11-dev python3-dev python3-venv python3-numpy python3-pytest  # the Python package and its tests
   dpkg-dev             # dpkg-shlibdeps, for the Debian package's dependencies (cpack -G DEB)
+  clang-format         # the layout check (scripts/check_format.sh, version 14 on Debian 12)
   "$@"
 )
 
