@@ -12,7 +12,8 @@ std::unique_ptr<AllocationEngine<TVoxel, TIndex>> makeAllocationEngine() {
     return makeAllocationEngineOn<CudaDevice, TVoxel, TIndex>();
 }
 
-#define VF_INSTANTIATE(TVoxel, TIndex) template std::unique_ptr<AllocationEngine<TVoxel, TIndex>> makeAllocationEngine<TVoxel, TIndex>();
+#define VF_INSTANTIATE(TVoxel, TIndex) \
+    template std::unique_ptr<AllocationEngine<TVoxel, TIndex>> makeAllocationEngine<TVoxel, TIndex>();
 VF_FOR_EACH_ENGINE_PAIR(VF_INSTANTIATE)
 #undef VF_INSTANTIATE
 

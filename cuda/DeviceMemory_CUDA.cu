@@ -69,7 +69,8 @@ template <class F>
 bool lookUp(const char* symbol, F& fn) {
     void* p = nullptr;
     cudaDriverEntryPointQueryResult found{};
-    if (!cuda::succeeded(cudaGetDriverEntryPointByVersion(symbol, &p, 12000, cudaEnableDefault, &found)) || found != cudaDriverEntryPointSuccess)
+    if (!cuda::succeeded(cudaGetDriverEntryPointByVersion(symbol, &p, 12000, cudaEnableDefault, &found)) ||
+        found != cudaDriverEntryPointSuccess)
         return false;
     fn = reinterpret_cast<F>(p);
     return p != nullptr;
@@ -81,7 +82,9 @@ struct GrowableRegion {
     std::size_t mapped_bytes = 0;
     std::vector<std::pair<CUmemGenericAllocationHandle, std::size_t>> chunks;
 };
-std::size_t roundUp(std::size_t bytes, std::size_t granularity) { return (bytes + granularity - 1) / granularity * granularity; }
+std::size_t roundUp(std::size_t bytes, std::size_t granularity) {
+    return (bytes + granularity - 1) / granularity * granularity;
+}
 // The regions by base address, under the ledger's lock.
 std::unordered_map<void*, GrowableRegion>& growableRegions() {
     static std::unordered_map<void*, GrowableRegion> regions;
@@ -115,13 +118,15 @@ std::string cudaDescription() {
         // Without any driver the runtime says its version is "insufficient": say both causes.
         if (status == cudaErrorInsufficientDriver)
             return "no usable CUDA device (no NVIDIA driver found, or one older than this build's CUDA " +
-                   std::to_string(CUDART_VERSION / 1000) + "." + std::to_string(CUDART_VERSION % 1000 / 10) + " runtime)";
+                   std::to_string(CUDART_VERSION / 1000) + "." + std::to_string(CUDART_VERSION % 1000 / 10) +
+                   " runtime)";
         return std::string("no usable CUDA device (") + cudaGetErrorString(status) + ")";
     }
     if (count == 0) return "no CUDA device";
     cudaDeviceProp prop{};
     int device = 0;
-    if (!cuda::succeeded(cudaGetDevice(&device)) || !cuda::succeeded(cudaGetDeviceProperties(&prop, device))) return "CUDA device (unknown)";
+    if (!cuda::succeeded(cudaGetDevice(&device)) || !cuda::succeeded(cudaGetDeviceProperties(&prop, device)))
+        return "CUDA device (unknown)";
     return std::string(prop.name) + " (sm_" + std::to_string(prop.major) + std::to_string(prop.minor) + ", " +
            std::to_string(prop.totalGlobalMem >> 20) + " MiB)";
 }
@@ -153,18 +158,23 @@ const VirtualMemoryCalls& virtualMemory() {
         VirtualMemoryCalls c;
         if (!cudaAvailable()) return c;
         const bool found = lookUp("cuDeviceGet", c.deviceGet) && lookUp("cuDeviceGetAttribute", c.deviceGetAttribute) &&
-                           lookUp("cuMemGetAllocationGranularity", c.granularity) && lookUp("cuMemAddressReserve", c.addressReserve) &&
-                           lookUp("cuMemAddressFree", c.addressFree) && lookUp("cuMemCreate", c.create) && lookUp("cuMemRelease", c.release) &&
-                           lookUp("cuMemMap", c.map) && lookUp("cuMemUnmap", c.unmap) && lookUp("cuMemSetAccess", c.setAccess);
+                           lookUp("cuMemGetAllocationGranularity", c.granularity) &&
+                           lookUp("cuMemAddressReserve", c.addressReserve) &&
+                           lookUp("cuMemAddressFree", c.addressFree) && lookUp("cuMemCreate", c.create) &&
+                           lookUp("cuMemRelease", c.release) && lookUp("cuMemMap", c.map) &&
+                           lookUp("cuMemUnmap", c.unmap) && lookUp("cuMemSetAccess", c.setAccess);
         CUdevice device = 0;
         int supported = 0;
         if (!found || !cuda::succeeded(cudaGetDevice(&c.device)) || c.deviceGet(&device, c.device) != CUDA_SUCCESS ||
-            c.deviceGetAttribute(&supported, CU_DEVICE_ATTRIBUTE_VIRTUAL_MEMORY_MANAGEMENT_SUPPORTED, device) != CUDA_SUCCESS || !supported)
+            c.deviceGetAttribute(&supported, CU_DEVICE_ATTRIBUTE_VIRTUAL_MEMORY_MANAGEMENT_SUPPORTED, device) !=
+                CUDA_SUCCESS ||
+            !supported)
             return c;
         c.prop.type = CU_MEM_ALLOCATION_TYPE_PINNED;
         c.prop.location.type = CU_MEM_LOCATION_TYPE_DEVICE;
         c.prop.location.id = c.device;
-        c.usable = c.granularity(&c.granularity_bytes, &c.prop, CU_MEM_ALLOC_GRANULARITY_RECOMMENDED) == CUDA_SUCCESS && c.granularity_bytes > 0;
+        c.usable = c.granularity(&c.granularity_bytes, &c.prop, CU_MEM_ALLOC_GRANULARITY_RECOMMENDED) == CUDA_SUCCESS &&
+                   c.granularity_bytes > 0;
         return c;
     }();
     return calls;
@@ -199,14 +209,15 @@ void growGrowable(void* base, std::size_t bytes) {
     if (bytes <= region.mapped_bytes) return;
     const std::size_t target = roundUp(bytes, vm.granularity_bytes);
     if (target > region.reserved_bytes)
-        throw DeviceError("growGrowable: " + std::to_string(bytes) + " bytes exceed the " + std::to_string(region.reserved_bytes) + " reserved");
+        throw DeviceError("growGrowable: " + std::to_string(bytes) + " bytes exceed the " +
+                          std::to_string(region.reserved_bytes) + " reserved");
     const std::size_t chunk = target - region.mapped_bytes;
     const CUdeviceptr at = reinterpret_cast<CUdeviceptr>(base) + region.mapped_bytes;
     CUmemGenericAllocationHandle handle{};
     CUresult status = vm.create(&handle, chunk, &vm.prop, 0);
     if (status != CUDA_SUCCESS)
-        throw DeviceError("cuMemCreate of " + std::to_string(chunk >> 20) + " MiB failed (GPU memory exhausted?), CUresult " +
-                          std::to_string(int(status)));
+        throw DeviceError("cuMemCreate of " + std::to_string(chunk >> 20) +
+                          " MiB failed (GPU memory exhausted?), CUresult " + std::to_string(int(status)));
     status = vm.map(at, chunk, 0, handle, 0);
     if (status == CUDA_SUCCESS) {
         CUmemAccessDesc access{};
@@ -217,7 +228,8 @@ void growGrowable(void* base, std::size_t bytes) {
     }
     if (status != CUDA_SUCCESS) {
         vm.release(handle);
-        throw DeviceError("mapping " + std::to_string(chunk >> 20) + " MiB of GPU memory failed, CUresult " + std::to_string(int(status)));
+        throw DeviceError("mapping " + std::to_string(chunk >> 20) + " MiB of GPU memory failed, CUresult " +
+                          std::to_string(int(status)));
     }
     region.chunks.emplace_back(handle, chunk);
     region.mapped_bytes = target;
@@ -278,19 +290,27 @@ void releasePinned(void* ptr) noexcept {
     if (ptr) cuda::succeeded(cudaFreeHost(ptr));
 }
 
-void copyHostToDevice(void* dst, const void* src, std::size_t bytes) { VF_CUDA_CHECK(cudaMemcpy(dst, src, bytes, cudaMemcpyHostToDevice)); }
-void copyDeviceToHost(void* dst, const void* src, std::size_t bytes) { VF_CUDA_CHECK(cudaMemcpy(dst, src, bytes, cudaMemcpyDeviceToHost)); }
-void copyDeviceToDevice(void* dst, const void* src, std::size_t bytes) { VF_CUDA_CHECK(cudaMemcpy(dst, src, bytes, cudaMemcpyDeviceToDevice)); }
+void copyHostToDevice(void* dst, const void* src, std::size_t bytes) {
+    VF_CUDA_CHECK(cudaMemcpy(dst, src, bytes, cudaMemcpyHostToDevice));
+}
+void copyDeviceToHost(void* dst, const void* src, std::size_t bytes) {
+    VF_CUDA_CHECK(cudaMemcpy(dst, src, bytes, cudaMemcpyDeviceToHost));
+}
+void copyDeviceToDevice(void* dst, const void* src, std::size_t bytes) {
+    VF_CUDA_CHECK(cudaMemcpy(dst, src, bytes, cudaMemcpyDeviceToDevice));
+}
 void fill(void* dst, int byte_value, std::size_t bytes) { VF_CUDA_CHECK(cudaMemset(dst, byte_value, bytes)); }
 
 void fillPattern(void* dst, const void* pattern, std::size_t pattern_bytes, std::size_t count) {
-    if (pattern_bytes == 0 || pattern_bytes > sizeof(FillPattern)) throw DeviceError("fillPattern: element size must be 1..64 bytes");
+    if (pattern_bytes == 0 || pattern_bytes > sizeof(FillPattern))
+        throw DeviceError("fillPattern: element size must be 1..64 bytes");
     if (count == 0) return;
     FillPattern p{};
     std::memcpy(p.bytes, pattern, pattern_bytes);
     const unsigned threads = 256;
     const std::size_t blocks = (count + threads - 1) / threads;
-    fillPatternKernel<<<unsigned(blocks), threads>>>(static_cast<unsigned char*>(dst), p, unsigned(pattern_bytes), count);
+    fillPatternKernel<<<unsigned(blocks), threads>>>(static_cast<unsigned char*>(dst), p, unsigned(pattern_bytes),
+                                                     count);
     VF_CUDA_CHECK_LAUNCH();
 }
 

@@ -11,7 +11,8 @@ std::unique_ptr<IntegrationEngine<TVoxel, TIndex>> makeIntegrationEngine() {
     return makeIntegrationEngineOn<CudaDevice, TVoxel, TIndex>();
 }
 
-#define VF_INSTANTIATE(TVoxel, TIndex) template std::unique_ptr<IntegrationEngine<TVoxel, TIndex>> makeIntegrationEngine<TVoxel, TIndex>();
+#define VF_INSTANTIATE(TVoxel, TIndex) \
+    template std::unique_ptr<IntegrationEngine<TVoxel, TIndex>> makeIntegrationEngine<TVoxel, TIndex>();
 VF_FOR_EACH_ENGINE_PAIR(VF_INSTANTIATE)
 #undef VF_INSTANTIATE
 

@@ -11,7 +11,8 @@ std::unique_ptr<RaycastEngine<TVoxel, TIndex>> makeRaycastEngine() {
     return makeRaycastEngineOn<CudaDevice, TVoxel, TIndex>();
 }
 
-#define VF_INSTANTIATE(TVoxel, TIndex) template std::unique_ptr<RaycastEngine<TVoxel, TIndex>> makeRaycastEngine<TVoxel, TIndex>();
+#define VF_INSTANTIATE(TVoxel, TIndex) \
+    template std::unique_ptr<RaycastEngine<TVoxel, TIndex>> makeRaycastEngine<TVoxel, TIndex>();
 VF_FOR_EACH_ENGINE_PAIR(VF_INSTANTIATE)
 #undef VF_INSTANTIATE
 

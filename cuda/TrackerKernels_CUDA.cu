@@ -5,7 +5,11 @@
 
 namespace voxfuse::cuda {
 
-std::unique_ptr<DepthTrackerKernels> makeDepthTrackerKernels() { return std::make_unique<DepthTrackerKernelsOn<CudaDevice>>(); }
-std::unique_ptr<ColorTrackerKernels> makeColorTrackerKernels() { return std::make_unique<ColorTrackerKernelsOn<CudaDevice>>(); }
+std::unique_ptr<DepthTrackerKernels> makeDepthTrackerKernels() {
+    return std::make_unique<DepthTrackerKernelsOn<CudaDevice>>();
+}
+std::unique_ptr<ColorTrackerKernels> makeColorTrackerKernels() {
+    return std::make_unique<ColorTrackerKernelsOn<CudaDevice>>();
+}
 
 }  // namespace voxfuse::cuda

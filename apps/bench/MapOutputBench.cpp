@@ -64,36 +64,43 @@ CloudBench benchCloud(MainEngine& engine, int repeats, float cell_m) {
 }
 
 void printMeshing(const MeshingBench& b) {
-    std::printf("\n  meshing (marching cubes, median of %d): %.1f ms (min %.1f), %lld vertices, %lld triangles, mesh %.1f MB",
-                b.repeats, b.median_ms, b.min_ms, b.vertices, b.triangles, b.mesh_mb);
+    std::printf(
+        "\n  meshing (marching cubes, median of %d): %.1f ms (min %.1f), %lld vertices, %lld triangles, mesh %.1f MB",
+        b.repeats, b.median_ms, b.min_ms, b.vertices, b.triangles, b.mesh_mb);
     if (b.peak_extra_mb >= 0.0)
-        std::printf(", peak +%.1f MB (%.2f x the mesh)", b.peak_extra_mb, b.mesh_mb > 0.0 ? b.peak_extra_mb / b.mesh_mb : 0.0);
+        std::printf(", peak +%.1f MB (%.2f x the mesh)", b.peak_extra_mb,
+                    b.mesh_mb > 0.0 ? b.peak_extra_mb / b.mesh_mb : 0.0);
     if (b.gpu_peak_extra_mb >= 0.0)
-        std::printf(", GPU peak +%.1f MB (%.2f x the mesh)", b.gpu_peak_extra_mb, b.mesh_mb > 0.0 ? b.gpu_peak_extra_mb / b.mesh_mb : 0.0);
+        std::printf(", GPU peak +%.1f MB (%.2f x the mesh)", b.gpu_peak_extra_mb,
+                    b.mesh_mb > 0.0 ? b.gpu_peak_extra_mb / b.mesh_mb : 0.0);
     std::printf("\n");
 }
 
 void printCloud(const CloudBench& b) {
     std::printf("  point cloud (median of %d): %.1f ms, %lld points", b.repeats, b.extract_median_ms, b.points);
     if (b.cell_m > 0.f)
-        std::printf("; downsampled to %.1f mm cells in %.1f ms, %lld points", 1000.0 * b.cell_m, b.downsample_median_ms, b.downsampled_points);
+        std::printf("; downsampled to %.1f mm cells in %.1f ms, %lld points", 1000.0 * b.cell_m, b.downsample_median_ms,
+                    b.downsampled_points);
     std::printf("\n");
 }
 
 namespace {
 
-double perFrameMs(const OccupancyStats& s) { return s.frames_inserted > 0 ? s.insert_ms / double(s.frames_inserted) : 0.0; }
+double perFrameMs(const OccupancyStats& s) {
+    return s.frames_inserted > 0 ? s.insert_ms / double(s.frames_inserted) : 0.0;
+}
 
 }  // namespace
 
 void printOccupancy(const OccupancyStats& s, const OccupancySettings& settings) {
     const double ms = perFrameMs(s);
-    std::printf("  occupancy (%.0f mm cells, every %d%s pixel, every %d%s frame): %lld of %lld frames inserted, %lld dropped; "
-                "worker %.1f ms per frame = %.1f frames/s, %.2f M points/s\n",
-                1000.0 * settings.resolution_m, settings.pixel_step, settings.pixel_step == 1 ? "st" : "th", settings.frame_step,
-                settings.frame_step == 1 ? "st" : "th", (long long)s.frames_inserted, (long long)s.frames_submitted,
-                (long long)s.frames_dropped, ms, ms > 0.0 ? 1000.0 / ms : 0.0,
-                s.insert_ms > 0.0 ? double(s.points_inserted) / s.insert_ms / 1000.0 : 0.0);
+    std::printf(
+        "  occupancy (%.0f mm cells, every %d%s pixel, every %d%s frame): %lld of %lld frames inserted, %lld dropped; "
+        "worker %.1f ms per frame = %.1f frames/s, %.2f M points/s\n",
+        1000.0 * settings.resolution_m, settings.pixel_step, settings.pixel_step == 1 ? "st" : "th",
+        settings.frame_step, settings.frame_step == 1 ? "st" : "th", (long long)s.frames_inserted,
+        (long long)s.frames_submitted, (long long)s.frames_dropped, ms, ms > 0.0 ? 1000.0 / ms : 0.0,
+        s.insert_ms > 0.0 ? double(s.points_inserted) / s.insert_ms / 1000.0 : 0.0);
 }
 
 Json meshingJson(const MeshingBench& b) {

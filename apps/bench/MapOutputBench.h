@@ -14,8 +14,8 @@ struct MeshingBench {
     int repeats = 0;
     double median_ms = 0.0, min_ms = 0.0;
     long long vertices = 0, triangles = 0;
-    double mesh_mb = 0.0;        // the arrays of the finished mesh
-    double peak_extra_mb = -1.0;  // resident memory above the pre-meshing level at the peak (< 0: unknown)
+    double mesh_mb = 0.0;             // the arrays of the finished mesh
+    double peak_extra_mb = -1.0;      // resident memory above the pre-meshing level at the peak (< 0: unknown)
     double gpu_peak_extra_mb = -1.0;  // GPU memory above the pre-meshing level at the peak (< 0: a CPU run)
 };
 

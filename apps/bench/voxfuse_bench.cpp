@@ -84,8 +84,10 @@ std::unique_ptr<ImageSource> openSource(const std::string& path) {
 #if VOXFUSE_WITH_IO
     return openImageSource(path);  // undistorted after the labels are attached (framesForEngine)
 #else
-    throw ConfigError("this build has no image I/O (VOXFUSE_IO=OFF): the source must be synthetic[:N] or a depth pack (a folder with "
-                      "depth.bin.gz), not '" + path + "'");
+    throw ConfigError(
+        "this build has no image I/O (VOXFUSE_IO=OFF): the source must be synthetic[:N] or a depth pack (a folder with "
+        "depth.bin.gz), not '" +
+        path + "'");
 #endif
 }
 
@@ -108,33 +110,50 @@ int main(int argc, char** argv) {
     occupancy_settings.resolution_m = 0.f;  // off unless --occupancy
     MainEngineSettings& s = o.engine;
     cli.add_option("source", source_path,
-                   "sequence (default: ../shared/data/tum_fr3_teddy_200, else the bundled data), or synthetic[:N] for N frames of the "
+                   "sequence (default: ../shared/data/tum_fr3_teddy_200, else the bundled data), or synthetic[:N] for "
+                   "N frames of the "
                    "synthetic room rendered in memory");
     cli.add_option("--frames", max_frames, "at most N frames (0 = all)")->check(app::nonNegativeInt());
-    cli.add_option("--warmup", warmup, "frames left out of the statistics")->capture_default_str()->check(app::nonNegativeInt());
+    cli.add_option("--warmup", warmup, "frames left out of the statistics")
+        ->capture_default_str()
+        ->check(app::nonNegativeInt());
 #if VOXFUSE_WITH_IO
-    app::addVoxelAndLabelOptions(cli, labels, "s_rgb");  // voxfuse's default: the rgbd tracker aligns to the map's colours
+    app::addVoxelAndLabelOptions(cli, labels,
+                                 "s_rgb");  // voxfuse's default: the rgbd tracker aligns to the map's colours
 #else
-    cli.add_option("--voxel", voxel, "voxel type")->capture_default_str()->check(CLI::IsMember({"s", "f", "s_rgb", "f_rgb", "s_label", "s_rgb_label"}));
+    cli.add_option("--voxel", voxel, "voxel type")
+        ->capture_default_str()
+        ->check(CLI::IsMember({"s", "f", "s_rgb", "f_rgb", "s_label", "s_rgb_label"}));
 #endif
     app::addMapOptions(cli, o);
     app::addTrackingOptions(cli, o);
-    cli.add_flag("--render", render,
-                 "after each frame, render the model from the frame's camera (shaded, the depth camera's resolution, the image "
-                 "brought to the host), as the viewer does: timed as stage 'render', outside 'total'");
-    cli.add_flag("--mesh", mesh, "after the run, time marching cubes on the map (median of --repeats), its size and peak memory");
+    cli.add_flag(
+        "--render", render,
+        "after each frame, render the model from the frame's camera (shaded, the depth camera's resolution, the image "
+        "brought to the host), as the viewer does: timed as stage 'render', outside 'total'");
+    cli.add_flag("--mesh", mesh,
+                 "after the run, time marching cubes on the map (median of --repeats), its size and peak memory");
     cli.add_flag("--cloud", cloud, "after the run, time the point cloud extraction");
-    cli.add_option("--cloud-voxel", cloud_voxel_m, "also time downsampling the cloud to cells of this size (m); implies --cloud")
+    cli.add_option("--cloud-voxel", cloud_voxel_m,
+                   "also time downsampling the cloud to cells of this size (m); implies --cloud")
         ->check(app::floatIn(1e-4, 1000.0));
-    cli.add_option("--repeats", repeats, "runs of each map output timed")->capture_default_str()->check(app::intIn(1, 100));
-    cli.add_option("--occupancy", occupancy_settings.resolution_m, "build an OctoMap with RES-metre cells beside the run; report its thread's throughput")
+    cli.add_option("--repeats", repeats, "runs of each map output timed")
+        ->capture_default_str()
+        ->check(app::intIn(1, 100));
+    cli.add_option("--occupancy", occupancy_settings.resolution_m,
+                   "build an OctoMap with RES-metre cells beside the run; report its thread's throughput")
         ->check(app::floatIn(0.001, 10.0));
     cli.add_option("--occupancy-pixel-step", occupancy_settings.pixel_step, "occupancy: every Nth pixel in x and y")
-        ->capture_default_str()->check(app::intIn(1, 64));
+        ->capture_default_str()
+        ->check(app::intIn(1, 64));
     cli.add_option("--json", json_path, "where to write the JSON report")->capture_default_str();
-    cli.add_option("--timings", timings_path, "also write every frame's stage times and visible blocks to this JSON file (as voxfuse's timings.json)");
-    cli.add_option("--trajectory", trajectory_path, "also write the frames' poses to this file (TUM format, as voxfuse's trajectory.txt)");
-    cli.add_option("--mesh-out", mesh_path, "after the run, also write the map's mesh to this file (.ply, .obj or .stl)")
+    cli.add_option(
+        "--timings", timings_path,
+        "also write every frame's stage times and visible blocks to this JSON file (as voxfuse's timings.json)");
+    cli.add_option("--trajectory", trajectory_path,
+                   "also write the frames' poses to this file (TUM format, as voxfuse's trajectory.txt)");
+    cli.add_option("--mesh-out", mesh_path,
+                   "after the run, also write the map's mesh to this file (.ply, .obj or .stl)")
         ->check(app::meshFileName());
     app::addVersionFlag(cli, "voxfuse_bench");
     if (const auto status = app::parseCommandLine(cli, argc, argv, "voxfuse_bench")) return *status;
@@ -146,8 +165,8 @@ int main(int argc, char** argv) {
         if (cli.count("--occupancy-pixel-step") > 0 && !(occupancy_settings.resolution_m > 0.f))
             throw ConfigError("--occupancy-pixel-step needs --occupancy");
         if (max_frames > 0 && max_frames <= warmup)
-            throw ConfigError("--frames " + std::to_string(max_frames) + " leaves no frame after the " + std::to_string(warmup) +
-                              " warm-up frames (--warmup)");
+            throw ConfigError("--frames " + std::to_string(max_frames) + " leaves no frame after the " +
+                              std::to_string(warmup) + " warm-up frames (--warmup)");
         requireWritable(json_path);  // before the run, not after it
         if (!timings_path.empty()) requireWritable(timings_path);
         if (!trajectory_path.empty()) requireWritable(trajectory_path);
@@ -168,21 +187,24 @@ int main(int argc, char** argv) {
         record.source = source->description();
         record.settings = engine->settings();
         record.tracked = o.poses == "track";
-        app::SequenceRunner runner(*source, *engine, record.tracked ? app::PoseSource::Tracker : app::PoseSource::GroundTruth, record,
+        app::SequenceRunner runner(*source, *engine,
+                                   record.tracked ? app::PoseSource::Tracker : app::PoseSource::GroundTruth, record,
                                    "voxfuse_bench");
         // Per pyramid level of the tracker, coarse to fine: "track L0 160x120", ...
         std::vector<std::string> level_names;
         std::map<std::string, std::vector<double>> level_samples, level_iterations;
         const Timer wall;
         Image<Vec4u8> rendered;
-        while ((max_frames <= 0 || int(record.frames.size()) < max_frames) && runner.processNext(app::interrupt::requested)) {
+        while ((max_frames <= 0 || int(record.frames.size()) < max_frames) &&
+               runner.processNext(app::interrupt::requested)) {
             if (render) {
                 const Timer render_time;
                 engine->renderLast(RenderMode::Shaded, rendered);
                 record.frames.back().result.stages.push_back({"render", render_time.elapsedMs()});
             }
             const FrameResult& fr = runner.lastRecord().result;
-            if (occupancy && fr.fused) occupancy->submit(engine->view().depth, engine->view().calib.depth, fr.T_world_camera);
+            if (occupancy && fr.fused)
+                occupancy->submit(engine->view().depth, engine->view().calib.depth, fr.T_world_camera);
             if (!record.tracked || int(record.frames.size()) <= warmup) continue;
             const TrackerStats& ts = engine->trackerStats();
             for (std::size_t l = 0; l < ts.levels.size(); ++l) {
@@ -200,8 +222,8 @@ int main(int argc, char** argv) {
         record.scene_mb = double(engine->sceneBytes()) / (1024.0 * 1024.0);
         record.allocation = engine->allocationStats();
         if (int(record.frames.size()) <= warmup)
-            throw ConfigError(std::to_string(record.frames.size()) + " frames were processed, no more than the " + std::to_string(warmup) +
-                              " warm-up frames (--warmup): none is left for the statistics");
+            throw ConfigError(std::to_string(record.frames.size()) + " frames were processed, no more than the " +
+                              std::to_string(warmup) + " warm-up frames (--warmup): none is left for the statistics");
 
         std::vector<std::string> order;
         std::map<std::string, std::vector<double>> samples;
@@ -222,22 +244,26 @@ int main(int argc, char** argv) {
         if (render) order.push_back("total+render");
 
         std::printf("VoxFuse benchmark: %s\n", record.source.c_str());
-        const std::string device_text =
-            s.device == Device::CUDA ? std::string("cuda: ") + device_memory::cudaDescription() : std::string(deviceName(s.device));
-        std::printf("  %s voxels, %s index, %.1f mm voxels, device %s, poses %s; %zu frames (%d warm-up frames left out)\n\n",
-                    toString(s.voxel_type), toString(s.index_type), 1000.0 * s.scene.voxel_size_m, device_text.c_str(),
-                    record.tracked ? (std::string("tracked (") + toString(s.tracker.kind) + ")").c_str() : "ground truth",
-                    record.frames.size(), warmup);
+        const std::string device_text = s.device == Device::CUDA
+                                            ? std::string("cuda: ") + device_memory::cudaDescription()
+                                            : std::string(deviceName(s.device));
+        std::printf(
+            "  %s voxels, %s index, %.1f mm voxels, device %s, poses %s; %zu frames (%d warm-up frames left out)\n\n",
+            toString(s.voxel_type), toString(s.index_type), 1000.0 * s.scene.voxel_size_m, device_text.c_str(),
+            record.tracked ? (std::string("tracked (") + toString(s.tracker.kind) + ")").c_str() : "ground truth",
+            record.frames.size(), warmup);
         std::printf("  %-12s %10s %10s %10s\n", "stage", "median ms", "mean ms", "p90 ms");
         std::map<std::string, StageSummary> summaries;
         for (const auto& name : order) {
             summaries[name] = summarise(samples[name]);
-            std::printf("  %-12s %10.2f %10.2f %10.2f\n", name.c_str(), summaries[name].median_ms, summaries[name].mean_ms, summaries[name].p90_ms);
+            std::printf("  %-12s %10.2f %10.2f %10.2f\n", name.c_str(), summaries[name].median_ms,
+                        summaries[name].mean_ms, summaries[name].p90_ms);
             if (name != "track") continue;
             for (const auto& level : level_names) {  // the tracker's levels, indented under it
                 summaries[level] = summarise(level_samples[level]);
-                std::printf("  %-12s %10.2f %10.2f %10.2f   %.1f iterations (mean)\n", level.c_str(), summaries[level].median_ms,
-                            summaries[level].mean_ms, summaries[level].p90_ms, meanOf(level_iterations[level]));
+                std::printf("  %-12s %10.2f %10.2f %10.2f   %.1f iterations (mean)\n", level.c_str(),
+                            summaries[level].median_ms, summaries[level].mean_ms, summaries[level].p90_ms,
+                            meanOf(level_iterations[level]));
             }
         }
         if (!source->groundTruth().empty()) {
@@ -250,19 +276,24 @@ int main(int argc, char** argv) {
                         record.allocation.allocation_failures_total);
         if (record.has_trajectory_error) {
             const TrajectoryError& e = record.trajectory_error;
-            const std::string rpe = e.rpe_pairs > 0 ? formatMillimetres(e.rpe_trans_m_per_s) + " mm/s" : "n/a (too short)";
-            std::printf("\n  ATE RMSE %.2f mm over %d poses (%.2f mm with the timestamps moved %+.1f ms, the best offset), RPE %s; "
-                        "%d frames failed tracking",
-                        1000.0 * e.ate_rmse_m, e.pairs, 1000.0 * e.ate_rmse_at_best_offset_m, 1000.0 * e.best_time_offset_s, rpe.c_str(),
-                        app::countQuality(record, TrackingQuality::Failed));
+            const std::string rpe =
+                e.rpe_pairs > 0 ? formatMillimetres(e.rpe_trans_m_per_s) + " mm/s" : "n/a (too short)";
+            std::printf(
+                "\n  ATE RMSE %.2f mm over %d poses (%.2f mm with the timestamps moved %+.1f ms, the best offset), RPE "
+                "%s; "
+                "%d frames failed tracking",
+                1000.0 * e.ate_rmse_m, e.pairs, 1000.0 * e.ate_rmse_at_best_offset_m, 1000.0 * e.best_time_offset_s,
+                rpe.c_str(), app::countQuality(record, TrackingQuality::Failed));
         }
         if (s.relocalisation.enabled)
-            std::printf("\n  relocalisation: %d frames lost, %d relocalised after %d attempts", app::countStatus(record, TrackingStatus::Lost),
-                        app::countStatus(record, TrackingStatus::Relocalised), app::countRelocalisationAttempts(record));
+            std::printf("\n  relocalisation: %d frames lost, %d relocalised after %d attempts",
+                        app::countStatus(record, TrackingStatus::Lost),
+                        app::countStatus(record, TrackingStatus::Relocalised),
+                        app::countRelocalisationAttempts(record));
         std::printf("\n  engine frames/s (1000 / median total): %.1f", engine_fps);
         if (render) std::printf(", with a render per frame: %.1f", 1000.0 / summaries["total+render"].median_ms);
-        std::printf("\n  wall frames/s (incl. decoding): %.1f\n  peak RSS: %.0f MB, scene: %.0f MB\n", app::framesPerSecond(record),
-                    record.peak_rss_mb, record.scene_mb);
+        std::printf("\n  wall frames/s (incl. decoding): %.1f\n  peak RSS: %.0f MB, scene: %.0f MB\n",
+                    app::framesPerSecond(record), record.peak_rss_mb, record.scene_mb);
 
         // Swapping: blocks moved per frame (each way) and what stayed active.
         std::vector<double> swapped_in, swapped_out;
@@ -273,12 +304,16 @@ int main(int argc, char** argv) {
             swapped_out.push_back(a.blocks_swapped_out_this_frame);
             most_active = std::max(most_active, a.blocks_allocated);
         }
-        const auto most = [](const std::vector<double>& v) { return v.empty() ? 0.0 : *std::max_element(v.begin(), v.end()); };
+        const auto most = [](const std::vector<double>& v) {
+            return v.empty() ? 0.0 : *std::max_element(v.begin(), v.end());
+        };
         if (s.swap.enabled)
-            std::printf("  swapping: %d blocks stored in %s; per frame in %.1f (max %.0f), out %.1f (max %.0f), limit %d; "
-                        "at most %d of %d blocks active\n",
-                        record.allocation.blocks_stored, s.swap.swap_file.empty() ? "memory" : s.swap.swap_file.c_str(), meanOf(swapped_in),
-                        most(swapped_in), meanOf(swapped_out), most(swapped_out), s.swap.blocks_per_frame, most_active, s.hash.max_block_count);
+            std::printf(
+                "  swapping: %d blocks stored in %s; per frame in %.1f (max %.0f), out %.1f (max %.0f), limit %d; "
+                "at most %d of %d blocks active\n",
+                record.allocation.blocks_stored, s.swap.swap_file.empty() ? "memory" : s.swap.swap_file.c_str(),
+                meanOf(swapped_in), most(swapped_in), meanOf(swapped_out), most(swapped_out), s.swap.blocks_per_frame,
+                most_active, s.hash.max_block_count);
 
         app::MeshingBench meshing;
         app::CloudBench cloud_bench;
@@ -305,16 +340,20 @@ int main(int argc, char** argv) {
         j["warmup_frames"] = warmup;
         app::Json& stages = j["stages"] = app::Json::object();
         for (const auto& name : order)
-            stages[name] = {{"median_ms", summaries[name].median_ms}, {"mean_ms", summaries[name].mean_ms}, {"p90_ms", summaries[name].p90_ms}};
+            stages[name] = {{"median_ms", summaries[name].median_ms},
+                            {"mean_ms", summaries[name].mean_ms},
+                            {"p90_ms", summaries[name].p90_ms}};
         app::Json& levels = j["tracker_levels"] = app::Json::object();
         for (const auto& level : level_names) levels[level.substr(2)] = summaries[level].median_ms;
-        app::Json& iterations = j["tracker_iterations"] = app::Json::object();  // mean Gauss-Newton iterations per frame
+        app::Json& iterations = j["tracker_iterations"] =
+            app::Json::object();  // mean Gauss-Newton iterations per frame
         for (const auto& level : level_names) iterations[level.substr(2)] = meanOf(level_iterations[level]);
         if (record.has_trajectory_error) {
             j["ate_rmse_m"] = record.trajectory_error.ate_rmse_m;
             j["ate_best_time_offset_s"] = record.trajectory_error.best_time_offset_s;
             j["ate_rmse_at_best_time_offset_m"] = record.trajectory_error.ate_rmse_at_best_offset_m;
-            if (record.trajectory_error.rpe_pairs > 0) j["rpe_trans_m_per_s"] = record.trajectory_error.rpe_trans_m_per_s;
+            if (record.trajectory_error.rpe_pairs > 0)
+                j["rpe_trans_m_per_s"] = record.trajectory_error.rpe_trans_m_per_s;
         }
         j["tracking_failed_frames"] = app::countQuality(record, TrackingQuality::Failed);
         j["frames_lost"] = app::countStatus(record, TrackingStatus::Lost);

@@ -15,7 +15,8 @@ namespace voxfuse::app {
 
 // --version prints "PROGRAM VERSION".
 inline void addVersionFlag(CLI::App& cli, const char* program) {
-    cli.set_version_flag("--version", std::string(program) + " " + VOXFUSE_VERSION_STRING, "print the version and exit");
+    cli.set_version_flag("--version", std::string(program) + " " + VOXFUSE_VERSION_STRING,
+                         "print the version and exit");
 }
 
 // Parses the command line. Returns the status to exit with when the program ends here (help, version,

@@ -20,8 +20,9 @@ std::string bundledSequence(const char* program) {
     candidates.push_back("data/synthetic_room");
     for (const fs::path& candidate : candidates)
         if (fs::exists(candidate / "rgb.txt", ec)) return candidate.string();
-    throw IoError(VOXFUSE_SOURCE_DATA_DIR, std::string("the bundled sequence is missing (not beside the sources, nor installed beside ") +
-                                               program + "): give a SOURCE (see " + program + " --help)");
+    throw IoError(VOXFUSE_SOURCE_DATA_DIR,
+                  std::string("the bundled sequence is missing (not beside the sources, nor installed beside ") +
+                      program + "): give a SOURCE (see " + program + " --help)");
 }
 
 }  // namespace voxfuse::app

@@ -47,8 +47,10 @@ void prepareMessage(char* buffer, std::size_t& length, const std::string& text) 
 
 void install(const char* program) {
     prepareMessage(g_first_message, g_first_length,
-                   std::string("\n") + program + ": interrupted: stopping after this frame and writing the outputs (again to quit at once)\n");
-    prepareMessage(g_second_message, g_second_length, std::string("\n") + program + ": interrupted again: quitting now, outputs not written\n");
+                   std::string("\n") + program +
+                       ": interrupted: stopping after this frame and writing the outputs (again to quit at once)\n");
+    prepareMessage(g_second_message, g_second_length,
+                   std::string("\n") + program + ": interrupted again: quitting now, outputs not written\n");
     struct sigaction action {};
     action.sa_handler = onSignal;
     sigemptyset(&action.sa_mask);

@@ -15,16 +15,22 @@ void addVoxelAndLabelOptions(CLI::App& cli, LabelInputOptions& o, const std::str
     cli.add_option("--voxel", o.voxel, "voxel type (default " + default_voxel + "; s_rgb_label with --labels)")
         ->check(CLI::IsMember({"s", "f", "s_rgb", "f_rgb", "s_label", "s_rgb_label"}));
     cli.add_option("--labels", o.path,
-                   "semantic label images (one class id per pixel; PNG, PGM or TIFF): a folder, or a list file of 'timestamp path' lines "
+                   "semantic label images (one class id per pixel; PNG, PGM or TIFF): a folder, or a list file of "
+                   "'timestamp path' lines "
                    "(default: SOURCE/labels.txt or SOURCE/labels/ when a semantic voxel type is used)");
-    cli.add_option("--label-match", o.match, "how label images find their frames: by file order (index), by timestamp, or auto")
-        ->capture_default_str()->check(CLI::IsMember({"auto", "index", "timestamp"}));
+    cli.add_option("--label-match", o.match,
+                   "how label images find their frames: by file order (index), by timestamp, or auto")
+        ->capture_default_str()
+        ->check(CLI::IsMember({"auto", "index", "timestamp"}));
     cli.add_option("--label-ignore", o.ignore_id, "class id that means 'no label' in the label images (-1: none)")
-        ->capture_default_str()->check(intIn(-1, 65535));
-    cli.add_option("--label-update", o.update,
-                   "class update on disagreement: switch with probability 1/(count+1) (probabilistic, the report's rule) or "
-                   "majority vote (vote: more robust to noisy segmentations)")
-        ->capture_default_str()->check(CLI::IsMember({"probabilistic", "vote"}));
+        ->capture_default_str()
+        ->check(intIn(-1, 65535));
+    cli.add_option(
+           "--label-update", o.update,
+           "class update on disagreement: switch with probability 1/(count+1) (probabilistic, the report's rule) or "
+           "majority vote (vote: more robust to noisy segmentations)")
+        ->capture_default_str()
+        ->check(CLI::IsMember({"probabilistic", "vote"}));
 }
 
 namespace {
@@ -39,8 +45,8 @@ std::string labelsBeside(const std::string& source_path) {
 
 }  // namespace
 
-LabelledImageSource* attachLabelInput(std::unique_ptr<ImageSource>& source, const std::string& source_path, const LabelInputOptions& o,
-                                      MainEngineSettings& s, const char* program) {
+LabelledImageSource* attachLabelInput(std::unique_ptr<ImageSource>& source, const std::string& source_path,
+                                      const LabelInputOptions& o, MainEngineSettings& s, const char* program) {
     s.scene.label_update = o.update == "vote" ? LabelUpdate::Vote : LabelUpdate::Probabilistic;
     s.voxel_type = parseVoxelType(!o.voxel.empty() ? o.voxel : !o.path.empty() ? "s_rgb_label" : o.default_voxel);
     if (!o.path.empty() && !voxelTypeHasLabels(s.voxel_type))
@@ -54,7 +60,7 @@ LabelledImageSource* attachLabelInput(std::unique_ptr<ImageSource>& source, cons
     }
     LabelStreamOptions lo;
     lo.path = path;
-    lo.match = o.match == "index" ? LabelStreamOptions::Match::Index
+    lo.match = o.match == "index"       ? LabelStreamOptions::Match::Index
                : o.match == "timestamp" ? LabelStreamOptions::Match::Timestamp
                                         : LabelStreamOptions::Match::Automatic;
     lo.ignore_id = o.ignore_id;

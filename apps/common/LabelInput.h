@@ -15,11 +15,11 @@
 namespace voxfuse::app {
 
 struct LabelInputOptions {
-    std::string voxel;                     // --voxel: "" = default_voxel, or s_rgb_label with --labels
-    std::string default_voxel;             // the front-end's own default (set by addVoxelAndLabelOptions)
-    std::string path;                      // --labels: folder or list file; "" = SOURCE/labels.txt or SOURCE/labels/ if there
-    std::string match = "auto";            // --label-match auto|index|timestamp
-    int ignore_id = 0;                     // --label-ignore: this id in the files means "no label" (-1: none)
+    std::string voxel;           // --voxel: "" = default_voxel, or s_rgb_label with --labels
+    std::string default_voxel;   // the front-end's own default (set by addVoxelAndLabelOptions)
+    std::string path;            // --labels: folder or list file; "" = SOURCE/labels.txt or SOURCE/labels/ if there
+    std::string match = "auto";  // --label-match auto|index|timestamp
+    int ignore_id = 0;           // --label-ignore: this id in the files means "no label" (-1: none)
     std::string update = "probabilistic";  // --label-update probabilistic|vote
 };
 
@@ -34,6 +34,7 @@ void addVoxelAndLabelOptions(CLI::App& cli, LabelInputOptions& options, const st
 // Sets settings.voxel_type and settings.scene.label_update. Returns the label stream (owned by
 // `source`), or nullptr without one.
 LabelledImageSource* attachLabelInput(std::unique_ptr<ImageSource>& source, const std::string& source_path,
-                                      const LabelInputOptions& options, MainEngineSettings& settings, const char* program);
+                                      const LabelInputOptions& options, MainEngineSettings& settings,
+                                      const char* program);
 
 }  // namespace voxfuse::app

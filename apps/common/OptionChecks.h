@@ -45,7 +45,8 @@ inline CLI::Validator floatIn(double lo, double hi, bool lo_open = false) {
             if (!std::isfinite(v) || std::abs(v) > double(std::numeric_limits<float>::max()))
                 return "'" + text + "' is not a finite number (values are stored as floats)";
             const double as_float = double(float(v));
-            if (!(lo_open ? as_float > lo : as_float >= lo) || !(as_float <= hi)) return "'" + text + "' is not in " + range;
+            if (!(lo_open ? as_float > lo : as_float >= lo) || !(as_float <= hi))
+                return "'" + text + "' is not in " + range;
             return {};
         },
         "FLOAT in " + range);
@@ -64,8 +65,10 @@ inline CLI::Validator intIn(long long lo, long long hi) {
             long long v = 0;
             const char* end = digits.data() + digits.size();
             const auto result = std::from_chars(digits.data(), end, v);
-            if (digits.empty() || result.ptr != end || result.ec == std::errc::invalid_argument) return "'" + text + "' is not an integer";
-            if (result.ec == std::errc::result_out_of_range || v < lo || v > hi) return "'" + text + "' is not in " + range;
+            if (digits.empty() || result.ptr != end || result.ec == std::errc::invalid_argument)
+                return "'" + text + "' is not an integer";
+            if (result.ec == std::errc::result_out_of_range || v < lo || v > hi)
+                return "'" + text + "' is not in " + range;
             return {};
         },
         "INT in " + range);
@@ -82,7 +85,8 @@ inline CLI::Validator meshFileName() {
             std::error_code ec;
             if (std::filesystem::is_directory(path, ec)) return "'" + path + "' is a folder, not a file";
             if (!isMeshFileName(path))
-                return "'" + path + "': unknown mesh format '" + std::filesystem::path(path).extension().string() + "' (expected .ply, .obj or .stl)";
+                return "'" + path + "': unknown mesh format '" + std::filesystem::path(path).extension().string() +
+                       "' (expected .ply, .obj or .stl)";
             return {};
         },
         "MESH FILE");

@@ -30,9 +30,12 @@ std::string listed(const std::vector<std::string>& names) {
 }  // namespace
 
 bool isRunOutputName(const std::string& name) {
-    for (const char* exact : {"trajectory.txt", "timings.json", "summary.json", "mesh.ply", "mesh_unlabelled.ply", "cloud.ply", "occupancy.bt"})
+    for (const char* exact : {"trajectory.txt", "timings.json", "summary.json", "mesh.ply", "mesh_unlabelled.ply",
+                              "cloud.ply", "occupancy.bt"})
         if (name == exact) return true;
-    if ((startsWith(name, "render_") && endsWith(name, ".png")) || (startsWith(name, "mesh_class_") && endsWith(name, ".ply"))) return true;
+    if ((startsWith(name, "render_") && endsWith(name, ".png")) ||
+        (startsWith(name, "mesh_class_") && endsWith(name, ".ply")))
+        return true;
     return isPartialFileName(name);
 }
 
@@ -55,11 +58,13 @@ OutputFolder::OutputFolder(const std::string& folder, bool overwrite, const char
                           "): give another --out, or --overwrite to replace them");
     for (const std::string& name : earlier) {
         fs::remove(fs::path(folder_) / name, ec);
-        if (ec) throw IoError((fs::path(folder_) / name).string(), "cannot remove an earlier run's output: " + ec.message());
+        if (ec)
+            throw IoError((fs::path(folder_) / name).string(),
+                          "cannot remove an earlier run's output: " + ec.message());
     }
     if (!earlier.empty())
-        std::cerr << program << ": --overwrite: removed " << earlier.size() << " files of an earlier run from " << folder_ << " ("
-                  << listed(earlier) << ")\n";
+        std::cerr << program << ": --overwrite: removed " << earlier.size() << " files of an earlier run from "
+                  << folder_ << " (" << listed(earlier) << ")\n";
     requireWritable((fs::path(folder_) / "summary.json").string());
 }
 

@@ -15,18 +15,23 @@ namespace voxfuse::app {
 
 void addSourceOptions(CLI::App& cli, PipelineOptions& o) {
     cli.add_option("source", o.source,
-                   "TUM RGB-D folder, per-frame folder (frame-XXXXXX.depth.png), OpenNI .oni recording, Stray Scanner (iPhone LiDAR) "
+                   "TUM RGB-D folder, per-frame folder (frame-XXXXXX.depth.png), OpenNI .oni recording, Stray Scanner "
+                   "(iPhone LiDAR) "
                    "folder, or synthetic[:N] / synthetic-corridor[:N] (rendered in memory)");
     cli.add_flag("--live", o.live, "read a live OpenNI2 camera (Kinect, PrimeSense, Structure)");
     cli.add_option("--device-uri", o.device_uri, "with --live: which camera (see --list-devices; default: the first)");
     cli.add_flag("--list-devices", o.list_devices, "list the OpenNI2 cameras and exit");
-    cli.add_flag("--threaded", o.threaded, "decode and undistort frames on a reader thread ahead of the engine (always on for --live)");
-    cli.add_option("--min-confidence", o.source_options.min_depth_confidence, "iPhone LiDAR: keep depth of at least this confidence (0-2)")
-        ->capture_default_str()->check(intIn(0, 2));
+    cli.add_flag("--threaded", o.threaded,
+                 "decode and undistort frames on a reader thread ahead of the engine (always on for --live)");
+    cli.add_option("--min-confidence", o.source_options.min_depth_confidence,
+                   "iPhone LiDAR: keep depth of at least this confidence (0-2)")
+        ->capture_default_str()
+        ->check(intIn(0, 2));
     cli.add_option("--rgb", o.source_options.rgb_pattern, "PPM colour file pattern, e.g. frames/%04i.ppm");
     cli.add_option("--depth", o.source_options.depth_pattern, "16-bit PGM depth file pattern, e.g. frames/%04i.pgm");
     cli.add_option("--calib", o.source_options.calib_path, "InfiniTAM calib.txt (overrides the source's own)");
-    cli.add_option("--skip", o.skip_frames, "drop the first N frames of the source (e.g. those a --load-map map already holds)")
+    cli.add_option("--skip", o.skip_frames,
+                   "drop the first N frames of the source (e.g. those a --load-map map already holds)")
         ->check(nonNegativeInt());
 }
 
@@ -53,13 +58,17 @@ void adoptMapSettings(PipelineOptions& o, const MapFileInfo& map) {
     MainEngineSettings adopted = settingsForMap(map, o.engine);
     if (o.wasGiven("--max-blocks")) adopted.hash.max_block_count = o.engine.hash.max_block_count;
     auto conflict = [&](const char* option, const std::string& what) {
-        throw ConfigError(o.load_map + ": the map has " + what + "; " + option + " cannot change it (leave the option out)");
+        throw ConfigError(o.load_map + ": the map has " + what + "; " + option +
+                          " cannot change it (leave the option out)");
     };
-    if (!o.labels.voxel.empty() && o.labels.voxel != map.voxel_type) conflict("--voxel", "'" + map.voxel_type + "' voxels");
-    if (o.wasGiven("--index") && o.index != (map.hash ? "hash" : "dense")) conflict("--index", std::string("the ") + (map.hash ? "hash" : "dense") + " index");
+    if (!o.labels.voxel.empty() && o.labels.voxel != map.voxel_type)
+        conflict("--voxel", "'" + map.voxel_type + "' voxels");
+    if (o.wasGiven("--index") && o.index != (map.hash ? "hash" : "dense"))
+        conflict("--index", std::string("the ") + (map.hash ? "hash" : "dense") + " index");
     if (o.wasGiven("--voxel-size") && o.engine.scene.voxel_size_m != map.scene.voxel_size_m)
         conflict("--voxel-size", std::to_string(map.scene.voxel_size_m) + " m voxels");
-    if (o.wasGiven("--mu") && o.engine.scene.mu_m != map.scene.mu_m) conflict("--mu", "mu " + std::to_string(map.scene.mu_m) + " m");
+    if (o.wasGiven("--mu") && o.engine.scene.mu_m != map.scene.mu_m)
+        conflict("--mu", "mu " + std::to_string(map.scene.mu_m) + " m");
     if (o.wasGiven("--max-blocks") && !map.hash) conflict("--max-blocks", "the dense index");
     for (const char* option : {"--hash-buckets", "--hash-excess", "--volume-size", "--volume-offset"})
         if (o.wasGiven(option)) conflict(option, "its own index settings");
@@ -80,7 +89,8 @@ namespace {
 
 std::unique_ptr<ImageSource> openSource(PipelineOptions& o, const char* program) {
     if (o.live) return OpenNISource::openDevice(o.device_uri, o.source_options);
-    if (o.source.empty() && o.source_options.rgb_pattern.empty() && o.source_options.depth_pattern.empty()) o.source = bundledSequence(program);
+    if (o.source.empty() && o.source_options.rgb_pattern.empty() && o.source_options.depth_pattern.empty())
+        o.source = bundledSequence(program);
     if (SyntheticSource::isSyntheticName(o.source)) return SyntheticSource::open(o.source);
     return openImageSource(o.source, o.source_options);
 }

@@ -23,14 +23,14 @@ struct PipelineOptions : EngineOptions {
     // Where the frames come from.
     std::string source;  // SOURCE: a recording, synthetic[:N] / synthetic-corridor[:N]; "" = the bundled sequence
     SourceOptions source_options;
-    bool live = false;              // an OpenNI2 camera instead of a recording
-    std::string device_uri;         // which camera ("" = the first)
+    bool live = false;       // an OpenNI2 camera instead of a recording
+    std::string device_uri;  // which camera ("" = the first)
     bool list_devices = false;
-    bool threaded = false;          // decode (and undistort) on a reader thread ahead of the engine
-    int skip_frames = 0;            // dropped from the start of the source
+    bool threaded = false;  // decode (and undistort) on a reader thread ahead of the engine
+    int skip_frames = 0;    // dropped from the start of the source
     // The map, beside EngineOptions.
-    LabelInputOptions labels;       // and --voxel
-    std::string load_map;           // continue this map (its voxel type, index and voxel size); each program adds --load-map
+    LabelInputOptions labels;  // and --voxel
+    std::string load_map;      // continue this map (its voxel type, index and voxel size); each program adds --load-map
 };
 
 // SOURCE, --live, --device-uri, --list-devices, --threaded, --min-confidence, --rgb, --depth, --calib, --skip.

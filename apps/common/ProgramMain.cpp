@@ -15,7 +15,8 @@ int runReportingErrors(const char* program, const std::function<int()>& body) {
         std::cerr << "\n" << program << ": error: " << e.what() << "\n";
         return 2;
     } catch (const std::bad_alloc&) {
-        std::cerr << "\n" << program << ": error: out of memory: the settings ask for more memory than this machine has "
+        std::cerr << "\n"
+                  << program << ": error: out of memory: the settings ask for more memory than this machine has "
                   << "(larger --voxel-size, smaller --max-blocks or --volume-size, fewer --frames)\n";
         return 2;
     } catch (const std::exception& e) {

@@ -15,15 +15,22 @@ inline void addRelocalisationOptions(CLI::App& cli, RelocalisationSettings& sett
     cli.add_option_function<std::string>(
            "--relocalise", [&settings](const std::string& mode) { settings.enabled = mode == "on"; },
            "once tracking is lost, find the camera again from keyframes (nothing is fused until then)")
-        ->default_str(settings.enabled ? "on" : "off")->check(CLI::IsMember({"on", "off"}));
-    cli.add_option("--relocalise-candidates", settings.candidates, "relocalisation: keyframes tried per lost frame, most alike first")
-        ->capture_default_str()->check(app::intIn(1, 1000));
+        ->default_str(settings.enabled ? "on" : "off")
+        ->check(CLI::IsMember({"on", "off"}));
+    cli.add_option("--relocalise-candidates", settings.candidates,
+                   "relocalisation: keyframes tried per lost frame, most alike first")
+        ->capture_default_str()
+        ->check(app::intIn(1, 1000));
     cli.add_option("--relocalise-max-speed", settings.max_speed_m_per_s,
-                   "relocalisation: m/s the camera may have moved since the last good frame; poses farther away are not taken (0: no limit)")
-        ->capture_default_str()->check(app::floatIn(0.0, 1e6));
+                   "relocalisation: m/s the camera may have moved since the last good frame; poses farther away are "
+                   "not taken (0: no limit)")
+        ->capture_default_str()
+        ->check(app::floatIn(0.0, 1e6));
     cli.add_option("--relocalise-min-colour-correlation", settings.min_colour_correlation,
-                   "relocalisation: how well a found pose's view must correlate with the map's colours (colour voxels; -1: no colour test)")
-        ->capture_default_str()->check(app::floatIn(-1.0, 1.0));
+                   "relocalisation: how well a found pose's view must correlate with the map's colours (colour voxels; "
+                   "-1: no colour test)")
+        ->capture_default_str()
+        ->check(app::floatIn(-1.0, 1.0));
 }
 
 }  // namespace voxfuse::app

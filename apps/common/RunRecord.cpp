@@ -143,7 +143,8 @@ void writeSummaryJson(const std::string& path, const RunRecord& run) {
         for (const auto& f : run.frames) {
             most_in = std::max(most_in, f.result.allocation.blocks_swapped_in_this_frame);
             most_out = std::max(most_out, f.result.allocation.blocks_swapped_out_this_frame);
-            moved += f.result.allocation.blocks_swapped_in_this_frame + f.result.allocation.blocks_swapped_out_this_frame;
+            moved +=
+                f.result.allocation.blocks_swapped_in_this_frame + f.result.allocation.blocks_swapped_out_this_frame;
         }
         Json& swapping = j["swapping"];
         swapping["blocks_stored"] = run.allocation.blocks_stored;
@@ -179,7 +180,8 @@ void writeSummaryJson(const std::string& path, const RunRecord& run) {
         // It changes the poses without changing max_depth_m: a run must say which depths it tracked on.
         settings["max_tracking_depth_m"] = double(run.settings.tracker.max_tracking_depth_m);
         // rgbd reads depths beyond max_depth_m too (its far field): 0 keyframes means it did not.
-        if (run.settings.tracker.kind == TrackerKind::Rgbd) settings["far_field_keyframes"] = run.settings.tracker.far_field_keyframes;
+        if (run.settings.tracker.kind == TrackerKind::Rgbd)
+            settings["far_field_keyframes"] = run.settings.tracker.far_field_keyframes;
         settings["relocalisation"] = run.settings.relocalisation.enabled;
     }
     j["outputs"] = run.outputs;
@@ -193,20 +195,25 @@ std::string summaryText(const RunRecord& run, const std::string& out_dir) {
     char line[256];
     s << (run.interrupted ? "VoxFuse run (interrupted: the outputs hold the frames done)\n" : "VoxFuse run\n");
     s << "  source       " << run.source << "\n";
-    std::snprintf(line, sizeof line, "  frames       %zu processed, %d fused, %d without pose, %d unreadable, %d dropped (live)\n",
+    std::snprintf(line, sizeof line,
+                  "  frames       %zu processed, %d fused, %d without pose, %d unreadable, %d dropped (live)\n",
                   run.frames.size(), fused, run.frames_without_pose, run.frames_unreadable, run.frames_dropped);
     s << line;
     if (run.frames.empty()) {
         // A map written out without frames: nothing was tracked.
     } else if (run.tracked) {
-        std::snprintf(line, sizeof line, "  tracking     %s tracker: %d good, %d poor, %d failed (not fused)\n", toString(run.settings.tracker.kind),
-                      int(run.frames.size()) - countQuality(run, TrackingQuality::Poor) - countQuality(run, TrackingQuality::Failed),
+        std::snprintf(line, sizeof line, "  tracking     %s tracker: %d good, %d poor, %d failed (not fused)\n",
+                      toString(run.settings.tracker.kind),
+                      int(run.frames.size()) - countQuality(run, TrackingQuality::Poor) -
+                          countQuality(run, TrackingQuality::Failed),
                       countQuality(run, TrackingQuality::Poor), countQuality(run, TrackingQuality::Failed));
         s << line;
         if (run.settings.relocalisation.enabled || countStatus(run, TrackingStatus::Lost) > 0) {
-            std::snprintf(line, sizeof line, "  lost         %d frames without a pose (not fused), %d relocalised after %d attempts%s\n",
+            std::snprintf(line, sizeof line,
+                          "  lost         %d frames without a pose (not fused), %d relocalised after %d attempts%s\n",
                           countStatus(run, TrackingStatus::Lost), countStatus(run, TrackingStatus::Relocalised),
-                          countRelocalisationAttempts(run), run.settings.relocalisation.enabled ? "" : " (relocalisation off)");
+                          countRelocalisationAttempts(run),
+                          run.settings.relocalisation.enabled ? "" : " (relocalisation off)");
             s << line;
         }
     } else {
@@ -214,44 +221,53 @@ std::string summaryText(const RunRecord& run, const std::string& out_dir) {
     }
     if (run.has_trajectory_error) {
         const TrajectoryError& e = run.trajectory_error;
-        std::snprintf(line, sizeof line, "  accuracy     ATE RMSE %.1f mm (median %.1f, max %.1f, %d poses), ", 1000.0 * e.ate_rmse_m,
-                      1000.0 * e.ate_median_m, 1000.0 * e.ate_max_m, e.pairs);
+        std::snprintf(line, sizeof line, "  accuracy     ATE RMSE %.1f mm (median %.1f, max %.1f, %d poses), ",
+                      1000.0 * e.ate_rmse_m, 1000.0 * e.ate_median_m, 1000.0 * e.ate_max_m, e.pairs);
         s << line;
         if (e.rpe_pairs > 0) {
-            std::snprintf(line, sizeof line, "RPE %.1f mm/s %.2f deg/s\n", 1000.0 * e.rpe_trans_m_per_s, e.rpe_rot_deg_per_s);
+            std::snprintf(line, sizeof line, "RPE %.1f mm/s %.2f deg/s\n", 1000.0 * e.rpe_trans_m_per_s,
+                          e.rpe_rot_deg_per_s);
             s << line;
         } else {
             s << "RPE n/a (sequence shorter than its 1 s step)\n";
         }
         if (std::isfinite(e.best_time_offset_s)) {
-            std::snprintf(line, sizeof line, "  clocks       best offset %+.1f ms (frame times against the ground truth's, within %.0f ms): ATE RMSE %.1f mm\n",
-                          1000.0 * e.best_time_offset_s, 1000.0 * TrajectoryErrorOptions().max_time_offset_s, 1000.0 * e.ate_rmse_at_best_offset_m);
+            std::snprintf(line, sizeof line,
+                          "  clocks       best offset %+.1f ms (frame times against the ground truth's, within %.0f "
+                          "ms): ATE RMSE %.1f mm\n",
+                          1000.0 * e.best_time_offset_s, 1000.0 * TrajectoryErrorOptions().max_time_offset_s,
+                          1000.0 * e.ate_rmse_at_best_offset_m);
             s << line;
         }
     }
     if (run.has_labels) {
-        std::snprintf(line, sizeof line, "  labels       %d of %zu frames had a label image (%s update)\n", run.frames_with_labels,
-                      run.frames.size(), run.settings.scene.label_update == LabelUpdate::Vote ? "vote" : "probabilistic");
+        std::snprintf(line, sizeof line, "  labels       %d of %zu frames had a label image (%s update)\n",
+                      run.frames_with_labels, run.frames.size(),
+                      run.settings.scene.label_update == LabelUpdate::Vote ? "vote" : "probabilistic");
         s << line;
     }
     std::snprintf(line, sizeof line, "  volume       %s voxels, %s index, %.1f mm voxels, mu %.1f mm, %.0f MB\n",
-                  toString(run.settings.voxel_type), toString(run.settings.index_type), 1000.0 * run.settings.scene.voxel_size_m,
-                  1000.0 * run.settings.scene.mu_m, run.scene_mb);
+                  toString(run.settings.voxel_type), toString(run.settings.index_type),
+                  1000.0 * run.settings.scene.voxel_size_m, 1000.0 * run.settings.scene.mu_m, run.scene_mb);
     s << line;
     std::snprintf(line, sizeof line, "  speed        %.1f ms per frame (median, engine only), %.1f frames/s overall\n",
                   medianTotalMs(run), framesPerSecond(run));
     s << line;
     if (run.settings.swap.enabled) {
-        std::snprintf(line, sizeof line, "  swapping     %d blocks stored in %s, at most %d active, at most %d moved each way per frame\n",
-                      run.allocation.blocks_stored, run.settings.swap.swap_file.empty() ? "memory" : run.settings.swap.swap_file.c_str(),
+        std::snprintf(line, sizeof line,
+                      "  swapping     %d blocks stored in %s, at most %d active, at most %d moved each way per frame\n",
+                      run.allocation.blocks_stored,
+                      run.settings.swap.swap_file.empty() ? "memory" : run.settings.swap.swap_file.c_str(),
                       run.settings.hash.max_block_count, run.settings.swap.blocks_per_frame);
         s << line;
     }
     if (run.settings.index_type == IndexType::Hash) {
-        std::snprintf(line, sizeof line, "  hash         %d blocks in use (%d backed by memory), %lld removed, %lld could not be allocated%s\n",
-                      run.allocation.blocks_allocated, run.allocation.block_capacity, run.allocation.blocks_removed_total,
-                      run.allocation.allocation_failures_total,
-                      run.allocation.allocation_failures_total > 0 ? " (raise --max-blocks / the hash size)" : "");
+        std::snprintf(
+            line, sizeof line,
+            "  hash         %d blocks in use (%d backed by memory), %lld removed, %lld could not be allocated%s\n",
+            run.allocation.blocks_allocated, run.allocation.block_capacity, run.allocation.blocks_removed_total,
+            run.allocation.allocation_failures_total,
+            run.allocation.allocation_failures_total > 0 ? " (raise --max-blocks / the hash size)" : "");
         s << line;
     }
     s << "  stages (median ms):";
@@ -262,7 +278,8 @@ std::string summaryText(const RunRecord& run, const std::string& out_dir) {
     }
     s << "\n";
     if (!run.map_loaded.empty() || !run.map_saved.empty())
-        s << "  map          " << (run.map_loaded.empty() ? "" : "continued " + run.map_loaded + (run.map_saved.empty() ? "" : ", "))
+        s << "  map          "
+          << (run.map_loaded.empty() ? "" : "continued " + run.map_loaded + (run.map_saved.empty() ? "" : ", "))
           << (run.map_saved.empty() ? "" : "saved to " + run.map_saved) << "\n";
     std::snprintf(line, sizeof line, "  peak memory  %.0f MB\n", run.peak_rss_mb);
     s << line;

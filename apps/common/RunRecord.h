@@ -21,22 +21,22 @@ struct RunRecord {
     MainEngineSettings settings;
     std::vector<FrameRecord> frames;  // every processed frame
     std::vector<TimedPose> trajectory;
-    int frames_without_pose = 0;      // skipped: --poses groundtruth but no ground truth for the frame
-    int frames_unreadable = 0;        // skipped: the source could not read them
-    int frames_dropped = 0;           // live input: dropped by the reader thread while the engine lagged
-    bool has_labels = false;          // a label image stream was attached
-    int frames_with_labels = 0;       // frames a label image was found for
+    int frames_without_pose = 0;  // skipped: --poses groundtruth but no ground truth for the frame
+    int frames_unreadable = 0;    // skipped: the source could not read them
+    int frames_dropped = 0;       // live input: dropped by the reader thread while the engine lagged
+    bool has_labels = false;      // a label image stream was attached
+    int frames_with_labels = 0;   // frames a label image was found for
     double wall_s = 0.0;
     double peak_rss_mb = 0.0;
     double scene_mb = 0.0;
-    AllocationStats allocation;       // the index at the end (hash only)
-    bool tracked = false;             // poses came from the tracker (not ground truth)
-    std::string map_loaded;           // the map file the run continued, if any
-    std::string map_saved;            // the map file the run wrote, if any
-    bool interrupted = false;         // stopped early by Ctrl-C or SIGTERM (the outputs hold the frames done)
-    std::vector<std::string> outputs; // the files this run wrote in its output folder (summary.json last)
+    AllocationStats allocation;        // the index at the end (hash only)
+    bool tracked = false;              // poses came from the tracker (not ground truth)
+    std::string map_loaded;            // the map file the run continued, if any
+    std::string map_saved;             // the map file the run wrote, if any
+    bool interrupted = false;          // stopped early by Ctrl-C or SIGTERM (the outputs hold the frames done)
+    std::vector<std::string> outputs;  // the files this run wrote in its output folder (summary.json last)
     bool has_trajectory_error = false;
-    TrajectoryError trajectory_error; // against the source's ground truth, when it has one
+    TrajectoryError trajectory_error;  // against the source's ground truth, when it has one
 };
 
 // Frames whose tracking was poor / failed (failed frames are not fused).

@@ -6,10 +6,12 @@
 
 namespace voxfuse::app {
 
-SequenceRunner::SequenceRunner(ImageSource& source, MainEngine& engine, PoseSource poses, RunRecord& record, const char* program)
+SequenceRunner::SequenceRunner(ImageSource& source, MainEngine& engine, PoseSource poses, RunRecord& record,
+                               const char* program)
     : source_(source), engine_(engine), poses_(poses), record_(record), program_(program) {
     if (poses_ == PoseSource::GroundTruth && source_.groundTruth().empty())
-        throw ConfigError("poses from ground truth need a source with ground truth, and '" + source_.description() + "' has none");
+        throw ConfigError("poses from ground truth need a source with ground truth, and '" + source_.description() +
+                          "' has none");
 }
 
 int SequenceRunner::skip(int count) {
@@ -65,18 +67,22 @@ SequenceRunner::Step SequenceRunner::step() {
     reportNoColourToTrack();
     record_.frames.push_back(fr);
     // A lost frame has no pose (it holds the last good one): the trajectory leaves it out.
-    if (fr.result.status != TrackingStatus::Lost) record_.trajectory.push_back({frame_.timestamp_s, fr.result.T_world_camera});
+    if (fr.result.status != TrackingStatus::Lost)
+        record_.trajectory.push_back({frame_.timestamp_s, fr.result.T_world_camera});
     return Step::Processed;
 }
 
 // The colour tracker has nothing to go on in a frame without colour: said once, with the remedy,
 // since the frame's only other sign is a failed track.
 void SequenceRunner::reportNoColourToTrack() {
-    if (reported_no_colour_ || !frame_.rgb.empty() || poses_ == PoseSource::GroundTruth || engine_.settings().tracker.kind != TrackerKind::Color)
+    if (reported_no_colour_ || !frame_.rgb.empty() || poses_ == PoseSource::GroundTruth ||
+        engine_.settings().tracker.kind != TrackerKind::Color)
         return;
     reported_no_colour_ = true;
-    std::cerr << "\n" << program_ << ": warning: frame " << frame_.index
-              << " has no colour image, and the colour tracker (--tracker color) follows colour alone: such frames cannot be tracked. "
+    std::cerr << "\n"
+              << program_ << ": warning: frame " << frame_.index
+              << " has no colour image, and the colour tracker (--tracker color) follows colour alone: such frames "
+                 "cannot be tracked. "
                  "Use --tracker ren (depth) or rgbd (depth, and colour where there is any).\n";
 }
 
@@ -88,20 +94,24 @@ void SequenceRunner::reportFullMap(const FrameResult& result) {
     const bool hash_full = a.failures_hash_full_this_frame > 0 && !reported_hash_full_;
     if (!blocks_full && !hash_full) return;  // every frame comes here: no text made for nothing
     const std::string frame = std::string(program_) + ": warning: frame " + std::to_string(frame_.index) + ": ";
-    const std::string effect = " of the blocks this frame's depth needs could not be allocated; what they hold is not fused (nor, from "
-                               "now on, anything else the map has no room for) and tracking may fail. ";
+    const std::string effect =
+        " of the blocks this frame's depth needs could not be allocated; what they hold is not fused (nor, from "
+        "now on, anything else the map has no room for) and tracking may fail. ";
     if (blocks_full) {
         reported_blocks_full_ = true;
-        std::cerr << "\n" << frame << "the map is full (" << engine_.settings().hash.max_block_count << " voxel blocks, its most): "
-                  << a.failures_blocks_full_this_frame << effect
-                  << (engine_.settings().swap.enabled ? "Give swapping more active blocks (--active-blocks) or use larger voxels (--voxel-size).\n"
-                                                      : "Use swapping (--swap), a larger --max-blocks or larger voxels (--voxel-size).\n");
+        std::cerr << "\n"
+                  << frame << "the map is full (" << engine_.settings().hash.max_block_count
+                  << " voxel blocks, its most): " << a.failures_blocks_full_this_frame << effect
+                  << (engine_.settings().swap.enabled
+                          ? "Give swapping more active blocks (--active-blocks) or use larger voxels (--voxel-size).\n"
+                          : "Use swapping (--swap), a larger --max-blocks or larger voxels (--voxel-size).\n");
     }
     if (hash_full) {
         reported_hash_full_ = true;
-        std::cerr << "\n" << frame << "the hash table is full (every bucket and excess entry taken): " << a.failures_hash_full_this_frame
-                  << effect
-                  << "Use more --hash-buckets and --hash-excess, or larger voxels (--voxel-size).\n";
+        std::cerr << "\n"
+                  << frame
+                  << "the hash table is full (every bucket and excess entry taken): " << a.failures_hash_full_this_frame
+                  << effect << "Use more --hash-buckets and --hash-excess, or larger voxels (--voxel-size).\n";
     }
 }
 

@@ -28,7 +28,8 @@ struct SyntheticSource::Renderer {
     std::vector<float> depth_m;
     FrameImageBuffers images;
     Renderer(Kind kind, int width, int height, unsigned seed)
-        : scene(kind == Kind::Corridor ? synth::SyntheticScene::corridor(kCorridorLength) : synth::SyntheticScene::defaultRoom()),
+        : scene(kind == Kind::Corridor ? synth::SyntheticScene::corridor(kCorridorLength)
+                                       : synth::SyntheticScene::defaultRoom()),
           camera(synth::PinholeCamera::kinectV1(width, height)),
           depth_model(depthParams(camera), seed),
           colour_rng(seed + 1) {}
@@ -41,7 +42,8 @@ struct SyntheticSource::Renderer {
 
 SyntheticSource::SyntheticSource(Kind kind, int frames, int width, int height, unsigned seed)
     : renderer_(std::make_unique<Renderer>(kind, width, height, seed)), kind_(kind), frames_(frames) {
-    if (frames < 1 || width < 16 || height < 16) throw ConfigError("synthetic source: need at least one frame of 16x16 pixels or more");
+    if (frames < 1 || width < 16 || height < 16)
+        throw ConfigError("synthetic source: need at least one frame of 16x16 pixels or more");
     const synth::PinholeCamera& c = renderer_->camera;
     calib_.depth = calib_.rgb = Intrinsics{c.width, c.height, c.fx, c.fy, c.cx, c.cy};
     calib_.disparity = DisparityCalib::affine(1.f / kDepthScale);
@@ -74,14 +76,15 @@ std::unique_ptr<SyntheticSource> SyntheticSource::open(const std::string& path) 
             used = 0;
         }
         if (used == 0 || used != path.size() - colon - 1 || frames < 1 || frames > kMaxFrames)
-            throw ConfigError("synthetic source: '" + path + "' should be NAME:N with 1 <= N <= " + std::to_string(kMaxFrames) + " frames");
+            throw ConfigError("synthetic source: '" + path +
+                              "' should be NAME:N with 1 <= N <= " + std::to_string(kMaxFrames) + " frames");
     }
     return std::make_unique<SyntheticSource>(kind, frames);
 }
 
 std::string SyntheticSource::description() const {
-    return std::string(kind_ == Kind::Corridor ? "synthetic corridor walk" : "synthetic room") + " rendered in memory (" +
-           std::to_string(frames_) + " frames, " + std::to_string(calib_.depth.width) + "x" +
+    return std::string(kind_ == Kind::Corridor ? "synthetic corridor walk" : "synthetic room") +
+           " rendered in memory (" + std::to_string(frames_) + " frames, " + std::to_string(calib_.depth.width) + "x" +
            std::to_string(calib_.depth.height) + ")";
 }
 
@@ -100,7 +103,9 @@ bool SyntheticSource::next(RGBDFrame& frame) {
     for (std::size_t p = 0; p < r.depth_m.size(); ++p) {
         const float raw = std::round(r.depth_m[p] * kDepthScale);
         r.images.depth_raw.host()[p] = raw >= 1.f && raw <= 65535.f ? std::uint16_t(raw) : 0;
-        auto channel = [&](float v) { return std::uint8_t(std::clamp(std::round(v * 255.f + noise(r.colour_rng)), 0.f, 255.f)); };
+        auto channel = [&](float v) {
+            return std::uint8_t(std::clamp(std::round(v * 255.f + noise(r.colour_rng)), 0.f, 255.f));
+        };
         const Eigen::Vector3f& c = r.rendered.rgb[p];
         const std::uint8_t red = channel(c.x()), green = channel(c.y()), blue = channel(c.z());
         r.images.rgb.host()[p] = Vec4u8{red, green, blue, 255};

@@ -48,9 +48,9 @@ Eigen::Isometry3f CameraPath::poseAt(double t) const {
 
     Eigen::Isometry3f T = lookAt(eye.cast<float>(), target.cast<float>());
     const double rollDeg = s * shake(t, 1.5, 0.45, 0.4, 0.7, 1.3, 1.9);  // wrist roll
-    T.linear() = T.linear() *
-                 Eigen::AngleAxisf(static_cast<float>(rollDeg * kTwoPi / 360.0), Eigen::Vector3f::UnitZ())
-                     .toRotationMatrix();
+    T.linear() =
+        T.linear() *
+        Eigen::AngleAxisf(static_cast<float>(rollDeg * kTwoPi / 360.0), Eigen::Vector3f::UnitZ()).toRotationMatrix();
     return T;
 }
 

@@ -9,14 +9,14 @@
 namespace voxfuse::synth {
 
 struct CameraPathParams {
-    Eigen::Vector2f orbitCenter{0.1f, 0.05f};  // world xy (m)
-    Eigen::Vector2f orbitRadii{1.7f, 1.35f};   // semi-axes along world x, y (m)
-    float startAngleDeg = 180.0f;              // start on the -x side of the room
-    float speed = 0.3f;                        // mean walking speed along the orbit (m/s)
-    float height = 1.45f;                      // mean camera height (m)
-    float heightSwing = 0.08f;                 // slow up/down motion (m)
-    Eigen::Vector3f target{0.1f, 0.05f, 0.6f}; // point the camera looks at (m)
-    float shake = 1.0f;                        // scales hand-held shake; 0 = smooth
+    Eigen::Vector2f orbitCenter{0.1f, 0.05f};   // world xy (m)
+    Eigen::Vector2f orbitRadii{1.7f, 1.35f};    // semi-axes along world x, y (m)
+    float startAngleDeg = 180.0f;               // start on the -x side of the room
+    float speed = 0.3f;                         // mean walking speed along the orbit (m/s)
+    float height = 1.45f;                       // mean camera height (m)
+    float heightSwing = 0.08f;                  // slow up/down motion (m)
+    Eigen::Vector3f target{0.1f, 0.05f, 0.6f};  // point the camera looks at (m)
+    float shake = 1.0f;                         // scales hand-held shake; 0 = smooth
 };
 
 class CameraPath {

@@ -5,8 +5,7 @@
 
 namespace voxfuse::synth {
 
-KinectDepthModel::KinectDepthModel(const Params& params, std::uint32_t seed)
-    : params_(params), rng_(seed) {}
+KinectDepthModel::KinectDepthModel(const Params& params, std::uint32_t seed) : params_(params), rng_(seed) {}
 
 float KinectDepthModel::measure(float z) { return measureWithNoise(z, noise_(rng_)); }
 
@@ -19,8 +18,7 @@ float KinectDepthModel::measureWithNoise(float z, float unitNoise) const {
     return (measured >= params_.minDepth && measured <= params_.maxDepth) ? measured : 0.0f;
 }
 
-bool KinectDepthModel::onFarSideOfEdge(const std::vector<float>& depth, int width, int height,
-                                       int x, int y) const {
+bool KinectDepthModel::onFarSideOfEdge(const std::vector<float>& depth, int width, int height, int x, int y) const {
     const float z = depth[static_cast<std::size_t>(y) * width + x];
     const float nearLimit = z * (1.0f - params_.edgeJumpRatio);
     const int r = params_.edgeRadius;
@@ -57,23 +55,21 @@ const std::vector<float>& KinectDepthModel::noiseField(int width, int height) {
             float sum = 0.0f;
             for (int ny = std::max(y - r, 0); ny <= std::min(y + r, height - 1); ++ny)
                 sum += rows_[static_cast<std::size_t>(ny) * width + x];
-            correlated_[static_cast<std::size_t>(y) * width + x] =
-                sum / std::sqrt(static_cast<float>(countX * countY));
+            correlated_[static_cast<std::size_t>(y) * width + x] = sum / std::sqrt(static_cast<float>(countX * countY));
         }
     }
     return correlated_;
 }
 
-std::vector<float> KinectDepthModel::apply(const std::vector<float>& exactDepth,
-                                           const std::vector<float>& cosIncidence, int width,
-                                           int height) {
+std::vector<float> KinectDepthModel::apply(const std::vector<float>& exactDepth, const std::vector<float>& cosIncidence,
+                                           int width, int height) {
     std::vector<float> out;
     apply(exactDepth, cosIncidence, width, height, out);
     return out;
 }
 
-void KinectDepthModel::apply(const std::vector<float>& exactDepth, const std::vector<float>& cosIncidence,
-                             int width, int height, std::vector<float>& out) {
+void KinectDepthModel::apply(const std::vector<float>& exactDepth, const std::vector<float>& cosIncidence, int width,
+                             int height, std::vector<float>& out) {
     const float minCos = std::cos(params_.maxIncidenceDeg * 3.14159265f / 180.0f);
     const std::vector<float>& noise = noiseField(width, height);
     out.assign(exactDepth.size(), 0.0f);
@@ -93,8 +89,7 @@ void KinectDepthModel::apply(const std::vector<float>& exactDepth, const std::ve
 
 float KinectDepthModel::depthStepAt(float z) const {
     const float d = depthToDisparity(z);
-    return disparityToDepth(d - 0.5f * params_.disparityStep) -
-           disparityToDepth(d + 0.5f * params_.disparityStep);
+    return disparityToDepth(d - 0.5f * params_.disparityStep) - disparityToDepth(d + 0.5f * params_.disparityStep);
 }
 
 std::uint16_t KinectDepthModel::depthToKinectRaw(float z) const {

@@ -10,8 +10,8 @@
 namespace voxfuse::synth {
 
 struct KinectDepthParams {
-    float fx = 525.0f;                // focal length of the depth camera (px)
-    float baseline = 0.075f;          // projector-camera baseline (m)
+    float fx = 525.0f;        // focal length of the depth camera (px)
+    float baseline = 0.075f;  // projector-camera baseline (m)
     // Gaussian disparity noise (px); with the 1/8 px quantisation the depth
     // noise is ~1.6 mm at 1 m and ~6.3 mm at 2 m (sigma_z = sigma_d * z^2 / (fx * b)).
     float disparitySigma = 0.05f;
@@ -20,12 +20,12 @@ struct KinectDepthParams {
     // radius (0 = independent per pixel), rescaled to keep disparitySigma per
     // pixel. Correlated noise is also what keeps the PNG depth files small.
     int noiseCorrelationRadius = 2;
-    float disparityStep = 0.125f;     // disparity quantisation (px), 1/8 as on the Kinect
-    float minDepth = 0.4f;            // valid range (m)
+    float disparityStep = 0.125f;  // disparity quantisation (px), 1/8 as on the Kinect
+    float minDepth = 0.4f;         // valid range (m)
     float maxDepth = 4.5f;
-    float maxIncidenceDeg = 78.0f;    // larger ray/normal angles return no depth
-    float edgeJumpRatio = 0.04f;      // depth jump (fraction of depth) that makes an edge
-    int edgeRadius = 1;               // far-side pixels within this radius of a jump are lost
+    float maxIncidenceDeg = 78.0f;      // larger ray/normal angles return no depth
+    float edgeJumpRatio = 0.04f;        // depth jump (fraction of depth) that makes an edge
+    int edgeRadius = 1;                 // far-side pixels within this radius of a jump are lost
     float dropoutProbability = 0.005f;  // random missing pixels
 };
 
@@ -42,12 +42,12 @@ public:
     // exactDepth and cosIncidence are width x height, row-major; 0 depth = no
     // surface. Returns the sensor depth (m), 0 where the sensor gives nothing.
     // Draws from the model's generator: call in a fixed order for repeatable output.
-    std::vector<float> apply(const std::vector<float>& exactDepth,
-                             const std::vector<float>& cosIncidence, int width, int height);
+    std::vector<float> apply(const std::vector<float>& exactDepth, const std::vector<float>& cosIncidence, int width,
+                             int height);
     // The same into `out`, reusing its memory and the model's scratch: a sequence made this way
     // allocates nothing per frame.
-    void apply(const std::vector<float>& exactDepth, const std::vector<float>& cosIncidence, int width,
-               int height, std::vector<float>& out);
+    void apply(const std::vector<float>& exactDepth, const std::vector<float>& cosIncidence, int width, int height,
+               std::vector<float>& out);
 
     // One noisy, quantised measurement of a surface at depth z seen head-on
     // (no holes except out of range), with independent noise.

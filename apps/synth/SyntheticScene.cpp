@@ -25,8 +25,8 @@ constexpr float kEdgeTolerance = 1e-4f;
 
 std::uint32_t hashInts(int x, int y, int z, std::uint32_t seed) {
     std::uint32_t h = seed * 0x9E3779B1u + 0x7F4A7C15u;
-    for (std::uint32_t v : {static_cast<std::uint32_t>(x), static_cast<std::uint32_t>(y),
-                            static_cast<std::uint32_t>(z)}) {
+    for (std::uint32_t v :
+         {static_cast<std::uint32_t>(x), static_cast<std::uint32_t>(y), static_cast<std::uint32_t>(z)}) {
         h ^= v + 0x9E3779B9u + (h << 6) + (h >> 2);
         h ^= h >> 16;
         h *= 0x85EBCA6Bu;
@@ -44,13 +44,11 @@ float valueNoise(const Eigen::Vector3f& p, std::uint32_t seed) {
     const Eigen::Vector3f cell = p.array().floor();
     const Eigen::Vector3f f = p - cell;
     const Eigen::Vector3f w = f.array() * f.array() * (3.0f - 2.0f * f.array());
-    const int ix = static_cast<int>(cell.x()), iy = static_cast<int>(cell.y()),
-              iz = static_cast<int>(cell.z());
+    const int ix = static_cast<int>(cell.x()), iy = static_cast<int>(cell.y()), iz = static_cast<int>(cell.z());
     float result = 0.0f;
     for (int corner = 0; corner < 8; ++corner) {
         const int dx = corner & 1, dy = (corner >> 1) & 1, dz = (corner >> 2) & 1;
-        const float weight = (dx ? w.x() : 1.0f - w.x()) * (dy ? w.y() : 1.0f - w.y()) *
-                             (dz ? w.z() : 1.0f - w.z());
+        const float weight = (dx ? w.x() : 1.0f - w.x()) * (dy ? w.y() : 1.0f - w.y()) * (dz ? w.z() : 1.0f - w.z());
         result += weight * hashToUnit(hashInts(ix + dx, iy + dy, iz + dz, seed));
     }
     return result;
@@ -66,39 +64,53 @@ int floorInt(float v) { return static_cast<int>(std::floor(v)); }
 
 const char* textureName(TextureKind kind) {
     switch (kind) {
-        case TextureKind::Solid: return "solid";
-        case TextureKind::Checker: return "checker";
-        case TextureKind::Stripes: return "stripes";
-        case TextureKind::Noise: return "noise";
-        case TextureKind::Wood: return "wood";
-        case TextureKind::Poster: return "poster";
+        case TextureKind::Solid:
+            return "solid";
+        case TextureKind::Checker:
+            return "checker";
+        case TextureKind::Stripes:
+            return "stripes";
+        case TextureKind::Noise:
+            return "noise";
+        case TextureKind::Wood:
+            return "wood";
+        case TextureKind::Poster:
+            return "poster";
     }
     return "solid";
 }
 
 TextureKind textureFromName(const std::string& name) {
-    for (TextureKind kind : {TextureKind::Solid, TextureKind::Checker, TextureKind::Stripes,
-                             TextureKind::Noise, TextureKind::Wood, TextureKind::Poster})
+    for (TextureKind kind : {TextureKind::Solid, TextureKind::Checker, TextureKind::Stripes, TextureKind::Noise,
+                             TextureKind::Wood, TextureKind::Poster})
         if (name == textureName(kind)) return kind;
     throw std::runtime_error("scene: unknown texture '" + name + "'");
 }
 
 const char* primitiveName(PrimitiveKind kind) {
     switch (kind) {
-        case PrimitiveKind::Rectangle: return "rectangle";
-        case PrimitiveKind::Box: return "box";
-        case PrimitiveKind::Sphere: return "sphere";
-        case PrimitiveKind::Cylinder: return "cylinder";
+        case PrimitiveKind::Rectangle:
+            return "rectangle";
+        case PrimitiveKind::Box:
+            return "box";
+        case PrimitiveKind::Sphere:
+            return "sphere";
+        case PrimitiveKind::Cylinder:
+            return "cylinder";
     }
     return "sphere";
 }
 
 int sizeParameterCount(PrimitiveKind kind) {
     switch (kind) {
-        case PrimitiveKind::Rectangle: return 2;
-        case PrimitiveKind::Box: return 3;
-        case PrimitiveKind::Sphere: return 1;
-        case PrimitiveKind::Cylinder: return 2;
+        case PrimitiveKind::Rectangle:
+            return 2;
+        case PrimitiveKind::Box:
+            return 3;
+        case PrimitiveKind::Sphere:
+            return 1;
+        case PrimitiveKind::Cylinder:
+            return 2;
     }
     return 1;
 }
@@ -106,9 +118,8 @@ int sizeParameterCount(PrimitiveKind kind) {
 // ------------------------------------------------- local-frame ray casting
 // Each routine finds the nearest t in (tMin, tMax) and the outward normal.
 
-bool intersectRectangle(const Eigen::Vector3f& size, const Eigen::Vector3f& o,
-                        const Eigen::Vector3f& d, float tMin, float tMax, float& t,
-                        Eigen::Vector3f& n) {
+bool intersectRectangle(const Eigen::Vector3f& size, const Eigen::Vector3f& o, const Eigen::Vector3f& d, float tMin,
+                        float tMax, float& t, Eigen::Vector3f& n) {
     if (d.z() == 0.0f) return false;
     const float tHit = -o.z() / d.z();
     if (!(tHit > tMin && tHit < tMax)) return false;
@@ -120,9 +131,8 @@ bool intersectRectangle(const Eigen::Vector3f& size, const Eigen::Vector3f& o,
     return true;
 }
 
-bool intersectSphere(const Eigen::Vector3f& size, const Eigen::Vector3f& o,
-                     const Eigen::Vector3f& d, float tMin, float tMax, float& t,
-                     Eigen::Vector3f& n) {
+bool intersectSphere(const Eigen::Vector3f& size, const Eigen::Vector3f& o, const Eigen::Vector3f& d, float tMin,
+                     float tMax, float& t, Eigen::Vector3f& n) {
     const float r = size.x();
     const float a = d.squaredNorm(), b = o.dot(d), c = o.squaredNorm() - r * r;
     const float disc = b * b - a * c;
@@ -138,9 +148,8 @@ bool intersectSphere(const Eigen::Vector3f& size, const Eigen::Vector3f& o,
     return true;
 }
 
-bool intersectBox(const Eigen::Vector3f& size, const Eigen::Vector3f& o,
-                  const Eigen::Vector3f& d, float tMin, float tMax, float& t,
-                  Eigen::Vector3f& n) {
+bool intersectBox(const Eigen::Vector3f& size, const Eigen::Vector3f& o, const Eigen::Vector3f& d, float tMin,
+                  float tMax, float& t, Eigen::Vector3f& n) {
     float tNear = -kInf, tFar = kInf;
     int nearAxis = -1, farAxis = -1;
     for (int i = 0; i < 3; ++i) {
@@ -150,8 +159,14 @@ bool intersectBox(const Eigen::Vector3f& size, const Eigen::Vector3f& o,
         }
         float t0 = (-size[i] - o[i]) / d[i], t1 = (size[i] - o[i]) / d[i];
         if (t0 > t1) std::swap(t0, t1);
-        if (t0 > tNear) { tNear = t0; nearAxis = i; }
-        if (t1 < tFar) { tFar = t1; farAxis = i; }
+        if (t0 > tNear) {
+            tNear = t0;
+            nearAxis = i;
+        }
+        if (t1 < tFar) {
+            tFar = t1;
+            farAxis = i;
+        }
     }
     if (tNear > tFar) return false;
     if (tNear > tMin && tNear < tMax && nearAxis >= 0) {  // entering from outside
@@ -169,9 +184,8 @@ bool intersectBox(const Eigen::Vector3f& size, const Eigen::Vector3f& o,
     return false;
 }
 
-bool intersectCylinder(const Eigen::Vector3f& size, const Eigen::Vector3f& o,
-                       const Eigen::Vector3f& d, float tMin, float tMax, float& t,
-                       Eigen::Vector3f& n) {
+bool intersectCylinder(const Eigen::Vector3f& size, const Eigen::Vector3f& o, const Eigen::Vector3f& d, float tMin,
+                       float tMax, float& t, Eigen::Vector3f& n) {
     const float r = size.x(), halfHeight = size.y();
     bool found = false;
     float best = tMax;
@@ -211,13 +225,17 @@ bool intersectCylinder(const Eigen::Vector3f& size, const Eigen::Vector3f& o,
     return found;
 }
 
-bool intersectLocal(const Primitive& prim, const Eigen::Vector3f& o, const Eigen::Vector3f& d,
-                    float tMin, float tMax, float& t, Eigen::Vector3f& n) {
+bool intersectLocal(const Primitive& prim, const Eigen::Vector3f& o, const Eigen::Vector3f& d, float tMin, float tMax,
+                    float& t, Eigen::Vector3f& n) {
     switch (prim.kind) {
-        case PrimitiveKind::Rectangle: return intersectRectangle(prim.size, o, d, tMin, tMax, t, n);
-        case PrimitiveKind::Box: return intersectBox(prim.size, o, d, tMin, tMax, t, n);
-        case PrimitiveKind::Sphere: return intersectSphere(prim.size, o, d, tMin, tMax, t, n);
-        case PrimitiveKind::Cylinder: return intersectCylinder(prim.size, o, d, tMin, tMax, t, n);
+        case PrimitiveKind::Rectangle:
+            return intersectRectangle(prim.size, o, d, tMin, tMax, t, n);
+        case PrimitiveKind::Box:
+            return intersectBox(prim.size, o, d, tMin, tMax, t, n);
+        case PrimitiveKind::Sphere:
+            return intersectSphere(prim.size, o, d, tMin, tMax, t, n);
+        case PrimitiveKind::Cylinder:
+            return intersectCylinder(prim.size, o, d, tMin, tMax, t, n);
     }
     return false;
 }
@@ -237,7 +255,8 @@ float distanceLocal(const Primitive& prim, const Eigen::Vector3f& p) {
             const float inside = std::min(q.maxCoeff(), 0.0f);
             return std::abs(outside + inside);
         }
-        case PrimitiveKind::Sphere: return std::abs(p.norm() - s.x());
+        case PrimitiveKind::Sphere:
+            return std::abs(p.norm() - s.x());
         case PrimitiveKind::Cylinder: {
             const float radial = std::hypot(p.x(), p.y()) - s.x();
             const float axial = std::abs(p.z()) - s.y();
@@ -273,7 +292,8 @@ Eigen::Quaternionf yaw(float degrees) {
 
 }  // namespace
 
-Texture makeTexture(TextureKind kind, const Eigen::Vector3f& a, const Eigen::Vector3f& b, float scale, std::uint32_t seed) {
+Texture makeTexture(TextureKind kind, const Eigen::Vector3f& a, const Eigen::Vector3f& b, float scale,
+                    std::uint32_t seed) {
     Texture tex;
     tex.kind = kind;
     tex.colorA = a;
@@ -288,10 +308,12 @@ Texture makeTexture(TextureKind kind, const Eigen::Vector3f& a, const Eigen::Vec
 Eigen::Vector3f Texture::albedo(const Eigen::Vector3f& p) const {
     const Eigen::Vector3f q = p / scale;
     switch (kind) {
-        case TextureKind::Solid: return colorA;
+        case TextureKind::Solid:
+            return colorA;
         case TextureKind::Checker:
             return ((floorInt(q.x()) + floorInt(q.y()) + floorInt(q.z())) & 1) ? colorB : colorA;
-        case TextureKind::Stripes: return (floorInt(q.x()) & 1) ? colorB : colorA;
+        case TextureKind::Stripes:
+            return (floorInt(q.x()) & 1) ? colorB : colorA;
         case TextureKind::Noise: {
             const float n = fractalNoise(q, seed);
             return colorA + (colorB - colorA) * std::clamp(1.6f * (n - 0.5f) + 0.5f, 0.0f, 1.0f);
@@ -308,10 +330,14 @@ Eigen::Vector3f Texture::albedo(const Eigen::Vector3f& p) const {
             // Random blocks in four colours: high-contrast corners and edges.
             const std::uint32_t h = hashInts(floorInt(q.x()), floorInt(q.y()), 0, seed);
             switch (h & 3u) {
-                case 0: return colorA;
-                case 1: return colorB;
-                case 2: return Eigen::Vector3f(0.05f, 0.05f, 0.05f);
-                default: return Eigen::Vector3f(0.92f, 0.92f, 0.9f);
+                case 0:
+                    return colorA;
+                case 1:
+                    return colorB;
+                case 2:
+                    return Eigen::Vector3f(0.05f, 0.05f, 0.05f);
+                default:
+                    return Eigen::Vector3f(0.92f, 0.92f, 0.9f);
             }
         }
     }
@@ -334,8 +360,7 @@ PinholeCamera PinholeCamera::kinectV1(int width, int height) {
 
 Eigen::Quaternionf rotationFromNormal(const Eigen::Vector3f& normal) {
     const Eigen::Vector3f z = normal.normalized();
-    const Eigen::Vector3f reference =
-        std::abs(z.z()) > 0.99f ? Eigen::Vector3f::UnitY() : Eigen::Vector3f::UnitZ();
+    const Eigen::Vector3f reference = std::abs(z.z()) > 0.99f ? Eigen::Vector3f::UnitY() : Eigen::Vector3f::UnitZ();
     const Eigen::Vector3f x = reference.cross(z).normalized();
     Eigen::Matrix3f R;
     R.col(0) = x;
@@ -355,17 +380,27 @@ int SyntheticScene::add(const Primitive& primitive) {
     const Eigen::Vector3f& s = prim.size;
     float bound = kInf;
     switch (prim.kind) {
-        case PrimitiveKind::Rectangle: bound = std::hypot(s.x(), s.y()); break;
-        case PrimitiveKind::Box: bound = s.norm(); break;
-        case PrimitiveKind::Sphere: bound = s.x(); break;
-        case PrimitiveKind::Cylinder: bound = std::hypot(s.x(), s.y()); break;
+        case PrimitiveKind::Rectangle:
+            bound = std::hypot(s.x(), s.y());
+            break;
+        case PrimitiveKind::Box:
+            bound = s.norm();
+            break;
+        case PrimitiveKind::Sphere:
+            bound = s.x();
+            break;
+        case PrimitiveKind::Cylinder:
+            bound = std::hypot(s.x(), s.y());
+            break;
     }
     // A margin for rounding: a sphere a little too large only costs a test.
-    placements_.push_back({prim.rotation.toRotationMatrix(), prim.translation, std::isfinite(bound) ? bound * 1.001f + 1e-4f : kInf});
+    placements_.push_back(
+        {prim.rotation.toRotationMatrix(), prim.translation, std::isfinite(bound) ? bound * 1.001f + 1e-4f : kInf});
     return static_cast<int>(primitives_.size()) - 1;
 }
 
-bool SyntheticScene::mayHit(const Placement& pl, const Eigen::Vector3f& o, const Eigen::Vector3f& d, float tMin, float tMax) {
+bool SyntheticScene::mayHit(const Placement& pl, const Eigen::Vector3f& o, const Eigen::Vector3f& d, float tMin,
+                            float tMax) {
     if (!std::isfinite(pl.bound_radius)) return true;
     const Eigen::Vector3f oc = pl.t_world_local - o;
     const float dd = d.squaredNorm();
@@ -378,14 +413,13 @@ bool SyntheticScene::mayHit(const Placement& pl, const Eigen::Vector3f& o, const
     return tClosest + halfChord >= tMin && tClosest - halfChord <= tMax;
 }
 
-int SyntheticScene::addPlane(const Eigen::Vector3f& point, const Eigen::Vector3f& normal,
-                             const Texture& texture, std::uint16_t classId) {
+int SyntheticScene::addPlane(const Eigen::Vector3f& point, const Eigen::Vector3f& normal, const Texture& texture,
+                             std::uint16_t classId) {
     return addRectangle(point, normal, kInf, kInf, texture, classId);
 }
 
-int SyntheticScene::addRectangle(const Eigen::Vector3f& center, const Eigen::Vector3f& normal,
-                                 float halfWidth, float halfHeight, const Texture& texture,
-                                 std::uint16_t classId) {
+int SyntheticScene::addRectangle(const Eigen::Vector3f& center, const Eigen::Vector3f& normal, float halfWidth,
+                                 float halfHeight, const Texture& texture, std::uint16_t classId) {
     Primitive prim;
     prim.kind = PrimitiveKind::Rectangle;
     prim.size = Eigen::Vector3f(halfWidth, halfHeight, 0.0f);
@@ -397,8 +431,7 @@ int SyntheticScene::addRectangle(const Eigen::Vector3f& center, const Eigen::Vec
 }
 
 int SyntheticScene::addBox(const Eigen::Vector3f& center, const Eigen::Quaternionf& rotation,
-                           const Eigen::Vector3f& halfExtents, const Texture& texture,
-                           std::uint16_t classId) {
+                           const Eigen::Vector3f& halfExtents, const Texture& texture, std::uint16_t classId) {
     Primitive prim;
     prim.kind = PrimitiveKind::Box;
     prim.size = halfExtents;
@@ -420,9 +453,8 @@ int SyntheticScene::addSphere(const Eigen::Vector3f& center, float radius, const
     return add(prim);
 }
 
-int SyntheticScene::addCylinder(const Eigen::Vector3f& center, const Eigen::Quaternionf& rotation,
-                                float radius, float halfHeight, const Texture& texture,
-                                std::uint16_t classId) {
+int SyntheticScene::addCylinder(const Eigen::Vector3f& center, const Eigen::Quaternionf& rotation, float radius,
+                                float halfHeight, const Texture& texture, std::uint16_t classId) {
     Primitive prim;
     prim.kind = PrimitiveKind::Cylinder;
     prim.size = Eigen::Vector3f(radius, halfHeight, 0.0f);
@@ -435,22 +467,22 @@ int SyntheticScene::addCylinder(const Eigen::Vector3f& center, const Eigen::Quat
 
 void SyntheticScene::addClass(std::uint16_t id, const std::string& name) {
     if (id == kUnlabelled) throw std::invalid_argument("scene: class id 0 means unlabelled");
-    if (name.empty() || std::any_of(name.begin(), name.end(),
-                                    [](unsigned char c) { return std::isspace(c) != 0; }))
+    if (name.empty() || std::any_of(name.begin(), name.end(), [](unsigned char c) { return std::isspace(c) != 0; }))
         throw std::invalid_argument("scene: class name '" + name + "' is not one word");
     const auto at = std::lower_bound(classes_.begin(), classes_.end(), id,
                                      [](const SemanticClass& c, std::uint16_t v) { return c.id < v; });
-    if (at != classes_.end() && at->id == id) at->name = name;
-    else classes_.insert(at, SemanticClass{id, name});
+    if (at != classes_.end() && at->id == id)
+        at->name = name;
+    else
+        classes_.insert(at, SemanticClass{id, name});
 }
 
-bool SyntheticScene::intersect(const Eigen::Vector3f& origin, const Eigen::Vector3f& dir,
-                               Hit& hit) const {
+bool SyntheticScene::intersect(const Eigen::Vector3f& origin, const Eigen::Vector3f& dir, Hit& hit) const {
     return intersect(origin, dir, hit, 1e-5f, kInf);
 }
 
-bool SyntheticScene::intersect(const Eigen::Vector3f& origin, const Eigen::Vector3f& dir,
-                               Hit& hit, float tMin, float tMax) const {
+bool SyntheticScene::intersect(const Eigen::Vector3f& origin, const Eigen::Vector3f& dir, Hit& hit, float tMin,
+                               float tMax) const {
     int best = -1;
     float bestT = tMax;
     Eigen::Vector3f bestNormalLocal = Eigen::Vector3f::Zero();
@@ -469,8 +501,7 @@ bool SyntheticScene::intersect(const Eigen::Vector3f& origin, const Eigen::Vecto
     }
     if (best < 0) return false;
     const Placement& pl = placements_[best];
-    const Eigen::Vector3f pLocal =
-        pl.R_world_local.transpose() * (origin + bestT * dir - pl.t_world_local);
+    const Eigen::Vector3f pLocal = pl.R_world_local.transpose() * (origin + bestT * dir - pl.t_world_local);
     hit.t = bestT;
     hit.primitive = best;
     // Sample the texture just inside the surface so that solid patterns whose
@@ -481,8 +512,7 @@ bool SyntheticScene::intersect(const Eigen::Vector3f& origin, const Eigen::Vecto
     return true;
 }
 
-bool SyntheticScene::occluded(const Eigen::Vector3f& origin, const Eigen::Vector3f& dir,
-                              float tMin, float tMax) const {
+bool SyntheticScene::occluded(const Eigen::Vector3f& origin, const Eigen::Vector3f& dir, float tMin, float tMax) const {
     for (std::size_t i = 0; i < primitives_.size(); ++i) {
         const Placement& pl = placements_[i];
         if (!mayHit(pl, origin, dir, tMin, tMax)) continue;
@@ -518,16 +548,15 @@ Eigen::Vector3f SyntheticScene::shade(const Eigen::Vector3f& point, const Hit& h
     return hit.albedo_rgb * irradiance;
 }
 
-RenderedFrame SyntheticScene::render(const PinholeCamera& camera,
-                                     const Eigen::Isometry3f& T_world_camera,
+RenderedFrame SyntheticScene::render(const PinholeCamera& camera, const Eigen::Isometry3f& T_world_camera,
                                      int colourSamples) const {
     RenderedFrame frame;
     render(camera, T_world_camera, colourSamples, frame);
     return frame;
 }
 
-void SyntheticScene::render(const PinholeCamera& camera, const Eigen::Isometry3f& T_world_camera,
-                            int colourSamples, RenderedFrame& frame) const {
+void SyntheticScene::render(const PinholeCamera& camera, const Eigen::Isometry3f& T_world_camera, int colourSamples,
+                            RenderedFrame& frame) const {
     frame.width = camera.width;
     frame.height = camera.height;
     const std::size_t count = static_cast<std::size_t>(camera.width) * camera.height;
@@ -610,7 +639,12 @@ SyntheticScene SyntheticScene::defaultRoom() {
 
     // Posters: 2 cm deep frames on every wall, so any view has strong texture.
     const Texture posterBase = makeTexture(TextureKind::Poster, V(0.85f, 0.15f, 0.10f), V(0.10f, 0.30f, 0.80f), 0.1f);
-    struct PosterSpec { V center; V normal; float halfW, halfH; std::uint32_t seed; };
+    struct PosterSpec {
+        V center;
+        V normal;
+        float halfW, halfH;
+        std::uint32_t seed;
+    };
     const PosterSpec posters[] = {
         {V(hx - 0.01f, 0.3f, 1.2f), V(-1, 0, 0), 0.6f, 0.4f, 21},
         {V(-hx + 0.01f, -0.4f, 1.2f), V(1, 0, 0), 0.5f, 0.4f, 22},
@@ -627,32 +661,27 @@ SyntheticScene SyntheticScene::defaultRoom() {
     const V tableCenter(0.15f, 0.1f, 0.73f);
     const V tableHalf(0.55f, 0.35f, 0.02f);
     scene.addBox(tableCenter, yaw(0), tableHalf,
-                 makeTexture(TextureKind::Wood, V(0.62f, 0.42f, 0.22f), V(0.38f, 0.22f, 0.10f), 0.04f, 31),
-                 rc::kTable);
+                 makeTexture(TextureKind::Wood, V(0.62f, 0.42f, 0.22f), V(0.38f, 0.22f, 0.10f), 0.04f, 31), rc::kTable);
     for (float sx : {-1.0f, 1.0f})
         for (float sy : {-1.0f, 1.0f})
             scene.addBox(V(tableCenter.x() + sx * (tableHalf.x() - 0.06f),
                            tableCenter.y() + sy * (tableHalf.y() - 0.06f), 0.355f),
                          yaw(0), V(0.025f, 0.025f, 0.355f),
-                         makeTexture(TextureKind::Solid, V(0.25f, 0.18f, 0.12f), V::Zero(), 1.0f),
-                         rc::kTable);
+                         makeTexture(TextureKind::Solid, V(0.25f, 0.18f, 0.12f), V::Zero(), 1.0f), rc::kTable);
     const float tableTop = tableCenter.z() + tableHalf.z();
 
     // Objects on the table.
     scene.addBox(V(-0.05f, 0.2f, tableTop + 0.1f), yaw(30), V(0.1f, 0.1f, 0.1f),
-                 makeTexture(TextureKind::Checker, V(0.90f, 0.20f, 0.15f), V(0.95f, 0.95f, 0.90f), 0.05f),
-                 rc::kBox);
+                 makeTexture(TextureKind::Checker, V(0.90f, 0.20f, 0.15f), V(0.95f, 0.95f, 0.90f), 0.05f), rc::kBox);
     scene.addSphere(V(0.45f, 0.25f, tableTop + 0.11f), 0.11f,
                     makeTexture(TextureKind::Noise, V(0.15f, 0.30f, 0.85f), V(0.70f, 0.85f, 1.00f), 0.05f, 41),
                     rc::kBall);
     scene.addBox(V(0.35f, -0.1f, tableTop + 0.03f), yaw(-15), V(0.12f, 0.08f, 0.03f),
-                 makeTexture(TextureKind::Stripes, V(0.95f, 0.80f, 0.10f), V(0.20f, 0.20f, 0.25f), 0.02f),
-                 rc::kBox);
+                 makeTexture(TextureKind::Stripes, V(0.95f, 0.80f, 0.10f), V(0.20f, 0.20f, 0.25f), 0.02f), rc::kBox);
 
     // Objects on the floor.
     scene.addBox(V(-0.75f, -0.55f, 0.2f), yaw(25), V(0.25f, 0.2f, 0.2f),
-                 makeTexture(TextureKind::Stripes, V(0.20f, 0.60f, 0.30f), V(0.90f, 0.90f, 0.80f), 0.06f),
-                 rc::kBox);
+                 makeTexture(TextureKind::Stripes, V(0.20f, 0.60f, 0.30f), V(0.90f, 0.90f, 0.80f), 0.06f), rc::kBox);
     scene.addSphere(V(0.8f, -0.6f, 0.18f), 0.18f,
                     makeTexture(TextureKind::Checker, V(0.95f, 0.55f, 0.10f), V(0.15f, 0.15f, 0.20f), 0.07f),
                     rc::kBall);
@@ -678,18 +707,24 @@ SyntheticScene SyntheticScene::corridor(float length_m) {
     scene.addClass(rc::kPoster, "poster");
     scene.addClass(rc::kCylinder, "cylinder");
     const V centre(hx, 0, 0);
-    scene.addRectangle(centre, V(0, 0, 1), hx, hy, makeTexture(TextureKind::Checker, V(0.78f, 0.72f, 0.62f), V(0.45f, 0.38f, 0.30f), 0.4f),
+    scene.addRectangle(centre, V(0, 0, 1), hx, hy,
+                       makeTexture(TextureKind::Checker, V(0.78f, 0.72f, 0.62f), V(0.45f, 0.38f, 0.30f), 0.4f),
                        rc::kFloor);
     scene.addRectangle(centre + V(0, 0, height), V(0, 0, -1), hx, hy,
-                       makeTexture(TextureKind::Noise, V(0.92f, 0.92f, 0.90f), V(0.75f, 0.75f, 0.72f), 0.4f, 61), rc::kCeiling);
+                       makeTexture(TextureKind::Noise, V(0.92f, 0.92f, 0.90f), V(0.75f, 0.75f, 0.72f), 0.4f, 61),
+                       rc::kCeiling);
     scene.addRectangle(centre + V(0, hy, height / 2), V(0, -1, 0), hx, height / 2,
-                       makeTexture(TextureKind::Noise, V(0.85f, 0.80f, 0.68f), V(0.60f, 0.55f, 0.45f), 0.25f, 62), rc::kWall);
+                       makeTexture(TextureKind::Noise, V(0.85f, 0.80f, 0.68f), V(0.60f, 0.55f, 0.45f), 0.25f, 62),
+                       rc::kWall);
     scene.addRectangle(centre + V(0, -hy, height / 2), V(0, 1, 0), hx, height / 2,
-                       makeTexture(TextureKind::Stripes, V(0.80f, 0.84f, 0.74f), V(0.62f, 0.70f, 0.56f), 0.15f), rc::kWall);
+                       makeTexture(TextureKind::Stripes, V(0.80f, 0.84f, 0.74f), V(0.62f, 0.70f, 0.56f), 0.15f),
+                       rc::kWall);
     scene.addRectangle(V(0, 0, height / 2), V(1, 0, 0), hy, height / 2,
-                       makeTexture(TextureKind::Noise, V(0.70f, 0.80f, 0.85f), V(0.45f, 0.55f, 0.62f), 0.25f, 63), rc::kWall);
+                       makeTexture(TextureKind::Noise, V(0.70f, 0.80f, 0.85f), V(0.45f, 0.55f, 0.62f), 0.25f, 63),
+                       rc::kWall);
     scene.addRectangle(V(length_m, 0, height / 2), V(-1, 0, 0), hy, height / 2,
-                       makeTexture(TextureKind::Noise, V(0.88f, 0.75f, 0.75f), V(0.62f, 0.48f, 0.50f), 0.25f, 64), rc::kWall);
+                       makeTexture(TextureKind::Noise, V(0.88f, 0.75f, 0.75f), V(0.62f, 0.48f, 0.50f), 0.25f, 64),
+                       rc::kWall);
     // Every 1.5 m a poster on one wall and an object on the floor by the other, so that every view
     // has texture and shape to track.
     const Texture poster = makeTexture(TextureKind::Poster, V(0.85f, 0.15f, 0.10f), V(0.10f, 0.30f, 0.80f), 0.1f);
@@ -698,15 +733,17 @@ SyntheticScene SyntheticScene::corridor(float length_m) {
         const float side = (k % 2) ? 1.f : -1.f;
         Texture tex = poster;
         tex.seed = std::uint32_t(70 + k);
-        scene.addBox(V(x, side * (hy - 0.01f), 1.3f + 0.2f * float(k % 3) - 0.2f), rotationFromNormal(V(0, -side, 0)), V(0.45f, 0.35f, 0.01f),
-                     tex, rc::kPoster);
+        scene.addBox(V(x, side * (hy - 0.01f), 1.3f + 0.2f * float(k % 3) - 0.2f), rotationFromNormal(V(0, -side, 0)),
+                     V(0.45f, 0.35f, 0.01f), tex, rc::kPoster);
         if (k % 3 == 2)
             scene.addCylinder(V(x + 0.4f, -side * (hy - 0.3f), 0.4f), yaw(0), 0.15f, 0.4f,
-                              makeTexture(TextureKind::Wood, V(0.75f, 0.55f, 0.35f), V(0.45f, 0.28f, 0.15f), 0.03f, std::uint32_t(90 + k)),
+                              makeTexture(TextureKind::Wood, V(0.75f, 0.55f, 0.35f), V(0.45f, 0.28f, 0.15f), 0.03f,
+                                          std::uint32_t(90 + k)),
                               rc::kCylinder);
         else
             scene.addBox(V(x + 0.4f, -side * (hy - 0.35f), 0.25f), yaw(float(20 * k)), V(0.25f, 0.2f, 0.25f),
-                         makeTexture(TextureKind::Checker, V(0.90f, 0.20f + 0.1f * float(k % 4), 0.15f), V(0.95f, 0.95f, 0.90f), 0.06f),
+                         makeTexture(TextureKind::Checker, V(0.90f, 0.20f + 0.1f * float(k % 4), 0.15f),
+                                     V(0.95f, 0.95f, 0.90f), 0.06f),
                          rc::kBox);
     }
     // Pilasters on both walls, between the posters. Walls, floor and ceiling are parallel to the
@@ -716,21 +753,20 @@ SyntheticScene SyntheticScene::corridor(float length_m) {
     const Texture plaster = makeTexture(TextureKind::Noise, V(0.82f, 0.80f, 0.76f), V(0.66f, 0.64f, 0.60f), 0.2f, 65);
     for (float x = 1.55f; x < length_m - 0.3f; x += 1.5f)
         for (const float side : {-1.f, 1.f})
-            scene.addBox(V(x, side * (hy - 0.04f), height / 2), Eigen::Quaternionf::Identity(), V(0.12f, 0.04f, height / 2), plaster,
-                         rc::kWall);
+            scene.addBox(V(x, side * (hy - 0.04f), height / 2), Eigen::Quaternionf::Identity(),
+                         V(0.12f, 0.04f, height / 2), plaster, rc::kWall);
     for (float x = 2.f; x < length_m; x += 4.f) scene.addLight({V(x, 0.f, height - 0.1f), 2.0f});
     scene.setAmbient(0.35f);
     return scene;
 }
 
-SyntheticScene SyntheticScene::singlePlane(const Eigen::Vector3f& point,
-                                           const Eigen::Vector3f& normal) {
+SyntheticScene SyntheticScene::singlePlane(const Eigen::Vector3f& point, const Eigen::Vector3f& normal) {
     SyntheticScene scene;
     scene.addClass(room_class::kFloor, "floor");  // whatever its orientation
-    scene.addPlane(point, normal,
-                   makeTexture(TextureKind::Checker, Eigen::Vector3f(0.8f, 0.8f, 0.8f),
-                               Eigen::Vector3f(0.2f, 0.2f, 0.2f), 0.1f),
-                   room_class::kFloor);
+    scene.addPlane(
+        point, normal,
+        makeTexture(TextureKind::Checker, Eigen::Vector3f(0.8f, 0.8f, 0.8f), Eigen::Vector3f(0.2f, 0.2f, 0.2f), 0.1f),
+        room_class::kFloor);
     scene.addLight({point + 2.0f * normal.normalized(), 2.0f});
     return scene;
 }
@@ -754,14 +790,11 @@ SyntheticScene SyntheticScene::boxAndSphere() {
     scene.addClass(rc::kBall, "ball");
     scene.addClass(rc::kBox, "box");
     scene.addPlane(V::Zero(), V::UnitZ(),
-                   makeTexture(TextureKind::Checker, V(0.8f, 0.75f, 0.7f), V(0.4f, 0.35f, 0.3f), 0.25f),
-                   rc::kFloor);
+                   makeTexture(TextureKind::Checker, V(0.8f, 0.75f, 0.7f), V(0.4f, 0.35f, 0.3f), 0.25f), rc::kFloor);
     scene.addBox(V(0, 0, 0.2f), Eigen::Quaternionf::Identity(), V(0.2f, 0.2f, 0.2f),
-                 makeTexture(TextureKind::Stripes, V(0.2f, 0.6f, 0.3f), V(0.9f, 0.9f, 0.8f), 0.05f),
-                 rc::kBox);
+                 makeTexture(TextureKind::Stripes, V(0.2f, 0.6f, 0.3f), V(0.9f, 0.9f, 0.8f), 0.05f), rc::kBox);
     scene.addSphere(V(0.6f, 0, 0.15f), 0.15f,
-                    makeTexture(TextureKind::Noise, V(0.15f, 0.3f, 0.85f), V(0.7f, 0.85f, 1.0f), 0.05f, 7),
-                    rc::kBall);
+                    makeTexture(TextureKind::Noise, V(0.15f, 0.3f, 0.85f), V(0.7f, 0.85f, 1.0f), 0.05f, 7), rc::kBall);
     scene.addLight({V(0.5f, -0.5f, 2.0f), 2.5f});
     return scene;
 }
@@ -777,7 +810,8 @@ void SyntheticScene::write(const std::string& path) const {
            "# ambient <a>\n"
            "# light <x y z> <intensity at 1 m>\n"
            "# class <id> <name>   (semantic class: id >= 1, as label images store it; 0 = unlabelled)\n"
-           "# <type> <size...> pose <tx ty tz qx qy qz qw> texture <kind> <rA gA bA> <rB gB bB> <scale> <seed> class <id>\n"
+           "# <type> <size...> pose <tx ty tz qx qy qz qw> texture <kind> <rA gA bA> <rB gB bB> <scale> <seed> class "
+           "<id>\n"
            "#   rectangle <half_x half_y>   (local z = 0, normal local +z; inf = infinite plane)\n"
            "#   box <half_x half_y half_z>\n"
            "#   sphere <radius>\n"
@@ -791,12 +825,10 @@ void SyntheticScene::write(const std::string& path) const {
         out << primitiveName(p.kind);
         for (int i = 0; i < sizeParameterCount(p.kind); ++i) out << " " << formatFloat(p.size[i]);
         out << " pose " << formatVector(p.translation) << " " << formatFloat(p.rotation.x()) << " "
-            << formatFloat(p.rotation.y()) << " " << formatFloat(p.rotation.z()) << " "
-            << formatFloat(p.rotation.w());
+            << formatFloat(p.rotation.y()) << " " << formatFloat(p.rotation.z()) << " " << formatFloat(p.rotation.w());
         const Texture& t = p.texture;
-        out << " texture " << textureName(t.kind) << " " << formatVector(t.colorA) << " "
-            << formatVector(t.colorB) << " " << formatFloat(t.scale) << " " << t.seed << " class "
-            << p.classId << "\n";
+        out << " texture " << textureName(t.kind) << " " << formatVector(t.colorA) << " " << formatVector(t.colorB)
+            << " " << formatFloat(t.scale) << " " << t.seed << " class " << p.classId << "\n";
     }
     if (!out) throw std::runtime_error("scene: error writing " + path);
 }
@@ -840,8 +872,7 @@ SyntheticScene SyntheticScene::read(const std::string& path) {
             const std::string& w = word();
             char* end = nullptr;
             const unsigned long value = std::strtoul(w.c_str(), &end, 10);
-            if (end == w.c_str() || *end != '\0' || !std::isdigit(static_cast<unsigned char>(w[0])) ||
-                value > 0xFFFFul)
+            if (end == w.c_str() || *end != '\0' || !std::isdigit(static_cast<unsigned char>(w[0])) || value > 0xFFFFul)
                 throw fail("bad class id '" + w + "'");
             return static_cast<std::uint16_t>(value);
         };
@@ -861,11 +892,16 @@ SyntheticScene SyntheticScene::read(const std::string& path) {
             scene.addClass(id, name);
         } else {
             Primitive prim;
-            if (type == "rectangle") prim.kind = PrimitiveKind::Rectangle;
-            else if (type == "box") prim.kind = PrimitiveKind::Box;
-            else if (type == "sphere") prim.kind = PrimitiveKind::Sphere;
-            else if (type == "cylinder") prim.kind = PrimitiveKind::Cylinder;
-            else throw fail("unknown entry '" + type + "'");
+            if (type == "rectangle")
+                prim.kind = PrimitiveKind::Rectangle;
+            else if (type == "box")
+                prim.kind = PrimitiveKind::Box;
+            else if (type == "sphere")
+                prim.kind = PrimitiveKind::Sphere;
+            else if (type == "cylinder")
+                prim.kind = PrimitiveKind::Cylinder;
+            else
+                throw fail("unknown entry '" + type + "'");
             prim.size = Eigen::Vector3f::Zero();
             for (int i = 0; i < sizeParameterCount(prim.kind); ++i) prim.size[i] = number();
             expect("pose");

@@ -18,7 +18,7 @@ struct Hit {
     float t = 0.0f;  // ray parameter: hit point = origin + t * dir (dir need not be unit)
     Eigen::Vector3f normal = Eigen::Vector3f::Zero();      // unit, facing the ray origin
     Eigen::Vector3f albedo_rgb = Eigen::Vector3f::Zero();  // linear RGB in [0, 1]
-    int primitive = -1;  // index into SyntheticScene::primitives()
+    int primitive = -1;                                    // index into SyntheticScene::primitives()
 };
 
 enum class TextureKind { Solid, Checker, Stripes, Noise, Wood, Poster };
@@ -29,12 +29,13 @@ struct Texture {
     TextureKind kind = TextureKind::Solid;
     Eigen::Vector3f colorA{0.7f, 0.7f, 0.7f};
     Eigen::Vector3f colorB{0.3f, 0.3f, 0.3f};
-    float scale = 0.1f;  // feature size in metres (tile, stripe, noise cell, ring, poster cell)
+    float scale = 0.1f;      // feature size in metres (tile, stripe, noise cell, ring, poster cell)
     std::uint32_t seed = 0;  // selects the noise / poster pattern
 
     Eigen::Vector3f albedo(const Eigen::Vector3f& p_local) const;
 };
-Texture makeTexture(TextureKind kind, const Eigen::Vector3f& a, const Eigen::Vector3f& b, float scale, std::uint32_t seed = 0);
+Texture makeTexture(TextureKind kind, const Eigen::Vector3f& a, const Eigen::Vector3f& b, float scale,
+                    std::uint32_t seed = 0);
 
 enum class PrimitiveKind { Rectangle, Box, Sphere, Cylinder };
 
@@ -45,8 +46,8 @@ namespace room_class {
 constexpr std::uint16_t kFloor = 1;
 constexpr std::uint16_t kWall = 2;
 constexpr std::uint16_t kCeiling = 3;
-constexpr std::uint16_t kTable = 4;   // top and legs
-constexpr std::uint16_t kBall = 5;    // spheres
+constexpr std::uint16_t kTable = 4;  // top and legs
+constexpr std::uint16_t kBall = 5;   // spheres
 constexpr std::uint16_t kCylinder = 6;
 constexpr std::uint16_t kBox = 7;     // boxes standing on the floor or the table
 constexpr std::uint16_t kPoster = 8;  // the framed posters on the walls
@@ -86,37 +87,32 @@ struct PinholeCamera {
     // Kinect v1 defaults (640x480, f = 525), scaled to another resolution.
     static PinholeCamera kinectV1(int width = 640, int height = 480);
     // Camera-frame ray through pixel (u, v), scaled so that its z is 1.
-    Eigen::Vector3f ray(float u, float v) const {
-        return {(u - cx) / fx, (v - cy) / fy, 1.0f};
-    }
+    Eigen::Vector3f ray(float u, float v) const { return {(u - cx) / fx, (v - cy) / fy, 1.0f}; }
 };
 
 // Exact per-pixel rendering of one view.
 struct RenderedFrame {
     int width = 0, height = 0;
-    std::vector<float> depth;         // z along the optical axis (m), 0 = no surface
-    std::vector<float> cosIncidence;  // |cos| of the angle between viewing ray and normal
-    std::vector<Eigen::Vector3f> rgb; // display RGB in [0, 1] (gamma applied), noise-free
-    std::vector<std::uint16_t> label; // class of the primitive hit by the depth ray
-                                      // (pixel centre), 0 = no surface; noise-free
+    std::vector<float> depth;          // z along the optical axis (m), 0 = no surface
+    std::vector<float> cosIncidence;   // |cos| of the angle between viewing ray and normal
+    std::vector<Eigen::Vector3f> rgb;  // display RGB in [0, 1] (gamma applied), noise-free
+    std::vector<std::uint16_t> label;  // class of the primitive hit by the depth ray
+                                       // (pixel centre), 0 = no surface; noise-free
 };
 
 class SyntheticScene {
 public:
     int add(const Primitive& primitive);
-    int addPlane(const Eigen::Vector3f& point, const Eigen::Vector3f& normal,
-                 const Texture& texture = {}, std::uint16_t classId = kUnlabelled);
-    int addRectangle(const Eigen::Vector3f& center, const Eigen::Vector3f& normal,
-                     float halfWidth, float halfHeight, const Texture& texture = {},
-                     std::uint16_t classId = kUnlabelled);
-    int addBox(const Eigen::Vector3f& center, const Eigen::Quaternionf& rotation,
-               const Eigen::Vector3f& halfExtents, const Texture& texture = {},
-               std::uint16_t classId = kUnlabelled);
+    int addPlane(const Eigen::Vector3f& point, const Eigen::Vector3f& normal, const Texture& texture = {},
+                 std::uint16_t classId = kUnlabelled);
+    int addRectangle(const Eigen::Vector3f& center, const Eigen::Vector3f& normal, float halfWidth, float halfHeight,
+                     const Texture& texture = {}, std::uint16_t classId = kUnlabelled);
+    int addBox(const Eigen::Vector3f& center, const Eigen::Quaternionf& rotation, const Eigen::Vector3f& halfExtents,
+               const Texture& texture = {}, std::uint16_t classId = kUnlabelled);
     int addSphere(const Eigen::Vector3f& center, float radius, const Texture& texture = {},
                   std::uint16_t classId = kUnlabelled);
-    int addCylinder(const Eigen::Vector3f& center, const Eigen::Quaternionf& rotation,
-                    float radius, float halfHeight, const Texture& texture = {},
-                    std::uint16_t classId = kUnlabelled);
+    int addCylinder(const Eigen::Vector3f& center, const Eigen::Quaternionf& rotation, float radius, float halfHeight,
+                    const Texture& texture = {}, std::uint16_t classId = kUnlabelled);
     void addLight(const PointLight& light) { lights_.push_back(light); }
     // Names a semantic class (id >= 1, name one word); replaces an earlier
     // name of the same id. Throws std::invalid_argument otherwise.
@@ -125,11 +121,9 @@ public:
 
     // Nearest hit with t > 1e-5 (in units of |dir|). Returns false on a miss.
     bool intersect(const Eigen::Vector3f& origin, const Eigen::Vector3f& dir, Hit& hit) const;
-    bool intersect(const Eigen::Vector3f& origin, const Eigen::Vector3f& dir, Hit& hit,
-                   float tMin, float tMax) const;
+    bool intersect(const Eigen::Vector3f& origin, const Eigen::Vector3f& dir, Hit& hit, float tMin, float tMax) const;
     // True if any surface lies on the ray for t in (tMin, tMax).
-    bool occluded(const Eigen::Vector3f& origin, const Eigen::Vector3f& dir,
-                  float tMin, float tMax) const;
+    bool occluded(const Eigen::Vector3f& origin, const Eigen::Vector3f& dir, float tMin, float tMax) const;
     // Unsigned distance (m) from p_world to the nearest surface.
     float distanceToSurface(const Eigen::Vector3f& p_world) const;
 

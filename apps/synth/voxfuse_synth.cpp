@@ -65,8 +65,8 @@ PoseRecord makePoseRecord(double timestamp, const Eigen::Isometry3f& pose) {
     q.normalize();
     if (q.w() < 0.0f) q.coeffs() *= -1.0f;  // one canonical sign
     char buffer[256];
-    std::snprintf(buffer, sizeof(buffer), "%.6f %.7f %.7f %.7f %.7f %.7f %.7f %.7f", timestamp,
-                  t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w());
+    std::snprintf(buffer, sizeof(buffer), "%.6f %.7f %.7f %.7f %.7f %.7f %.7f %.7f", timestamp, t.x(), t.y(), t.z(),
+                  q.x(), q.y(), q.z(), q.w());
     std::istringstream in(buffer);
     double ts, v[7];
     in >> ts >> v[0] >> v[1] >> v[2] >> v[3] >> v[4] >> v[5] >> v[6];
@@ -100,8 +100,7 @@ void writeCalib(const fs::path& path, const PinholeCamera& cam, const std::strin
 }
 
 // 8-bit interleaved colour with a little Gaussian sensor noise; OpenCV wants BGR.
-std::vector<std::uint8_t> toBytes(const std::vector<Eigen::Vector3f>& rgb, std::mt19937* rng,
-                                  bool bgr) {
+std::vector<std::uint8_t> toBytes(const std::vector<Eigen::Vector3f>& rgb, std::mt19937* rng, bool bgr) {
     std::normal_distribution<float> noise(0.0f, kColourNoiseSigma);
     std::vector<std::uint8_t> bytes(rgb.size() * 3);
     for (std::size_t i = 0; i < rgb.size(); ++i)
@@ -116,7 +115,8 @@ std::vector<std::uint8_t> toBytes(const std::vector<Eigen::Vector3f>& rgb, std::
 // last flush).
 void writeImage(const fs::path& path, const cv::Mat& image, const std::vector<int>& params) {
     std::vector<std::uint8_t> bytes;
-    if (!cv::imencode(path.extension().string(), image, bytes, params)) throw std::runtime_error("cannot encode " + path.string());
+    if (!cv::imencode(path.extension().string(), image, bytes, params))
+        throw std::runtime_error("cannot encode " + path.string());
     const OutputFile file = openFile(path);
     file->stream().write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
     file->commit();
@@ -152,7 +152,9 @@ void writeClasses(const fs::path& path, const std::string& source, const Synthet
     const OutputFile file = openFile(path);
     std::ostream& out = file->stream();
     out << "# semantic classes of the label images (labels/*.png, one class id per pixel)\n"
-           "# file: 'voxfuse " << source << " (voxfuse_synth)'\n"
+           "# file: 'voxfuse "
+        << source
+        << " (voxfuse_synth)'\n"
            "# id name   (0 = unlabelled: no surface)\n";
     for (const SemanticClass& c : scene.classes()) out << c.id << " " << c.name << "\n";
     file->commit();
@@ -181,7 +183,8 @@ void render(const Options& opt, const fs::path& out) {
     // complete and exact description of what was rendered.
     const bool corridor = opt.scene == "corridor";
     const std::string source = corridor ? "synthetic_corridor" : "synthetic_room";
-    (corridor ? SyntheticScene::corridor(opt.corridorLength) : SyntheticScene::defaultRoom()).write((out / "scene.txt").string());
+    (corridor ? SyntheticScene::corridor(opt.corridorLength) : SyntheticScene::defaultRoom())
+        .write((out / "scene.txt").string());
     const SyntheticScene scene = SyntheticScene::read((out / "scene.txt").string());
     if (labels) {
         checkClassesFitLabelImages(scene);
@@ -198,8 +201,10 @@ void render(const Options& opt, const fs::path& out) {
     KinectDepthModel depthModel(depthParams, depthRng());
 
     std::ostringstream disparityLine;
-    if (tum) disparityLine << "affine " << 1.0f / kTumDepthScale << " 0";
-    else disparityLine << "kinect " << KinectDepthModel::kKinectK1 << " " << depthParams.baseline;
+    if (tum)
+        disparityLine << "affine " << 1.0f / kTumDepthScale << " 0";
+    else
+        disparityLine << "kinect " << KinectDepthModel::kKinectK1 << " " << depthParams.baseline;
     writeCalib(out / "calib.txt", camera, disparityLine.str());
 
     OutputFile groundTruth = openFile(out / "groundtruth.txt");
@@ -215,13 +220,14 @@ void render(const Options& opt, const fs::path& out) {
     }
     if (labels) {
         labelList = openFile(out / "labels.txt");
-        writeTumHeader(labelList->stream(), source, "semantic labels (class ids, see classes.txt)", "timestamp filename");
+        writeTumHeader(labelList->stream(), source, "semantic labels (class ids, see classes.txt)",
+                       "timestamp filename");
     }
 
     const std::string rgbExt = opt.rgbFormat == "png" ? ".png" : ".jpg";
     const std::vector<int> rgbParams = opt.rgbFormat == "png"
-        ? std::vector<int>{cv::IMWRITE_PNG_COMPRESSION, 9}
-        : std::vector<int>{cv::IMWRITE_JPEG_QUALITY, opt.jpegQuality};
+                                           ? std::vector<int>{cv::IMWRITE_PNG_COMPRESSION, 9}
+                                           : std::vector<int>{cv::IMWRITE_JPEG_QUALITY, opt.jpegQuality};
     const std::vector<int> depthPngParams{cv::IMWRITE_PNG_COMPRESSION, 9};
 
     for (int i = 0; i < opt.frames; ++i) {
@@ -230,11 +236,9 @@ void render(const Options& opt, const fs::path& out) {
         groundTruth->stream() << pose.line << "\n";
 
         const RenderedFrame frame = scene.render(camera, pose.pose, opt.colourSamples);
-        const std::vector<float> depth = opt.noNoise
-            ? frame.depth
-            : depthModel.apply(frame.depth, frame.cosIncidence, frame.width, frame.height);
-        std::vector<std::uint8_t> colour =
-            toBytes(frame.rgb, opt.noNoise ? nullptr : &colourRng, /*bgr=*/tum);
+        const std::vector<float> depth =
+            opt.noNoise ? frame.depth : depthModel.apply(frame.depth, frame.cosIncidence, frame.width, frame.height);
+        std::vector<std::uint8_t> colour = toBytes(frame.rgb, opt.noNoise ? nullptr : &colourRng, /*bgr=*/tum);
 
         if (tum) {
             const std::string name = timestampName(timestamp);
@@ -242,7 +246,8 @@ void render(const Options& opt, const fs::path& out) {
             cv::Mat depthImage(opt.height, opt.width, CV_16UC1);
             for (int v = 0; v < opt.height; ++v)
                 for (int u = 0; u < opt.width; ++u) {
-                    const float scaled = std::round(depth[static_cast<std::size_t>(v) * opt.width + u] * kTumDepthScale);
+                    const float scaled =
+                        std::round(depth[static_cast<std::size_t>(v) * opt.width + u] * kTumDepthScale);
                     depthImage.at<std::uint16_t>(v, u) =
                         scaled >= 1.0f && scaled <= 65535.0f ? static_cast<std::uint16_t>(scaled) : 0;
                 }
@@ -256,8 +261,8 @@ void render(const Options& opt, const fs::path& out) {
                 cv::Mat labelImage(opt.height, opt.width, CV_8UC1);
                 for (int v = 0; v < opt.height; ++v)
                     for (int u = 0; u < opt.width; ++u)
-                        labelImage.at<std::uint8_t>(v, u) = static_cast<std::uint8_t>(
-                            frame.label[static_cast<std::size_t>(v) * opt.width + u]);
+                        labelImage.at<std::uint8_t>(v, u) =
+                            static_cast<std::uint8_t>(frame.label[static_cast<std::size_t>(v) * opt.width + u]);
                 writeImage(out / "labels" / (name + ".png"), labelImage, depthPngParams);
                 labelList->stream() << name << " labels/" << name << ".png\n";
             }
@@ -288,7 +293,8 @@ int run(const Options& opt) {
         if (!fs::is_empty(target, ec) && !opt.overwrite)
             throw std::runtime_error(target.string() + " exists and is not empty (give --overwrite to replace it)");
     }
-    const fs::path staging = target.parent_path() / ("." + target.filename().string() + ".partial-" + std::to_string(::getpid()));
+    const fs::path staging =
+        target.parent_path() / ("." + target.filename().string() + ".partial-" + std::to_string(::getpid()));
     fs::remove_all(staging, ec);
     fs::create_directories(staging);
     try {
@@ -306,16 +312,21 @@ int run(const Options& opt) {
 }  // namespace
 
 int main(int argc, char** argv) {
-    CLI::App app{"Render the VoxFuse synthetic room, or a walk down a corridor and back, as an RGB-D sequence with exact ground truth"};
+    CLI::App app{
+        "Render the VoxFuse synthetic room, or a walk down a corridor and back, as an RGB-D sequence with exact ground "
+        "truth"};
     app.option_defaults()->always_capture_default();  // show defaults in --help
     Options opt;
-    app.add_option("--out", opt.outDir, "Output directory (made whole at the end; an existing one that is not empty needs --overwrite)")->required();
+    app.add_option("--out", opt.outDir,
+                   "Output directory (made whole at the end; an existing one that is not empty needs --overwrite)")
+        ->required();
     app.add_flag("--overwrite", opt.overwrite, "Replace the output directory if it exists");
     app.add_option("--scene", opt.scene,
                    "room: the orbit of the bundled room; corridor: a walk down a corridor and back in --frames "
                    "frames, a map several times a bounded active memory (swapping benchmark: --frames 1200)")
         ->check(CLI::IsMember({"room", "corridor"}));
-    app.add_option("--corridor-length", opt.corridorLength, "Length of the corridor (m)")->check(CLI::Range(2.0f, 1000.0f));
+    app.add_option("--corridor-length", opt.corridorLength, "Length of the corridor (m)")
+        ->check(CLI::Range(2.0f, 1000.0f));
     app.add_option("--frames", opt.frames, "Number of frames (30 fps)")->check(CLI::PositiveNumber);
     app.add_option("--width", opt.width, "Image width (intrinsics scale with it)")->check(CLI::PositiveNumber);
     app.add_option("--height", opt.height, "Image height")->check(CLI::PositiveNumber);
@@ -325,10 +336,8 @@ int main(int argc, char** argv) {
         ->check(CLI::IsMember({"jpg", "png"}));
     app.add_option("--jpeg-quality", opt.jpegQuality, "JPEG quality")->check(CLI::Range(1, 100));
     app.add_option("--seed", opt.seed, "Seed of the depth and colour noise");
-    app.add_option("--colour-samples", opt.colourSamples, "Colour supersampling per axis")
-        ->check(CLI::Range(1, 4));
-    app.add_flag("--no-noise", opt.noNoise,
-                 "Exact depth (only the file's own quantisation) and noise-free colour");
+    app.add_option("--colour-samples", opt.colourSamples, "Colour supersampling per axis")->check(CLI::Range(1, 4));
+    app.add_flag("--no-noise", opt.noNoise, "Exact depth (only the file's own quantisation) and noise-free colour");
     app.add_flag("--no-labels", opt.noLabels,
                  "No semantic label images (TUM layout: labels/*.png, labels.txt, classes.txt)");
     voxfuse::app::addVersionFlag(app, "voxfuse_synth");

@@ -15,7 +15,8 @@ namespace {
 std::string g_last_glfw_error;
 
 void rememberGlfwError(int code, const char* description) {
-    g_last_glfw_error = std::string(description ? description : "unknown error") + " (GLFW error " + std::to_string(code) + ")";
+    g_last_glfw_error =
+        std::string(description ? description : "unknown error") + " (GLFW error " + std::to_string(code) + ")";
 }
 
 std::string lastGlfwError() { return g_last_glfw_error.empty() ? std::string("no reason given") : g_last_glfw_error; }
@@ -44,7 +45,8 @@ GlfwWindow::GlfwWindow(int width, int height, const std::string& title) {
     if (!window_) {
         const std::string why = lastGlfwError();
         glfwTerminate();
-        throw Error("cannot open a " + std::to_string(width) + "x" + std::to_string(height) + " window with OpenGL 2.1: " + why);
+        throw Error("cannot open a " + std::to_string(width) + "x" + std::to_string(height) +
+                    " window with OpenGL 2.1: " + why);
     }
     glfwMakeContextCurrent(window_);
     glfwSwapInterval(0);  // the frame loop, not the monitor, sets the pace

@@ -111,7 +111,8 @@ void drawStatusBar(const PanelRect& bar, const std::string& status_line, const s
     const int margin = 4;
     // The keys line sets the scale, so the text does not change size as the status line grows; a status
     // line too long for the window is cut off at its edge.
-    const int scale = (textWidth(keys_line, 2) <= bar.width - 2 * margin && 2 * (2 * kGlyphHeight + margin) <= bar.height) ? 2 : 1;
+    const int scale =
+        (textWidth(keys_line, 2) <= bar.width - 2 * margin && 2 * (2 * kGlyphHeight + margin) <= bar.height) ? 2 : 1;
     const int line_height = kGlyphHeight * scale + margin;
     const int top = bar.y + (bar.height - 2 * line_height + margin) / 2;
     glColor3f(1.f, 1.f, 1.f);

@@ -7,7 +7,7 @@ namespace voxfuse::viewer {
 namespace {
 
 constexpr float kRadiansPerPixel = 0.005f;
-constexpr float kZoomPerStep = 0.9f;      // each wheel step keeps this fraction of the distance
+constexpr float kZoomPerStep = 0.9f;  // each wheel step keeps this fraction of the distance
 constexpr float kMinPivotDistanceM = 0.05f;
 
 // Rotation by `angle` about the unit `axis` (Rodrigues), as a 4x4 with no translation.
@@ -15,9 +15,15 @@ Mat4f rotationAbout(Vec3f axis, float angle) {
     const float c = std::cos(angle), s = std::sin(angle), t = 1.f - c;
     const Vec3f a = normalize(axis);
     Mat4f R = Mat4f::identity();
-    R(0, 0) = t * a.x * a.x + c;       R(0, 1) = t * a.x * a.y - s * a.z; R(0, 2) = t * a.x * a.z + s * a.y;
-    R(1, 0) = t * a.x * a.y + s * a.z; R(1, 1) = t * a.y * a.y + c;       R(1, 2) = t * a.y * a.z - s * a.x;
-    R(2, 0) = t * a.x * a.z - s * a.y; R(2, 1) = t * a.y * a.z + s * a.x; R(2, 2) = t * a.z * a.z + c;
+    R(0, 0) = t * a.x * a.x + c;
+    R(0, 1) = t * a.x * a.y - s * a.z;
+    R(0, 2) = t * a.x * a.z + s * a.y;
+    R(1, 0) = t * a.x * a.y + s * a.z;
+    R(1, 1) = t * a.y * a.y + c;
+    R(1, 2) = t * a.y * a.z - s * a.x;
+    R(2, 0) = t * a.x * a.z - s * a.y;
+    R(2, 1) = t * a.y * a.z + s * a.x;
+    R(2, 2) = t * a.z * a.z + c;
     return R;
 }
 

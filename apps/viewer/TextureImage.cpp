@@ -40,10 +40,14 @@ void TextureImage::draw(const PanelRect& cell) const {
     glColor3f(1.f, 1.f, 1.f);
     // Image row 0 is the top row, and so is y = 0 of the projection: texture coordinates map directly.
     glBegin(GL_QUADS);
-    glTexCoord2f(0.f, 0.f); glVertex2i(r.x, r.y);
-    glTexCoord2f(1.f, 0.f); glVertex2i(r.x + r.width, r.y);
-    glTexCoord2f(1.f, 1.f); glVertex2i(r.x + r.width, r.y + r.height);
-    glTexCoord2f(0.f, 1.f); glVertex2i(r.x, r.y + r.height);
+    glTexCoord2f(0.f, 0.f);
+    glVertex2i(r.x, r.y);
+    glTexCoord2f(1.f, 0.f);
+    glVertex2i(r.x + r.width, r.y);
+    glTexCoord2f(1.f, 1.f);
+    glVertex2i(r.x + r.width, r.y + r.height);
+    glTexCoord2f(0.f, 1.f);
+    glVertex2i(r.x, r.y + r.height);
     glEnd();
     glBindTexture(GL_TEXTURE_2D, 0);
     glDisable(GL_TEXTURE_2D);

@@ -19,19 +19,26 @@
 namespace voxfuse::viewer {
 namespace {
 
-constexpr float kBackgroundGrey = 0.15f;  // window behind the panels: tells the panels' edges from black model background
+constexpr float kBackgroundGrey =
+    0.15f;  // window behind the panels: tells the panels' edges from black model background
 
 constexpr const char* kWaitingMessage = "waiting for frames from the source";
 
-constexpr const char* kKeysLine = "n next | space run | 1-5 mode | drag/wheel view | c camera | m mesh | s map | p shot | r reset | q quit";
+constexpr const char* kKeysLine =
+    "n next | space run | 1-5 mode | drag/wheel view | c camera | m mesh | s map | p shot | r reset | q quit";
 
 const char* modeName(RenderMode mode) {
     switch (mode) {
-    case RenderMode::Shaded: return "shaded";
-    case RenderMode::Color: return "colour";
-    case RenderMode::Normals: return "normals";
-    case RenderMode::Depth: return "depth";
-    case RenderMode::Class: return "class";
+        case RenderMode::Shaded:
+            return "shaded";
+        case RenderMode::Color:
+            return "colour";
+        case RenderMode::Normals:
+            return "normals";
+        case RenderMode::Depth:
+            return "depth";
+        case RenderMode::Class:
+            return "class";
     }
     return "?";
 }
@@ -43,7 +50,8 @@ void colourMapDepth(const Image<float>& depth_m, Image<Vec4u8>& out) {
     if (out.size() != depth_m.size()) out.resize(depth_m.size());
     float max_m = 0.f;
     for (std::size_t i = 0; i < depth_m.pixelCount(); ++i) max_m = std::max(max_m, depth_m.host()[i]);
-    for (std::size_t i = 0; i < depth_m.pixelCount(); ++i) out.host()[i] = renderDepth(depth_m.host()[i], max_m > 0.f ? max_m : 1.f);
+    for (std::size_t i = 0; i < depth_m.pixelCount(); ++i)
+        out.host()[i] = renderDepth(depth_m.host()[i], max_m > 0.f ? max_m : 1.f);
 }
 
 // Where the free view pivots: the mean measured depth, i.e. roughly the middle of what the camera sees.
@@ -60,7 +68,8 @@ float meanDepth(const Image<float>& depth_m) {
 
 }  // namespace
 
-ViewerApp::ViewerApp(const ViewerOptions& options, std::unique_ptr<ImageSource> source, std::unique_ptr<MainEngine> engine)
+ViewerApp::ViewerApp(const ViewerOptions& options, std::unique_ptr<ImageSource> source,
+                     std::unique_ptr<MainEngine> engine)
     : options_(options),
       source_(std::move(source)),
       read_ahead_(dynamic_cast<ThreadedImageSource*>(source_.get())),
@@ -70,13 +79,16 @@ ViewerApp::ViewerApp(const ViewerOptions& options, std::unique_ptr<ImageSource> 
     record_.settings = engine_->settings();
     record_.tracked = options_.poses == app::PoseSource::Tracker;
     runner_ = std::make_unique<app::SequenceRunner>(*source_, *engine_, options_.poses, record_, "voxfuse_viewer");
-    if (options_.skip_frames > 0) std::cerr << "voxfuse_viewer: skipped the first " << runner_->skip(options_.skip_frames) << " frames\n";
+    if (options_.skip_frames > 0)
+        std::cerr << "voxfuse_viewer: skipped the first " << runner_->skip(options_.skip_frames) << " frames\n";
     running_ = options_.start_running;
 
     GLFWwindow* w = window_.handle();
     glfwSetWindowUserPointer(w, this);
-    glfwSetKeyCallback(w, [](GLFWwindow* win, int key, int, int action, int mods) { appOf(win)->onKey(key, action, mods); });
-    glfwSetMouseButtonCallback(w, [](GLFWwindow* win, int button, int action, int) { appOf(win)->onMouseButton(button, action); });
+    glfwSetKeyCallback(
+        w, [](GLFWwindow* win, int key, int, int action, int mods) { appOf(win)->onKey(key, action, mods); });
+    glfwSetMouseButtonCallback(
+        w, [](GLFWwindow* win, int button, int action, int) { appOf(win)->onMouseButton(button, action); });
     glfwSetCursorPosCallback(w, [](GLFWwindow* win, double x, double y) { appOf(win)->onCursor(x, y); });
     glfwSetScrollCallback(w, [](GLFWwindow* win, double, double dy) { appOf(win)->onScroll(dy); });
     updateTitle();
@@ -127,8 +139,10 @@ int ViewerApp::run() {
         window_.swapBuffers();
         // Idle without spinning when nothing is being processed; keep polling while frames flow (or a
         // step waits for the camera's next frame).
-        if (running_ || step_requested_ || model_dirty_ || screenshot_requested_) glfwPollEvents();
-        else glfwWaitEvents();
+        if (running_ || step_requested_ || model_dirty_ || screenshot_requested_)
+            glfwPollEvents();
+        else
+            glfwWaitEvents();
     }
     return 0;
 }
@@ -173,8 +187,8 @@ void ViewerApp::processNextFrame() {
     }
     if (step == app::SequenceRunner::Step::Skipped) {
         // Back to the window's events; the next frame comes on the next pass.
-        status_ = "frame skipped: " + std::to_string(record_.frames_unreadable) + " unreadable, " + std::to_string(record_.frames_without_pose) +
-                  " without a ground-truth pose so far";
+        status_ = "frame skipped: " + std::to_string(record_.frames_unreadable) + " unreadable, " +
+                  std::to_string(record_.frames_without_pose) + " without a ground-truth pose so far";
         updateTitle();
         return;
     }
@@ -226,26 +240,54 @@ void ViewerApp::drawPanels() {
 void ViewerApp::onKey(int key, int action, int /*mods*/) {
     if (action != GLFW_PRESS && !(action == GLFW_REPEAT && key == GLFW_KEY_N)) return;
     switch (key) {
-    case GLFW_KEY_Q:
-    case GLFW_KEY_ESCAPE: window_.requestClose(); break;
-    case GLFW_KEY_N: step_requested_ = true; running_ = false; break;
-    case GLFW_KEY_SPACE: running_ = !running_; break;
-    case GLFW_KEY_1: setMode(RenderMode::Shaded); break;
-    case GLFW_KEY_2: setMode(RenderMode::Color); break;
-    case GLFW_KEY_3: setMode(RenderMode::Normals); break;
-    case GLFW_KEY_4: setMode(RenderMode::Depth); break;
-    case GLFW_KEY_5: setMode(RenderMode::Class); break;
-    case GLFW_KEY_TAB: setMode(RenderMode((int(mode_) + 1) % 5)); break;
-    case GLFW_KEY_C:
-        free_view_.stop();
-        model_dirty_ = true;
-        status_ = "following the camera";
-        break;
-    case GLFW_KEY_M: saveMesh(); break;
-    case GLFW_KEY_S: saveMap(); break;
-    case GLFW_KEY_P: screenshot_requested_ = true; break;
-    case GLFW_KEY_R: resetMap(); break;
-    default: return;
+        case GLFW_KEY_Q:
+        case GLFW_KEY_ESCAPE:
+            window_.requestClose();
+            break;
+        case GLFW_KEY_N:
+            step_requested_ = true;
+            running_ = false;
+            break;
+        case GLFW_KEY_SPACE:
+            running_ = !running_;
+            break;
+        case GLFW_KEY_1:
+            setMode(RenderMode::Shaded);
+            break;
+        case GLFW_KEY_2:
+            setMode(RenderMode::Color);
+            break;
+        case GLFW_KEY_3:
+            setMode(RenderMode::Normals);
+            break;
+        case GLFW_KEY_4:
+            setMode(RenderMode::Depth);
+            break;
+        case GLFW_KEY_5:
+            setMode(RenderMode::Class);
+            break;
+        case GLFW_KEY_TAB:
+            setMode(RenderMode((int(mode_) + 1) % 5));
+            break;
+        case GLFW_KEY_C:
+            free_view_.stop();
+            model_dirty_ = true;
+            status_ = "following the camera";
+            break;
+        case GLFW_KEY_M:
+            saveMesh();
+            break;
+        case GLFW_KEY_S:
+            saveMap();
+            break;
+        case GLFW_KEY_P:
+            screenshot_requested_ = true;
+            break;
+        case GLFW_KEY_R:
+            resetMap();
+            break;
+        default:
+            return;
     }
     updateTitle();
 }
@@ -264,8 +306,8 @@ void ViewerApp::saveMesh() {
         engine_->extractMesh(mesh);
         writeMesh(path.string(), mesh);
         status_ = "mesh saved to " + path.string();
-        std::cerr << "voxfuse_viewer: mesh " << mesh.vertices.size() << " vertices, " << mesh.triangles.size() << " triangles -> "
-                  << path.string() << "\n";
+        std::cerr << "voxfuse_viewer: mesh " << mesh.vertices.size() << " vertices, " << mesh.triangles.size()
+                  << " triangles -> " << path.string() << "\n";
     } catch (const std::exception& e) {
         // A failed save must not end the session: report it and carry on.
         status_ = "mesh NOT saved (see the terminal)";
@@ -340,14 +382,17 @@ std::string ViewerApp::statusLine() const {
     const FrameResult* last = done > 0 ? &record_.frames.back().result : nullptr;
     // "tracking good", "LOST (relocalising)", "relocalised"; and the keyframes relocalisation can use.
     std::string tracking = !last ? "tracking -"
-                           : last->status == TrackingStatus::Lost ? std::string("LOST") + (last->relocalisation_tried ? " (relocalising)" : "")
-                           : last->status == TrackingStatus::Relocalised ? "relocalised"
-                                                                          : std::string("tracking ") + toString(last->quality);
-    if (last && engine_->settings().relocalisation.enabled) tracking += ", " + std::to_string(last->keyframes) + " keyframes";
+                           : last->status == TrackingStatus::Lost
+                               ? std::string("LOST") + (last->relocalisation_tried ? " (relocalising)" : "")
+                           : last->status == TrackingStatus::Relocalised
+                               ? "relocalised"
+                               : std::string("tracking ") + toString(last->quality);
+    if (last && engine_->settings().relocalisation.enabled)
+        tracking += ", " + std::to_string(last->keyframes) + " keyframes";
     std::snprintf(text, sizeof text, "frame %d%s%s | %.1f ms/frame | %.1f fps | %s | %s%s | %s%s%s", done,
-                  total > 0 ? "/" : "", total > 0 ? std::to_string(total).c_str() : "", engine_ms, fps, tracking.c_str(), modeName(mode_),
-                  free_view_.active() ? ", free view" : "", running_ ? "running" : "paused", status_.empty() ? "" : " | ",
-                  status_.c_str());
+                  total > 0 ? "/" : "", total > 0 ? std::to_string(total).c_str() : "", engine_ms, fps,
+                  tracking.c_str(), modeName(mode_), free_view_.active() ? ", free view" : "",
+                  running_ ? "running" : "paused", status_.empty() ? "" : " | ", status_.c_str());
     return text;
 }
 

@@ -23,14 +23,14 @@ class ThreadedImageSource;
 namespace voxfuse::viewer {
 
 struct ViewerOptions {
-    int window_width = 1200;  // 2/3 for the model, 1/3 for the live images, a 40-pixel status bar:
-    int window_height = 640;  // 4:3 panels at this size
-    int max_frames = 0;                  // stop processing after N frames (0 = the whole source)
-    int skip_frames = 0;                 // dropped from the start of the source first
-    bool start_running = true;           // process continuously from the start (space toggles)
-    std::string screenshot_path;         // save the window as PNG once processing stops
-    bool exit_when_done = false;         // quit once processing stops (after the screenshot)
-    std::string out_dir = "voxfuse_out"; // where m writes mesh.ply, s map.vfm and p screenshot.png
+    int window_width = 1200;              // 2/3 for the model, 1/3 for the live images, a 40-pixel status bar:
+    int window_height = 640;              // 4:3 panels at this size
+    int max_frames = 0;                   // stop processing after N frames (0 = the whole source)
+    int skip_frames = 0;                  // dropped from the start of the source first
+    bool start_running = true;            // process continuously from the start (space toggles)
+    std::string screenshot_path;          // save the window as PNG once processing stops
+    bool exit_when_done = false;          // quit once processing stops (after the screenshot)
+    std::string out_dir = "voxfuse_out";  // where m writes mesh.ply, s map.vfm and p screenshot.png
     app::PoseSource poses = app::PoseSource::Tracker;
 };
 
@@ -67,7 +67,8 @@ private:
 
     ViewerOptions options_;
     std::unique_ptr<ImageSource> source_;
-    ThreadedImageSource* read_ahead_;  // source_, when frames are read ahead (a camera's): waited for a moment at a time
+    ThreadedImageSource*
+        read_ahead_;  // source_, when frames are read ahead (a camera's): waited for a moment at a time
     std::unique_ptr<MainEngine> engine_;
     app::RunRecord record_;
     std::unique_ptr<app::SequenceRunner> runner_;
@@ -77,19 +78,19 @@ private:
     Image<Vec4u8> model_image_, depth_image_;
     RenderMode mode_ = RenderMode::Shaded;
     OrbitCamera free_view_;
-    bool have_frame_ = false;       // a frame was processed since start or reset: there is a model to show
-    bool model_dirty_ = false;      // the model panel must be rendered again
-    bool running_ = true;           // continuous processing
-    bool step_requested_ = false;   // n was pressed
+    bool have_frame_ = false;            // a frame was processed since start or reset: there is a model to show
+    bool model_dirty_ = false;           // the model panel must be rendered again
+    bool running_ = true;                // continuous processing
+    bool step_requested_ = false;        // n was pressed
     bool screenshot_requested_ = false;  // p was pressed
     bool end_of_source_ = false;
     bool dragging_ = false;
     double last_cursor_x_ = 0.0, last_cursor_y_ = 0.0;
-    double smoothed_frame_s_ = 0.0; // wall time per frame (reading, processing, display), smoothed
-    std::string status_;            // last action, e.g. "mesh saved to voxfuse_out/mesh.ply"
+    double smoothed_frame_s_ = 0.0;           // wall time per frame (reading, processing, display), smoothed
+    std::string status_;                      // last action, e.g. "mesh saved to voxfuse_out/mesh.ply"
     static constexpr int kSilenceShownS = 1;  // a source silent this long is shown as waited for
-    std::unique_ptr<Timer> silence_;  // since the source last had a frame ready, while it has none
-    int silent_s_ = 0;                // whole seconds of that silence shown
+    std::unique_ptr<Timer> silence_;          // since the source last had a frame ready, while it has none
+    int silent_s_ = 0;                        // whole seconds of that silence shown
 };
 
 }  // namespace voxfuse::viewer

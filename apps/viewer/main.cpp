@@ -14,14 +14,14 @@
 #include "ViewerApp.h"
 #include "voxfuse/core/Error.h"
 
-
 namespace fs = std::filesystem;
 using namespace voxfuse;
 
 namespace {
 
 constexpr const char* kKeyHelp =
-    "keys: n next frame | space run/pause | 1-5 shaded/colour/normals/depth/class (Tab cycles) | left-drag orbit, wheel zoom,\n"
+    "keys: n next frame | space run/pause | 1-5 shaded/colour/normals/depth/class (Tab cycles) | left-drag orbit, "
+    "wheel zoom,\n"
     "      c back to the camera | m save mesh | s save map | p screenshot | r reset the map | q/Esc quit\n";
 
 struct Options {
@@ -39,8 +39,8 @@ void parseWindowSize(const std::string& text, viewer::ViewerOptions& out) {
         const auto result = std::from_chars(part.data(), part.data() + part.size(), value);
         return !part.empty() && result.ec == std::errc() && result.ptr == part.data() + part.size();
     };
-    if (x == std::string::npos || !number(text.substr(0, x), width) || !number(text.substr(x + 1), height) || width < 64 || height < 64 ||
-        width > 16384 || height > 16384)
+    if (x == std::string::npos || !number(text.substr(0, x), width) || !number(text.substr(x + 1), height) ||
+        width < 64 || height < 64 || width > 16384 || height > 16384)
         throw ConfigError("--size must be WIDTHxHEIGHT, each 64 to 16384, e.g. 1200x640 (got '" + text + "')");
     out.window_width = width;
     out.window_height = height;
@@ -69,21 +69,28 @@ int run(Options& o) {
 
 int main(int argc, char** argv) {
     app::useLongRunHeapPolicy();
-    CLI::App cli{"VoxFuse viewer: watch the reconstruction grow, frame by frame.\n"
-                 "With no SOURCE, runs on the bundled synthetic sequence.\n" + std::string(kKeyHelp)};
+    CLI::App cli{
+        "VoxFuse viewer: watch the reconstruction grow, frame by frame.\n"
+        "With no SOURCE, runs on the bundled synthetic sequence.\n" +
+        std::string(kKeyHelp)};
     Options o;
     app::addSourceOptions(cli, o.pipeline);
     app::addMapOptions(cli, o.pipeline);
     app::addTrackingOptions(cli, o.pipeline);
-    cli.add_option("--out", o.viewer.out_dir, "folder for the mesh (m), the map (s) and screenshot (p)")->capture_default_str();
+    cli.add_option("--out", o.viewer.out_dir, "folder for the mesh (m), the map (s) and screenshot (p)")
+        ->capture_default_str();
     cli.add_option("--load-map", o.pipeline.load_map,
-                   "continue the map in this file (.vfm; see voxfuse --save-map and key s): its voxel type, index and voxel size are used")
+                   "continue the map in this file (.vfm; see voxfuse --save-map and key s): its voxel type, index and "
+                   "voxel size are used")
         ->check(CLI::ExistingFile);
-    cli.add_option("--frames", o.viewer.max_frames, "stop processing after N frames (0 = all)")->check(app::nonNegativeInt());
+    cli.add_option("--frames", o.viewer.max_frames, "stop processing after N frames (0 = all)")
+        ->check(app::nonNegativeInt());
     cli.add_flag("--paused", o.paused, "start paused (n steps, space runs)");
     cli.add_option("--size", o.size, "window size WIDTHxHEIGHT (default 1200x640)");
-    cli.add_option("--screenshot", o.viewer.screenshot_path, "save the window as PNG once processing stops (end of source or --frames)");
-    cli.add_flag("--exit", o.viewer.exit_when_done, "quit once processing stops (after --screenshot); for scripts and tests");
+    cli.add_option("--screenshot", o.viewer.screenshot_path,
+                   "save the window as PNG once processing stops (end of source or --frames)");
+    cli.add_flag("--exit", o.viewer.exit_when_done,
+                 "quit once processing stops (after --screenshot); for scripts and tests");
     app::addVersionFlag(cli, "voxfuse_viewer");
     if (const auto status = app::parseCommandLine(cli, argc, argv, "voxfuse_viewer")) return *status;
     app::noteGivenOptions(cli, o.pipeline);

@@ -34,26 +34,25 @@
 #include "voxfuse/io/ThreadedImageSource.h"
 #include "voxfuse/mapping/OccupancyMapper.h"
 
-
 namespace fs = std::filesystem;
 using namespace voxfuse;
 
 namespace {
 
 struct CliOptions {
-    app::PipelineOptions pipeline;        // the source, the map and the tracker (shared with the viewer)
+    app::PipelineOptions pipeline;  // the source, the map and the tracker (shared with the viewer)
     std::string out_dir = "voxfuse_out";
-    bool overwrite = false;               // replace an earlier run's outputs in out_dir
-    int max_frames = -1;  // -1 = all; 0 = none (with --load-map: the map's outputs only)
+    bool overwrite = false;  // replace an earlier run's outputs in out_dir
+    int max_frames = -1;     // -1 = all; 0 = none (with --load-map: the map's outputs only)
     int render_every = 25;
-    bool write_mesh = false;              // DIR/mesh.ply at the end
-    std::string mesh_path;                // or this file (.ply, .obj, .stl)
-    bool write_cloud = false;             // DIR/cloud.ply at the end
-    float cloud_voxel_m = 0.f;            // downsample the cloud to one point per cell of this size
-    float occupancy_res_m = 0.f;          // > 0: an OctoMap with cells of this size -> DIR/occupancy.bt
-    bool mesh_per_class = false;          // DIR/mesh_class_<id>.ply for each class of the mesh
-    std::vector<int> exclude_classes;     // dropped from the mesh and the cloud (e.g. people from a static map)
-    std::string save_map;                 // write the map here at the end
+    bool write_mesh = false;           // DIR/mesh.ply at the end
+    std::string mesh_path;             // or this file (.ply, .obj, .stl)
+    bool write_cloud = false;          // DIR/cloud.ply at the end
+    float cloud_voxel_m = 0.f;         // downsample the cloud to one point per cell of this size
+    float occupancy_res_m = 0.f;       // > 0: an OctoMap with cells of this size -> DIR/occupancy.bt
+    bool mesh_per_class = false;       // DIR/mesh_class_<id>.ply for each class of the mesh
+    std::vector<int> exclude_classes;  // dropped from the mesh and the cloud (e.g. people from a static map)
+    std::string save_map;              // write the map here at the end
 };
 
 class ProgressLine {
@@ -61,8 +60,10 @@ public:
     explicit ProgressLine(int total) : total_(total), tty_(isatty(STDERR_FILENO)) {}
     void update(int done, double fps) {
         if (!tty_) return;
-        if (total_ > 0) std::fprintf(stderr, "\r  frame %d/%d  %.1f fps   ", done, total_, fps);
-        else std::fprintf(stderr, "\r  frame %d  %.1f fps   ", done, fps);
+        if (total_ > 0)
+            std::fprintf(stderr, "\r  frame %d/%d  %.1f fps   ", done, total_, fps);
+        else
+            std::fprintf(stderr, "\r  frame %d  %.1f fps   ", done, fps);
         std::fflush(stderr);
     }
     void finish() {
@@ -74,7 +75,9 @@ private:
     bool tty_;
 };
 
-std::vector<ClassId> excludedClasses(const CliOptions& o) { return std::vector<ClassId>(o.exclude_classes.begin(), o.exclude_classes.end()); }
+std::vector<ClassId> excludedClasses(const CliOptions& o) {
+    return std::vector<ClassId>(o.exclude_classes.begin(), o.exclude_classes.end());
+}
 
 void writeMapOutputs(MainEngine& engine, const CliOptions& o, app::OutputFolder& out) {
     if (o.write_mesh || !o.mesh_path.empty() || o.mesh_per_class) {
@@ -85,16 +88,17 @@ void writeMapOutputs(MainEngine& engine, const CliOptions& o, app::OutputFolder&
         if (o.write_mesh || !o.mesh_path.empty()) {
             const std::string path = o.mesh_path.empty() ? out.file("mesh.ply") : o.mesh_path;
             writeMesh(path, mesh);
-            std::cerr << "voxfuse: mesh " << mesh.vertices.size() << " vertices, " << mesh.triangles.size() << " triangles in "
-                      << int(t.elapsedMs()) << " ms -> " << path << "\n";
+            std::cerr << "voxfuse: mesh " << mesh.vertices.size() << " vertices, " << mesh.triangles.size()
+                      << " triangles in " << int(t.elapsedMs()) << " ms -> " << path << "\n";
         }
         if (o.mesh_per_class) {
             for (const ClassMesh& part : splitByClass(mesh)) {
                 const bool unlabelled = part.label == kNoLabel;
-                const std::string part_path = out.file(unlabelled ? "mesh_unlabelled.ply" : "mesh_class_" + std::to_string(part.label) + ".ply");
+                const std::string part_path =
+                    out.file(unlabelled ? "mesh_unlabelled.ply" : "mesh_class_" + std::to_string(part.label) + ".ply");
                 writeMesh(part_path, part.mesh);
-                std::cerr << "voxfuse: class " << (unlabelled ? std::string("none") : std::to_string(part.label)) << ": "
-                          << part.mesh.triangles.size() << " triangles -> " << part_path << "\n";
+                std::cerr << "voxfuse: class " << (unlabelled ? std::string("none") : std::to_string(part.label))
+                          << ": " << part.mesh.triangles.size() << " triangles -> " << part_path << "\n";
             }
         }
     }
@@ -106,7 +110,8 @@ void writeMapOutputs(MainEngine& engine, const CliOptions& o, app::OutputFolder&
         const std::size_t surface_points = cloud.points.size();
         if (o.cloud_voxel_m > 0.f) cloud = downsampleVoxelGrid(cloud, o.cloud_voxel_m);
         writePointCloudPly(path, cloud);
-        std::cerr << "voxfuse: point cloud " << cloud.points.size() << " points (of " << surface_points << " surface points) -> " << path << "\n";
+        std::cerr << "voxfuse: point cloud " << cloud.points.size() << " points (of " << surface_points
+                  << " surface points) -> " << path << "\n";
     }
 }
 
@@ -141,14 +146,38 @@ void checkCombinations(const CliOptions& o) {
     app::checkPipelineOptions(p);
     if (!p.load_map.empty() && o.max_frames == 0) {
         // Only the map is read: whatever reads, tracks or fuses frames would be ignored.
-        for (const char* option : {"source", "--live", "--device-uri", "--threaded", "--min-confidence", "--rgb", "--depth", "--calib", "--skip",
-                                   "--render-every", "--min-depth", "--max-depth", "--depth-gap-tolerance", "--occupancy", "--poses", "--tracker",
-                                   "--tracker-config", "--tracker-levels", "--tracker-iterations", "--tracker-max-distance", "--labels",
-                                   "--label-match", "--label-ignore", "--label-update", "--relocalise", "--relocalise-candidates",
-                                   "--relocalise-max-speed", "--relocalise-min-colour-correlation"})
+        for (const char* option : {"source",
+                                   "--live",
+                                   "--device-uri",
+                                   "--threaded",
+                                   "--min-confidence",
+                                   "--rgb",
+                                   "--depth",
+                                   "--calib",
+                                   "--skip",
+                                   "--render-every",
+                                   "--min-depth",
+                                   "--max-depth",
+                                   "--depth-gap-tolerance",
+                                   "--occupancy",
+                                   "--poses",
+                                   "--tracker",
+                                   "--tracker-config",
+                                   "--tracker-levels",
+                                   "--tracker-iterations",
+                                   "--tracker-max-distance",
+                                   "--labels",
+                                   "--label-match",
+                                   "--label-ignore",
+                                   "--label-update",
+                                   "--relocalise",
+                                   "--relocalise-candidates",
+                                   "--relocalise-max-speed",
+                                   "--relocalise-min-colour-correlation"})
             if (p.wasGiven(option))
-                throw ConfigError(std::string(option == std::string("source") ? "a SOURCE" : option) +
-                                  " concerns frames, and --load-map with --frames 0 reads none (leave it out, or give frames)");
+                throw ConfigError(
+                    std::string(option == std::string("source") ? "a SOURCE" : option) +
+                    " concerns frames, and --load-map with --frames 0 reads none (leave it out, or give frames)");
     }
 }
 
@@ -218,7 +247,8 @@ int run(CliOptions& o) {
     MainEngine* engine = pipeline.engine.get();
     // Before the run, not after it: a run must not end without its outputs over an option it cannot honour.
     if ((o.mesh_per_class || !o.exclude_classes.empty()) && !voxelTypeHasLabels(p.engine.voxel_type))
-        throw ConfigError("--mesh-per-class and --exclude-classes need a voxel type with classes (s_label, s_rgb_label)");
+        throw ConfigError(
+            "--mesh-per-class and --exclude-classes need a voxel type with classes (s_label, s_rgb_label)");
     const auto* threaded = dynamic_cast<const ThreadedImageSource*>(source);
     app::RunRecord record;
     record.map_loaded = p.load_map;
@@ -226,9 +256,11 @@ int run(CliOptions& o) {
     record.has_labels = pipeline.labels != nullptr;
     record.settings = engine->settings();
     record.tracked = p.poses == "track";
-    app::SequenceRunner runner(*source, *engine, record.tracked ? app::PoseSource::Tracker : app::PoseSource::GroundTruth, record, "voxfuse");
-    const int total = o.max_frames >= 0 && (source->frameCount() < 0 || o.max_frames < source->frameCount()) ? o.max_frames
-                                                                                                                : source->frameCount();
+    app::SequenceRunner runner(
+        *source, *engine, record.tracked ? app::PoseSource::Tracker : app::PoseSource::GroundTruth, record, "voxfuse");
+    const int total = o.max_frames >= 0 && (source->frameCount() < 0 || o.max_frames < source->frameCount())
+                          ? o.max_frames
+                          : source->frameCount();
     // The occupancy map is built on its own thread; the loop hands it each fused frame and never waits.
     std::unique_ptr<OccupancyMapper> occupancy;
     if (o.occupancy_res_m > 0.f) {
@@ -244,10 +276,12 @@ int run(CliOptions& o) {
     ProgressLine progress(total);
     const Timer wall;
     int last_rendered = -1;
-    while ((o.max_frames < 0 || int(record.frames.size()) < o.max_frames) && runner.processNext(app::interrupt::requested)) {
+    while ((o.max_frames < 0 || int(record.frames.size()) < o.max_frames) &&
+           runner.processNext(app::interrupt::requested)) {
         const FrameResult& fr = runner.lastRecord().result;
         record.frames_with_labels += !runner.frame().labels.empty();
-        if (occupancy && fr.fused) occupancy->submit(engine->view().depth, engine->view().calib.depth, fr.T_world_camera);
+        if (occupancy && fr.fused)
+            occupancy->submit(engine->view().depth, engine->view().calib.depth, fr.T_world_camera);
         if (o.render_every > 0 && int(record.frames.size() - 1) % o.render_every == 0) {
             saveRenders(*engine, out, runner.frame().index);
             last_rendered = runner.frame().index;
@@ -259,8 +293,10 @@ int run(CliOptions& o) {
     if (threaded) record.frames_dropped = int(threaded->droppedFrames());
 
     progress.finish();
-    if (record.frames.empty() && !record.interrupted) throw ConfigError("no frame could be processed from " + source->description());
-    if (!record.frames.empty() && last_rendered != record.frames.back().index) saveRenders(*engine, out, record.frames.back().index);
+    if (record.frames.empty() && !record.interrupted)
+        throw ConfigError("no frame could be processed from " + source->description());
+    if (!record.frames.empty() && last_rendered != record.frames.back().index)
+        saveRenders(*engine, out, record.frames.back().index);
 
     record.peak_rss_mb = app::peakRssMb();
     record.scene_mb = double(engine->sceneBytes()) / (1024.0 * 1024.0);
@@ -276,7 +312,8 @@ int run(CliOptions& o) {
     }
     if (occupancy) {
         const std::string path = out.file("occupancy.bt");
-        writeFileAtomically(path, [&](const std::string& temporary) { occupancy->write(temporary); });  // drains the queue first
+        writeFileAtomically(
+            path, [&](const std::string& temporary) { occupancy->write(temporary); });  // drains the queue first
         const OccupancyStats st = occupancy->stats();
         std::cerr << "voxfuse: occupancy map " << st.frames_inserted << " frames inserted, " << st.frames_dropped
                   << " dropped while the mapper lagged, " << st.points_inserted << " points -> " << path << "\n";
@@ -290,33 +327,48 @@ int run(CliOptions& o) {
 
 int main(int argc, char** argv) {
     app::useLongRunHeapPolicy();
-    CLI::App cli{"VoxFuse: dense 3D reconstruction from RGB-D sequences.\n"
-                 "With no SOURCE, runs on the bundled synthetic sequence.\n"
-                 "Ctrl-C (or SIGTERM) stops after the current frame and writes the outputs of the frames done; a second one quits at once."};
+    CLI::App cli{
+        "VoxFuse: dense 3D reconstruction from RGB-D sequences.\n"
+        "With no SOURCE, runs on the bundled synthetic sequence.\n"
+        "Ctrl-C (or SIGTERM) stops after the current frame and writes the outputs of the frames done; a second one "
+        "quits at once."};
     CliOptions o;
     app::addSourceOptions(cli, o.pipeline);
-    cli.add_option("--out", o.out_dir, "output folder (refused when it holds an earlier run's outputs, unless --overwrite)")->capture_default_str();
-    cli.add_flag("--overwrite", o.overwrite, "replace the outputs of an earlier run in the output folder (they are removed first)");
-    cli.add_option("--frames", o.max_frames, "process at most N frames (default: all; 0 with --load-map: none, only the map's outputs)")
+    cli.add_option("--out", o.out_dir,
+                   "output folder (refused when it holds an earlier run's outputs, unless --overwrite)")
+        ->capture_default_str();
+    cli.add_flag("--overwrite", o.overwrite,
+                 "replace the outputs of an earlier run in the output folder (they are removed first)");
+    cli.add_option("--frames", o.max_frames,
+                   "process at most N frames (default: all; 0 with --load-map: none, only the map's outputs)")
         ->check(app::nonNegativeInt());
-    cli.add_option("--save-map", o.save_map, "write the map to this file (.vfm) at the end, to continue or export it later");
+    cli.add_option("--save-map", o.save_map,
+                   "write the map to this file (.vfm) at the end, to continue or export it later");
     cli.add_option("--load-map", o.pipeline.load_map,
-                   "continue the map in this file (.vfm): its voxel type, index and voxel size are used, tracking resumes where it was "
+                   "continue the map in this file (.vfm): its voxel type, index and voxel size are used, tracking "
+                   "resumes where it was "
                    "saved; with --frames 0 no SOURCE is read")
         ->check(CLI::ExistingFile);
     cli.add_option("--render-every", o.render_every, "write render_XXXXXX.png every N frames (0 = only the last)")
-        ->capture_default_str()->check(app::nonNegativeInt());
+        ->capture_default_str()
+        ->check(app::nonNegativeInt());
     app::addMapOptions(cli, o.pipeline);
     cli.add_flag("--mesh", o.write_mesh, "write the map's mesh (marching cubes) to DIR/mesh.ply at the end");
-    cli.add_option("--mesh-file", o.mesh_path, "write the mesh to this file instead (.ply, .obj or .stl)")->check(app::meshFileName());
+    cli.add_option("--mesh-file", o.mesh_path, "write the mesh to this file instead (.ply, .obj or .stl)")
+        ->check(app::meshFileName());
     cli.add_flag("--cloud", o.write_cloud, "write the surface points with normals (and colours) to DIR/cloud.ply");
-    cli.add_option("--cloud-voxel", o.cloud_voxel_m, "downsample the cloud to one point (the centroid) per cell of M metres; implies --cloud")
+    cli.add_option("--cloud-voxel", o.cloud_voxel_m,
+                   "downsample the cloud to one point (the centroid) per cell of M metres; implies --cloud")
         ->check(app::floatIn(1e-4, 1000.0));
-    cli.add_option("--occupancy", o.occupancy_res_m, "also build an OctoMap with RES-metre cells on a background thread -> DIR/occupancy.bt")
+    cli.add_option("--occupancy", o.occupancy_res_m,
+                   "also build an OctoMap with RES-metre cells on a background thread -> DIR/occupancy.bt")
         ->check(app::floatIn(0.001, 10.0));
-    cli.add_flag("--mesh-per-class", o.mesh_per_class, "also write one mesh per semantic class: DIR/mesh_class_<id>.ply");
-    cli.add_option("--exclude-classes", o.exclude_classes, "drop these classes from the mesh and the cloud (e.g. people from a static map)")
-        ->delimiter(',')->check(app::intIn(0, 65535));
+    cli.add_flag("--mesh-per-class", o.mesh_per_class,
+                 "also write one mesh per semantic class: DIR/mesh_class_<id>.ply");
+    cli.add_option("--exclude-classes", o.exclude_classes,
+                   "drop these classes from the mesh and the cloud (e.g. people from a static map)")
+        ->delimiter(',')
+        ->check(app::intIn(0, 65535));
     app::addTrackingOptions(cli, o.pipeline);
     app::addVersionFlag(cli, "voxfuse");
     if (const auto status = app::parseCommandLine(cli, argc, argv, "voxfuse")) return *status;

@@ -18,15 +18,16 @@ namespace {
 
 std::string describe(const Intrinsics& k) {
     std::ostringstream s;
-    s << "Intrinsics(width=" << k.width << ", height=" << k.height << ", fx=" << k.fx << ", fy=" << k.fy << ", cx=" << k.cx
-      << ", cy=" << k.cy << ")";
+    s << "Intrinsics(width=" << k.width << ", height=" << k.height << ", fx=" << k.fx << ", fy=" << k.fy
+      << ", cx=" << k.cx << ", cy=" << k.cy << ")";
     return s.str();
 }
 
 RGBDCalib pinhole(int width, int height, float fx, float fy, float cx, float cy, float depth_scale) {
     if (width <= 0 || height <= 0) throw ConfigError("the image size must be positive");
     if (!(fx > 0.f) || !(fy > 0.f)) throw ConfigError("focal lengths must be positive");
-    if (!(depth_scale > 0.f) || !std::isfinite(depth_scale)) throw ConfigError("depth_scale (metres per raw depth unit) must be positive");
+    if (!(depth_scale > 0.f) || !std::isfinite(depth_scale))
+        throw ConfigError("depth_scale (metres per raw depth unit) must be positive");
     RGBDCalib c;
     c.depth = {width, height, fx, fy, cx, cy};
     c.rgb = c.depth;
@@ -38,13 +39,17 @@ RGBDCalib pinhole(int width, int height, float fx, float fy, float cx, float cy,
 
 float metresPerRawUnit(const RGBDCalib& calib) {
     if (calib.disparity.type != DisparityCalib::Type::Affine || calib.disparity.b != 0.f)
-        throw ConfigError("the calibration converts depth by Kinect disparity or with an offset; depth in metres needs a plain scale");
+        throw ConfigError(
+            "the calibration converts depth by Kinect disparity or with an offset; depth in metres needs a plain "
+            "scale");
     return calib.disparity.a;
 }
 
 void bindCalibration(py::module_& m) {
     py::class_<Intrinsics>(m, "Intrinsics", "Pinhole intrinsics in pixels (pixel centres at integers).")
-        .def(py::init([](int width, int height, float fx, float fy, float cx, float cy) { return Intrinsics{width, height, fx, fy, cx, cy}; }),
+        .def(py::init([](int width, int height, float fx, float fy, float cx, float cy) {
+                 return Intrinsics{width, height, fx, fy, cx, cy};
+             }),
              py::arg("width"), py::arg("height"), py::arg("fx"), py::arg("fy"), py::arg("cx"), py::arg("cy"))
         .def_readwrite("width", &Intrinsics::width)
         .def_readwrite("height", &Intrinsics::height)
@@ -65,17 +70,19 @@ void bindCalibration(py::module_& m) {
             "The 3x3 camera matrix.")
         .def("__repr__", &describe);
 
-    py::class_<RGBDCalib>(m, "Calibration",
-                          "An RGB-D camera pair: depth and colour intrinsics, the colour-to-depth transform and the depth scale.\n\n"
-                          "Make one with Calibration.pinhole(...), read InfiniTAM's calib.txt with Calibration.from_file(path), or take\n"
-                          "a source's (Source.calib).")
-        .def_static("pinhole", &pinhole, py::arg("width"), py::arg("height"), py::arg("fx"), py::arg("fy"), py::arg("cx"), py::arg("cy"),
-                    py::arg("depth_scale") = 0.001f,
+    py::class_<RGBDCalib>(
+        m, "Calibration",
+        "An RGB-D camera pair: depth and colour intrinsics, the colour-to-depth transform and the depth scale.\n\n"
+        "Make one with Calibration.pinhole(...), read InfiniTAM's calib.txt with Calibration.from_file(path), or take\n"
+        "a source's (Source.calib).")
+        .def_static("pinhole", &pinhole, py::arg("width"), py::arg("height"), py::arg("fx"), py::arg("fy"),
+                    py::arg("cx"), py::arg("cy"), py::arg("depth_scale") = 0.001f,
                     "One camera for depth and colour (registered depth): raw depth * depth_scale = metres (0.001 for\n"
                     "millimetres, 0.0002 for TUM's PNGs).")
         .def_static("from_file", &readCalib, py::arg("path"), "Reads InfiniTAM's calib.txt format.")
-        .def("save", [](const RGBDCalib& c, const std::string& path) { writeCalib(path, c); }, py::arg("path"),
-             "Writes InfiniTAM's calib.txt format.")
+        .def(
+            "save", [](const RGBDCalib& c, const std::string& path) { writeCalib(path, c); }, py::arg("path"),
+            "Writes InfiniTAM's calib.txt format.")
         .def_readwrite("depth", &RGBDCalib::depth, "The depth camera's intrinsics (the frames' geometry).")
         .def_readwrite("rgb", &RGBDCalib::rgb, "The colour camera's intrinsics.")
         .def_property(
@@ -85,7 +92,9 @@ void bindCalibration(py::module_& m) {
         .def_property_readonly(
             "depth_scale", [](const RGBDCalib& c) { return metresPerRawUnit(c); },
             "Metres per raw depth unit (ConfigError for a Kinect disparity calibration).")
-        .def("__repr__", [](const RGBDCalib& c) { return "Calibration(depth=" + describe(c.depth) + ", rgb=" + describe(c.rgb) + ")"; });
+        .def("__repr__", [](const RGBDCalib& c) {
+            return "Calibration(depth=" + describe(c.depth) + ", rgb=" + describe(c.rgb) + ")";
+        });
 }
 
 }  // namespace voxfuse::python

@@ -29,10 +29,12 @@ void bindErrors(py::module_& m) {
                                           "Any error VoxFuse reports; the message says what failed and where.");
     static PyObject* io_error = newException(m, "IoError", py::make_tuple(py::handle(error), py::handle(PyExc_OSError)),
                                              "A file or frame cannot be read or written (the message names it).");
-    static PyObject* parse_error = newException(m, "ParseError", py::make_tuple(py::handle(io_error)),
-                                                "A malformed line of a text file (the message reads 'file:line: reason').");
-    static PyObject* config_error = newException(m, "ConfigError", py::make_tuple(py::handle(error), py::handle(PyExc_ValueError)),
-                                                 "Settings that are out of range or cannot work together.");
+    static PyObject* parse_error =
+        newException(m, "ParseError", py::make_tuple(py::handle(io_error)),
+                     "A malformed line of a text file (the message reads 'file:line: reason').");
+    static PyObject* config_error =
+        newException(m, "ConfigError", py::make_tuple(py::handle(error), py::handle(PyExc_ValueError)),
+                     "Settings that are out of range or cannot work together.");
     static PyObject* device_error = newException(m, "DeviceError", py::make_tuple(py::handle(error)),
                                                  "The GPU is missing or a device call failed.");
     py::register_exception_translator([](std::exception_ptr p) {

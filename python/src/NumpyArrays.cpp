@@ -20,7 +20,8 @@ Mat4f arrayToMatrix(const py::handle& value, const char* what) {
         a = {};
     }
     if (!a || a.ndim() != 2 || a.shape(0) != 4 || a.shape(1) != 4)
-        throw py::value_error(std::string(what) + " must be a 4x4 matrix" + (a ? ", not of shape " + shapeText(a) : std::string()));
+        throw py::value_error(std::string(what) + " must be a 4x4 matrix" +
+                              (a ? ", not of shape " + shapeText(a) : std::string()));
     Mat4f T;
     const auto m = a.unchecked<2>();
     for (int r = 0; r < 4; ++r)

@@ -36,7 +36,8 @@ py::array rowsOf(const std::shared_ptr<TOwner>& owner, const std::vector<TElemen
     const auto* data = reinterpret_cast<const TScalar*>(v.data());
     const auto n = py::ssize_t(v.size());
     if (kComponents == 1) return viewOf<TScalar>(owner, data, {n}, {py::ssize_t(sizeof(TScalar))});
-    return viewOf<TScalar>(owner, data, {n, kComponents}, {py::ssize_t(sizeof(TElement)), py::ssize_t(sizeof(TScalar))});
+    return viewOf<TScalar>(owner, data, {n, kComponents},
+                           {py::ssize_t(sizeof(TElement)), py::ssize_t(sizeof(TScalar))});
 }
 
 // An image as (H, W) or, for pixels of several channels, (H, W, channels) without a copy. `channels`

@@ -23,10 +23,12 @@ MainEngineSettings PipelineSettings::toEngineSettings() const {
     s.hash.max_block_count = max_blocks;
     s.hash.bucket_count = hash_buckets;
     s.hash.excess_entry_count = hash_excess;
-    if (volume_size.size() != 3 || volume_offset.size() != 3) throw ConfigError("volume_size and volume_offset take three numbers (x, y, z)");
+    if (volume_size.size() != 3 || volume_offset.size() != 3)
+        throw ConfigError("volume_size and volume_offset take three numbers (x, y, z)");
     s.dense_size = {volume_size[0], volume_size[1], volume_size[2]};
     s.dense_offset = {volume_offset[0], volume_offset[1], volume_offset[2]};
-    s.tracker = trackerSettingsWith({tracker_config, tracker, tracker_levels, tracker_iterations, tracker_max_distance, "Pipeline settings"});
+    s.tracker = trackerSettingsWith(
+        {tracker_config, tracker, tracker_levels, tracker_iterations, tracker_max_distance, "Pipeline settings"});
     s.swap.enabled = swap || active_blocks > 0 || !swap_file.empty();
     s.swap.swap_file = swap_file;
     s.swap.blocks_per_frame = swap_blocks_per_frame;
@@ -72,7 +74,8 @@ FrameResult Pipeline::process(const RGBDFrame& frame, const Mat4f* T_world_camer
 }
 
 Mat4f Pipeline::groundTruthPose(const RGBDFrame& frame) {
-    if (!frame.has_ground_truth) throw ConfigError("frame " + std::to_string(frame.index) + " has no ground-truth pose");
+    if (!frame.has_ground_truth)
+        throw ConfigError("frame " + std::to_string(frame.index) + " has no ground-truth pose");
     if (!have_origin_) {
         Mat4f T_source_world = frame.T_world_camera_gt;
         if (!engine_->sourceOrigin(T_source_world)) engine_->setSourceOrigin(T_source_world);
@@ -84,7 +87,9 @@ Mat4f Pipeline::groundTruthPose(const RGBDFrame& frame) {
 
 std::unique_lock<std::mutex> Pipeline::claim(const char* call) {
     std::unique_lock<std::mutex> lock(busy_, std::try_to_lock);
-    if (!lock) throw Error(std::string("Pipeline.") + call + ": the pipeline is in use by another thread (one call at a time per pipeline)");
+    if (!lock)
+        throw Error(std::string("Pipeline.") + call +
+                    ": the pipeline is in use by another thread (one call at a time per pipeline)");
     return lock;
 }
 

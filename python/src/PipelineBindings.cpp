@@ -38,35 +38,40 @@ PipelineSettings withOverrides(PipelineSettings base, const py::kwargs& override
         try {
             obj.attr(name.c_str()) = item.second;
         } catch (const py::error_already_set&) {
-            throw py::type_error("setting '" + name + "' cannot be " + std::string(py::repr(item.second)) + " (see help(voxfuse.Settings))");
+            throw py::type_error("setting '" + name + "' cannot be " + std::string(py::repr(item.second)) +
+                                 " (see help(voxfuse.Settings))");
         }
     }
     return obj.cast<PipelineSettings>();
 }
 
-void checkShape(const py::array& a, const char* what, py::ssize_t h, py::ssize_t w, const char* channels_text, bool channels_ok) {
+void checkShape(const py::array& a, const char* what, py::ssize_t h, py::ssize_t w, const char* channels_text,
+                bool channels_ok) {
     if (a.ndim() < 2 || a.shape(0) != h || a.shape(1) != w || !channels_ok)
-        throw py::value_error(std::string(what) + " must be of shape (" + std::to_string(h) + ", " + std::to_string(w) + channels_text +
-                              ") for this calibration, not " + shapeText(a));
+        throw py::value_error(std::string(what) + " must be of shape (" + std::to_string(h) + ", " + std::to_string(w) +
+                              channels_text + ") for this calibration, not " + shapeText(a));
 }
 
 // `raw_scale` > 0: uint16 depth in units of that many metres (converted to the calibration's units).
 void copyDepth(const py::handle& value, const RGBDCalib& calib, float raw_scale, Image<std::uint16_t>& out) {
-    if (!py::isinstance<py::array>(value)) throw py::type_error("depth must be a numpy array (uint16 raw, or float32/float64 metres)");
+    if (!py::isinstance<py::array>(value))
+        throw py::type_error("depth must be a numpy array (uint16 raw, or float32/float64 metres)");
     const py::array a = py::reinterpret_borrow<py::array>(value);
     const py::ssize_t h = calib.depth.height, w = calib.depth.width;
     checkShape(a, "depth", h, w, "", a.ndim() == 2);
     out.resize({int(w), int(h)});
     std::uint16_t* dst = out.host();
     const bool is_raw = py::isinstance<py::array_t<std::uint16_t>>(a);
-    if (!is_raw && raw_scale > 0.f) throw py::type_error("depth_scale applies to uint16 depth; float depth is in metres already");
+    if (!is_raw && raw_scale > 0.f)
+        throw py::type_error("depth_scale applies to uint16 depth; float depth is in metres already");
     if (is_raw && raw_scale <= 0.f) {
         const auto raw = py::array_t<std::uint16_t, py::array::c_style>::ensure(a);
         std::copy_n(raw.data(), std::size_t(h * w), dst);
         return;
     }
     if (!is_raw && !py::isinstance<py::array_t<float>>(a) && !py::isinstance<py::array_t<double>>(a))
-        throw py::type_error("depth must be uint16 (raw) or float32/float64 (metres), not " + std::string(py::str(a.dtype())));
+        throw py::type_error("depth must be uint16 (raw) or float32/float64 (metres), not " +
+                             std::string(py::str(a.dtype())));
     // Metres become raw units of the calibration's scale (0.2 mm for TUM's, 1 mm by default); what the
     // raw range cannot hold, NaN and non-positive values are "no measurement".
     const double to_calib_units = (is_raw ? double(raw_scale) : 1.0) / double(metresPerRawUnit(calib));
@@ -79,13 +84,17 @@ void copyDepth(const py::handle& value, const RGBDCalib& calib, float raw_scale,
             dst[i] = raw >= 1.0 && raw <= 65535.0 ? std::uint16_t(raw) : 0;  // NaN fails both tests
         }
     };
-    if (is_raw) convert(std::uint16_t());
-    else if (py::isinstance<py::array_t<float>>(a)) convert(float());
-    else convert(double());
+    if (is_raw)
+        convert(std::uint16_t());
+    else if (py::isinstance<py::array_t<float>>(a))
+        convert(float());
+    else
+        convert(double());
 }
 
 void copyRgb(const py::handle& value, const RGBDCalib& calib, Image<Vec4u8>& out) {
-    if (!py::isinstance<py::array_t<std::uint8_t>>(value)) requireDtype<std::uint8_t>(value, "rgb", "uint8 (H, W, 3) or (H, W, 4)");
+    if (!py::isinstance<py::array_t<std::uint8_t>>(value))
+        requireDtype<std::uint8_t>(value, "rgb", "uint8 (H, W, 3) or (H, W, 4)");
     const py::array a = py::reinterpret_borrow<py::array>(value);
     const Intrinsics& cam = calib.rgb.valid() ? calib.rgb : calib.depth;
     const py::ssize_t h = cam.height, w = cam.width;
@@ -119,7 +128,8 @@ void copyRgb(const py::handle& value, const RGBDCalib& calib, Image<Vec4u8>& out
 
 void copyLabels(const py::handle& value, Image<ClassId>& out) {
     const auto a = requireDtype<ClassId>(value, "labels", "uint16 (H, W)");
-    if (a.ndim() != 2) throw py::value_error("labels must be a 2-D (H, W) array of class ids, not of shape " + shapeText(a));
+    if (a.ndim() != 2)
+        throw py::value_error("labels must be a 2-D (H, W) array of class ids, not of shape " + shapeText(a));
     out.resize({int(a.shape(1)), int(a.shape(0))});
     std::copy_n(a.data(), std::size_t(a.size()), out.host());
 }
@@ -176,12 +186,14 @@ TOutput extractOutput(Pipeline& p, const char* call, void (MainEngine::*extract)
     return {geometry, voxelTypeHasColor(t), voxelTypeHasLabels(t)};
 }
 
-py::array render(Pipeline& p, const std::string& mode, const py::object& pose, const std::optional<Intrinsics>& intrinsics) {
+py::array render(Pipeline& p, const std::string& mode, const py::object& pose,
+                 const std::optional<Intrinsics>& intrinsics) {
     const RenderMode m = parseRenderMode(mode);
     const auto busy = p.claim("render");
     Image<Vec4u8> image;
     if (pose.is_none()) {
-        if (intrinsics) throw ConfigError("render: intrinsics need a pose (without one, the last frame's raycast is shown)");
+        if (intrinsics)
+            throw ConfigError("render: intrinsics need a pose (without one, the last frame's raycast is shown)");
         py::gil_scoped_release no_gil;
         p.engine().renderLast(m, image);
     } else {
@@ -225,12 +237,15 @@ py::dict summary(Pipeline& p) {
 }  // namespace
 
 void bindPipeline(py::module_& m) {
-    py::class_<PipelineSettings> settings(m, "Settings",
-                                          "Pipeline settings, with the names (underscores for dashes) and defaults of `voxfuse --help`.\n"
-                                          "Settings(voxel_size=0.01, tracker='rgbd'); any of them can also be given to Pipeline(...).");
+    py::class_<PipelineSettings> settings(
+        m, "Settings",
+        "Pipeline settings, with the names (underscores for dashes) and defaults of `voxfuse --help`.\n"
+        "Settings(voxel_size=0.01, tracker='rgbd'); any of them can also be given to Pipeline(...).");
     settings.def(py::init([](const py::kwargs& kwargs) { return withOverrides(PipelineSettings{}, kwargs); }))
-        .def_readwrite("voxel", &PipelineSettings::voxel, "s | f | s_rgb | f_rgb | s_label | s_rgb_label (SDF int16 or float, colour, classes)")
-        .def_readwrite("index", &PipelineSettings::index, "hash (voxel block hash, grows with the scene) | dense (one box of voxels)")
+        .def_readwrite("voxel", &PipelineSettings::voxel,
+                       "s | f | s_rgb | f_rgb | s_label | s_rgb_label (SDF int16 or float, colour, classes)")
+        .def_readwrite("index", &PipelineSettings::index,
+                       "hash (voxel block hash, grows with the scene) | dense (one box of voxels)")
         .def_readwrite("device", &PipelineSettings::device, "cpu | cuda")
         .def_readwrite("voxel_size", &PipelineSettings::voxel_size, "voxel edge (m)")
         .def_readwrite("mu", &PipelineSettings::mu, "truncation band (m)")
@@ -238,80 +253,139 @@ void bindPipeline(py::module_& m) {
         .def_readwrite("min_depth", &PipelineSettings::min_depth, "depth below this (m) is ignored")
         .def_readwrite("max_depth", &PipelineSettings::max_depth, "depth beyond this (m) is ignored")
         .def_readwrite("depth_gap_tolerance", &PipelineSettings::depth_gap_tolerance,
-                       "a pixel without depth between two neighbours agreeing within this fraction of their depth gets their mean (0 = never)")
-        .def_readwrite("max_blocks", &PipelineSettings::max_blocks, "hash: most 8^3 voxel blocks (memory grows on demand up to this); 0 = automatic (as many as the hash has entries and 3/4 of the device's free memory holds; on the GPU with room for the copy a growth makes)")
+                       "a pixel without depth between two neighbours agreeing within this fraction of their depth gets "
+                       "their mean (0 = never)")
+        .def_readwrite(
+            "max_blocks", &PipelineSettings::max_blocks,
+            "hash: most 8^3 voxel blocks (memory grows on demand up to this); 0 = automatic (as many as the hash has "
+            "entries and 3/4 of the device's free memory holds; on the GPU with room for the copy a growth makes)")
         .def_readwrite("hash_buckets", &PipelineSettings::hash_buckets, "hash: ordered buckets")
         .def_readwrite("hash_excess", &PipelineSettings::hash_excess, "hash: entries of the excess list")
         .def_readwrite("volume_size", &PipelineSettings::volume_size, "dense: the box's size in voxels [x, y, z]")
-        .def_readwrite("volume_offset", &PipelineSettings::volume_offset, "dense: the box's first voxel [x, y, z] (grid units)")
-        .def_readwrite("tracker", &PipelineSettings::tracker, "icp | color | ren | rgbd ('' = rgbd, robust ICP plus colour aligned to the map's colours and, beyond max_depth, to keyframes of the far depths)")
-        .def_readwrite("tracker_config", &PipelineSettings::tracker_config, "a tracker settings file ('key = value' lines)")
-        .def_readwrite("tracker_levels", &PipelineSettings::tracker_levels, "pyramid levels coarse to fine: r rotation, t translation, b both")
-        .def_readwrite("tracker_iterations", &PipelineSettings::tracker_iterations, "iterations per level, coarse to fine")
-        .def_readwrite("tracker_max_distance", &PipelineSettings::tracker_max_distance, "ICP outlier distance per level (m), coarse to fine")
-        .def_readwrite("label_update", &PipelineSettings::label_update, "probabilistic | vote (class update on disagreement)")
+        .def_readwrite("volume_offset", &PipelineSettings::volume_offset,
+                       "dense: the box's first voxel [x, y, z] (grid units)")
+        .def_readwrite("tracker", &PipelineSettings::tracker,
+                       "icp | color | ren | rgbd ('' = rgbd, robust ICP plus colour aligned to the map's colours and, "
+                       "beyond max_depth, to keyframes of the far depths)")
+        .def_readwrite("tracker_config", &PipelineSettings::tracker_config,
+                       "a tracker settings file ('key = value' lines)")
+        .def_readwrite("tracker_levels", &PipelineSettings::tracker_levels,
+                       "pyramid levels coarse to fine: r rotation, t translation, b both")
+        .def_readwrite("tracker_iterations", &PipelineSettings::tracker_iterations,
+                       "iterations per level, coarse to fine")
+        .def_readwrite("tracker_max_distance", &PipelineSettings::tracker_max_distance,
+                       "ICP outlier distance per level (m), coarse to fine")
+        .def_readwrite("label_update", &PipelineSettings::label_update,
+                       "probabilistic | vote (class update on disagreement)")
         .def_readwrite("swap", &PipelineSettings::swap, "swapping: only the map near the view stays in the voxel array")
-        .def_readwrite("active_blocks", &PipelineSettings::active_blocks, "swapping: blocks the active voxel array holds at most (> 0 implies swap)")
-        .def_readwrite("swap_file", &PipelineSettings::swap_file, "swapping: keep the swapped-out map in this file (implies swap)")
-        .def_readwrite("swap_blocks_per_frame", &PipelineSettings::swap_blocks_per_frame, "swapping: blocks moved each way per frame at most")
+        .def_readwrite("active_blocks", &PipelineSettings::active_blocks,
+                       "swapping: blocks the active voxel array holds at most (> 0 implies swap)")
+        .def_readwrite("swap_file", &PipelineSettings::swap_file,
+                       "swapping: keep the swapped-out map in this file (implies swap)")
+        .def_readwrite("swap_blocks_per_frame", &PipelineSettings::swap_blocks_per_frame,
+                       "swapping: blocks moved each way per frame at most")
         .def_readwrite("relocalise", &PipelineSettings::relocalise,
                        "once tracking is lost, find the camera again from keyframes (nothing is fused until then)")
         .def_readwrite("relocalise_candidates", &PipelineSettings::relocalise_candidates,
                        "relocalisation: keyframes tried per lost frame, most alike first")
         .def_readwrite("relocalise_max_speed", &PipelineSettings::relocalise_max_speed,
-                       "relocalisation: m/s the camera may have moved since the last good frame; poses farther away are not taken (0: no limit)")
+                       "relocalisation: m/s the camera may have moved since the last good frame; poses farther away "
+                       "are not taken (0: no limit)")
         .def_readwrite("relocalise_min_colour_correlation", &PipelineSettings::relocalise_min_colour_correlation,
-                       "relocalisation: how well a found pose's view must correlate with the map's colours (colour voxels; -1: no colour test)")
-        .def("to_dict", [](const PipelineSettings& s) {
-            py::dict d;
-            py::object obj = py::cast(s);
-            for (const char* name : {"voxel", "index", "device", "voxel_size", "mu", "max_weight", "min_depth", "max_depth",
-                                     "depth_gap_tolerance", "max_blocks", "hash_buckets", "hash_excess", "volume_size", "volume_offset",
-                                     "tracker", "tracker_config", "tracker_levels", "tracker_iterations", "tracker_max_distance",
-                                     "label_update", "swap", "active_blocks", "swap_file", "swap_blocks_per_frame", "relocalise",
-                                     "relocalise_candidates", "relocalise_max_speed", "relocalise_min_colour_correlation"})
-                d[name] = obj.attr(name);
-            return d;
-        }, "Every setting by name.")
-        .def("__repr__", [](const py::object& self) { return "voxfuse.Settings(**" + std::string(py::repr(self.attr("to_dict")())) + ")"; });
+                       "relocalisation: how well a found pose's view must correlate with the map's colours (colour "
+                       "voxels; -1: no colour test)")
+        .def(
+            "to_dict",
+            [](const PipelineSettings& s) {
+                py::dict d;
+                py::object obj = py::cast(s);
+                for (const char* name : {"voxel",
+                                         "index",
+                                         "device",
+                                         "voxel_size",
+                                         "mu",
+                                         "max_weight",
+                                         "min_depth",
+                                         "max_depth",
+                                         "depth_gap_tolerance",
+                                         "max_blocks",
+                                         "hash_buckets",
+                                         "hash_excess",
+                                         "volume_size",
+                                         "volume_offset",
+                                         "tracker",
+                                         "tracker_config",
+                                         "tracker_levels",
+                                         "tracker_iterations",
+                                         "tracker_max_distance",
+                                         "label_update",
+                                         "swap",
+                                         "active_blocks",
+                                         "swap_file",
+                                         "swap_blocks_per_frame",
+                                         "relocalise",
+                                         "relocalise_candidates",
+                                         "relocalise_max_speed",
+                                         "relocalise_min_colour_correlation"})
+                    d[name] = obj.attr(name);
+                return d;
+            },
+            "Every setting by name.")
+        .def("__repr__", [](const py::object& self) {
+            return "voxfuse.Settings(**" + std::string(py::repr(self.attr("to_dict")())) + ")";
+        });
 
     py::class_<FrameOutcome>(m, "FrameResult", "What Pipeline.process did with one frame.")
-        .def_property_readonly("pose", [](const FrameOutcome& o) { return matrixToArray(o.result.T_world_camera); },
-                               "Camera-to-world pose (4, 4); after a failure, the last good pose.")
-        .def_property_readonly("quality", [](const FrameOutcome& o) { return toString(o.result.quality); }, "'good', 'poor' or 'failed'.")
-        .def_property_readonly("fused", [](const FrameOutcome& o) { return o.result.fused; },
-                               "Whether the frame went into the map (a failed frame does not).")
-        .def_property_readonly("status", [](const FrameOutcome& o) { return toString(o.result.status); },
-                               "'tracking' (posed from the last frame, or given), 'lost' (no pose: the pose is the last good one,\n"
-                               "the frame was not fused and is not in the trajectory) or 'relocalised' (found again from keyframes).")
-        .def_property_readonly("relocalisation_tried", [](const FrameOutcome& o) { return o.result.relocalisation_tried; },
-                               "Whether the frame was looked up among the keyframes (tracking had failed or was lost).")
-        .def_property_readonly("keyframes", [](const FrameOutcome& o) { return o.result.keyframes; },
-                               "Keyframes the relocaliser holds after this frame.")
+        .def_property_readonly(
+            "pose", [](const FrameOutcome& o) { return matrixToArray(o.result.T_world_camera); },
+            "Camera-to-world pose (4, 4); after a failure, the last good pose.")
+        .def_property_readonly(
+            "quality", [](const FrameOutcome& o) { return toString(o.result.quality); }, "'good', 'poor' or 'failed'.")
+        .def_property_readonly(
+            "fused", [](const FrameOutcome& o) { return o.result.fused; },
+            "Whether the frame went into the map (a failed frame does not).")
+        .def_property_readonly(
+            "status", [](const FrameOutcome& o) { return toString(o.result.status); },
+            "'tracking' (posed from the last frame, or given), 'lost' (no pose: the pose is the last good one,\n"
+            "the frame was not fused and is not in the trajectory) or 'relocalised' (found again from keyframes).")
+        .def_property_readonly(
+            "relocalisation_tried", [](const FrameOutcome& o) { return o.result.relocalisation_tried; },
+            "Whether the frame was looked up among the keyframes (tracking had failed or was lost).")
+        .def_property_readonly(
+            "keyframes", [](const FrameOutcome& o) { return o.result.keyframes; },
+            "Keyframes the relocaliser holds after this frame.")
         .def_property_readonly("inlier_ratio", [](const FrameOutcome& o) { return o.result.tracking.inlier_ratio; })
-        .def_property_readonly("residual", [](const FrameOutcome& o) { return o.result.tracking.residual_m; },
-                               "RMS point-to-plane residual of the inliers (m; colour tracker: intensity).")
-        .def_property_readonly("condition", [](const FrameOutcome& o) { return o.result.tracking.condition; },
-                               "Smallest/largest eigenvalue of the scaled normal matrix (near 0: a motion is unconstrained).")
-        .def_property_readonly("translation_constraint", [](const FrameOutcome& o) { return o.result.tracking.translation_constraint; },
-                               "Share of the depth terms' weight along the least constrained translation (0..1/3, below 0.02 poor; -1 without depth terms).")
-        .def_property_readonly("timings", [](const FrameOutcome& o) { return stageDict(o.result.stages, o.result.total_ms); },
-                               "Milliseconds per stage of this frame, and 'total'.")
+        .def_property_readonly(
+            "residual", [](const FrameOutcome& o) { return o.result.tracking.residual_m; },
+            "RMS point-to-plane residual of the inliers (m; colour tracker: intensity).")
+        .def_property_readonly(
+            "condition", [](const FrameOutcome& o) { return o.result.tracking.condition; },
+            "Smallest/largest eigenvalue of the scaled normal matrix (near 0: a motion is unconstrained).")
+        .def_property_readonly(
+            "translation_constraint", [](const FrameOutcome& o) { return o.result.tracking.translation_constraint; },
+            "Share of the depth terms' weight along the least constrained translation (0..1/3, below 0.02 poor; -1 "
+            "without depth terms).")
+        .def_property_readonly(
+            "timings", [](const FrameOutcome& o) { return stageDict(o.result.stages, o.result.total_ms); },
+            "Milliseconds per stage of this frame, and 'total'.")
         .def_readonly("index", &FrameOutcome::index)
         .def_readonly("timestamp", &FrameOutcome::timestamp_s)
         .def("__repr__", [](const FrameOutcome& o) {
-            const std::string status = o.result.status == TrackingStatus::Tracking ? "" : std::string(", ") + toString(o.result.status);
-            return "<voxfuse.FrameResult " + std::to_string(o.index) + ": " + toString(o.result.quality) + status + (o.result.fused ? ", fused" : "") + ">";
+            const std::string status =
+                o.result.status == TrackingStatus::Tracking ? "" : std::string(", ") + toString(o.result.status);
+            return "<voxfuse.FrameResult " + std::to_string(o.index) + ": " + toString(o.result.quality) + status +
+                   (o.result.fused ? ", fused" : "") + ">";
         });
 
-    py::class_<Pipeline>(m, "Pipeline",
-                         "The reconstruction loop: each frame is tracked against the model (or placed at a given pose), fused\n"
-                         "into the TSDF map and the model is raycast from the new pose.\n\n"
-                         "    pipeline = voxfuse.Pipeline(source.calib, voxel_size=0.01)\n"
-                         "    for frame in source:\n"
-                         "        result = pipeline.process(frame.depth, frame.rgb)\n"
-                         "    pipeline.extract_mesh().save('mesh.ply')\n\n"
-                         "Settings are voxfuse.Settings names (those of `voxfuse --help`), given as a Settings or as keywords.")
+    py::class_<Pipeline>(
+        m, "Pipeline",
+        "The reconstruction loop: each frame is tracked against the model (or placed at a given pose), fused\n"
+        "into the TSDF map and the model is raycast from the new pose.\n\n"
+        "    pipeline = voxfuse.Pipeline(source.calib, voxel_size=0.01)\n"
+        "    for frame in source:\n"
+        "        result = pipeline.process(frame.depth, frame.rgb)\n"
+        "    pipeline.extract_mesh().save('mesh.ply')\n\n"
+        "Settings are voxfuse.Settings names (those of `voxfuse --help`), given as a Settings or as keywords.")
         .def(py::init([](const RGBDCalib& calib, const std::optional<PipelineSettings>& s, const py::kwargs& kwargs) {
                  const PipelineSettings settings = withOverrides(s ? *s : PipelineSettings{}, kwargs);
                  py::gil_scoped_release no_gil;
@@ -320,17 +394,21 @@ void bindPipeline(py::module_& m) {
              py::arg("calib"), py::arg("settings") = py::none())
         .def_static(
             "from_map",
-            [](const std::string& path, const std::optional<RGBDCalib>& calib, const std::optional<PipelineSettings>& s, const py::kwargs& kwargs) {
-                for (const char* fixed : {"voxel", "index", "voxel_size", "mu", "hash_buckets", "hash_excess", "volume_size", "volume_offset"})
+            [](const std::string& path, const std::optional<RGBDCalib>& calib, const std::optional<PipelineSettings>& s,
+               const py::kwargs& kwargs) {
+                for (const char* fixed : {"voxel", "index", "voxel_size", "mu", "hash_buckets", "hash_excess",
+                                          "volume_size", "volume_offset"})
                     if (kwargs.contains(fixed))
-                        throw ConfigError(path + ": the map decides '" + fixed + "'; leave it out (or create a Pipeline and load_map)");
+                        throw ConfigError(path + ": the map decides '" + fixed +
+                                          "'; leave it out (or create a Pipeline and load_map)");
                 const MapFileInfo info = readMapFileInfo(path);
                 PipelineSettings settings = withOverrides(s ? *s : PipelineSettings{}, kwargs);
                 settings.adopt(info);
                 // The block ceiling bounds how far the map may grow here: the map's, unless given.
                 if (kwargs.contains("max_blocks")) settings.max_blocks = kwargs["max_blocks"].cast<int>();
                 RGBDCalib c;
-                if (calib) c = *calib;
+                if (calib)
+                    c = *calib;
                 else {
                     if (!info.camera.valid()) throw ConfigError(path + ": the map has no camera; give a calib");
                     c.depth = c.rgb = info.camera;
@@ -341,31 +419,37 @@ void bindPipeline(py::module_& m) {
                 return p;
             },
             py::arg("path"), py::arg("calib") = py::none(), py::arg("settings") = py::none(),
-            "A pipeline continuing the map in a .vfm file (its voxel type, index, voxel size and mu, and its block ceiling\n"
+            "A pipeline continuing the map in a .vfm file (its voxel type, index, voxel size and mu, and its block "
+            "ceiling\n"
             "unless max_blocks is given; tracking resumes\n"
             "from the pose it was saved at). Without calib: the camera the map was saved with, and raw depth in\n"
             "millimetres (depth given in metres is exact either way); give the source's calib to fuse its raw frames.")
         .def(
             "process",
-            [](Pipeline& p, const py::handle& depth, const py::object& rgb, const py::object& labels, const py::object& depth_scale,
-               const py::object& pose, const py::object& timestamp) {
+            [](Pipeline& p, const py::handle& depth, const py::object& rgb, const py::object& labels,
+               const py::object& depth_scale, const py::object& pose, const py::object& timestamp) {
                 float raw_scale = 0.f;
                 if (!depth_scale.is_none()) {
                     raw_scale = depth_scale.cast<float>();
-                    if (!(raw_scale > 0.f) || !std::isfinite(raw_scale)) throw py::value_error("depth_scale must be a positive number of metres");
+                    if (!(raw_scale > 0.f) || !std::isfinite(raw_scale))
+                        throw py::value_error("depth_scale must be a positive number of metres");
                 }
                 const auto busy = p.claim("process");
                 RGBDFrame& f = p.frameBuffer();
                 copyDepth(depth, p.calib(), raw_scale, f.depth_raw);
-                if (rgb.is_none()) f.rgb = Image<Vec4u8>();
-                else copyRgb(rgb, p.calib(), f.rgb);
+                if (rgb.is_none())
+                    f.rgb = Image<Vec4u8>();
+                else
+                    copyRgb(rgb, p.calib(), f.rgb);
                 if (labels.is_none()) {
                     f.labels = Image<ClassId>();
                 } else {
-                    copyLabels(labels, f.labels);  // checked first: a wrong dtype or shape says so whatever the voxel type
+                    copyLabels(labels,
+                               f.labels);  // checked first: a wrong dtype or shape says so whatever the voxel type
                     // Labels given to a map that cannot hold them would be dropped without a word.
                     if (!voxelTypeHasLabels(p.engine().settings().voxel_type))
-                        throw ConfigError(std::string("process: labels need a voxel type with classes (s_label, s_rgb_label); this pipeline's is ") +
+                        throw ConfigError(std::string("process: labels need a voxel type with classes (s_label, "
+                                                      "s_rgb_label); this pipeline's is ") +
                                           toString(p.engine().settings().voxel_type));
                 }
                 std::optional<Mat4f> given;
@@ -382,8 +466,8 @@ void bindPipeline(py::module_& m) {
                 o.result = p.process(f, given ? &*given : nullptr);
                 return o;
             },
-            py::arg("depth"), py::arg("rgb") = py::none(), py::arg("labels") = py::none(), py::kw_only(), py::arg("depth_scale") = py::none(),
-            py::arg("pose") = py::none(), py::arg("timestamp") = py::none(),
+            py::arg("depth"), py::arg("rgb") = py::none(), py::arg("labels") = py::none(), py::kw_only(),
+            py::arg("depth_scale") = py::none(), py::arg("pose") = py::none(), py::arg("timestamp") = py::none(),
             "Processes one frame. depth: uint16 (H, W) raw (metres = raw * depth_scale, by default calib.depth_scale)\n"
             "or float32/float64 metres;\n"
             "rgb: uint8 (H, W, 3) or (H, W, 4) of the colour camera; labels: uint16 (H, W) class ids (65535: none).\n"
@@ -393,7 +477,8 @@ void bindPipeline(py::module_& m) {
             "process_frame",
             [](Pipeline& p, const std::shared_ptr<RGBDFrame>& frame, const py::object& pose, bool ground_truth) {
                 std::optional<Mat4f> given;
-                if (!pose.is_none() && ground_truth) throw ConfigError("process_frame: give a pose or ground_truth=True, not both");
+                if (!pose.is_none() && ground_truth)
+                    throw ConfigError("process_frame: give a pose or ground_truth=True, not both");
                 if (!pose.is_none()) given = arrayToMatrix(pose, "pose");
                 const auto busy = p.claim("process_frame");
                 if (ground_truth) given = p.groundTruthPose(*frame);
@@ -408,56 +493,90 @@ void bindPipeline(py::module_& m) {
             "Processes a Frame from a Source as it is (no copy of its images), with its labels when it has any.\n"
             "pose: a camera-to-world 4x4 to fuse at instead of tracking; ground_truth=True: the frame's ground-truth\n"
             "pose, relative to the first frame's as `voxfuse --poses groundtruth` does.")
-        .def("render", &render, py::arg("mode") = "shaded", py::kw_only(), py::arg("pose") = py::none(), py::arg("intrinsics") = py::none(),
-             "The model as an image, uint8 (H, W, 3) RGB (a view of RGBA pixels). mode: shaded, color, normals, depth or\n"
-             "class. Without pose: the raycast of the last frame; with a camera-to-world pose (and intrinsics, default\n"
-             "the depth camera's): a new raycast from there.")
-        .def("extract_mesh", [](Pipeline& p) { return extractOutput<MeshOutput>(p, "extract_mesh", &MainEngine::extractMesh); },
-             "The map's surface by marching cubes, as a voxfuse.Mesh.")
-        .def("extract_point_cloud", [](Pipeline& p) { return extractOutput<CloudOutput>(p, "extract_point_cloud", &MainEngine::extractPointCloud); },
-             "The map's surface points, as a voxfuse.PointCloud.")
-        .def("save_map", [](Pipeline& p, const std::string& path) {
-                 const auto busy = p.claim("save_map");
-                 py::gil_scoped_release no_gil;
-                 p.engine().saveMap(path);
-             }, py::arg("path"), "Writes the map and the current pose to a .vfm file (written to a temporary file, then renamed).")
-        .def("load_map", [](Pipeline& p, const std::string& path) {
-                 const auto busy = p.claim("load_map");
-                 py::gil_scoped_release no_gil;
-                 p.engine().loadMap(path);
-             }, py::arg("path"), "Replaces the map with a .vfm file's (which must match the settings; see Pipeline.from_map).")
-        .def("reset", [](Pipeline& p) {
-                 const auto busy = p.claim("reset");
-                 py::gil_scoped_release no_gil;  // a large dense volume takes a while to clear
-                 p.reset();
-             }, "Clears the map, the pose, the trajectory and the timings.")
+        .def(
+            "render", &render, py::arg("mode") = "shaded", py::kw_only(), py::arg("pose") = py::none(),
+            py::arg("intrinsics") = py::none(),
+            "The model as an image, uint8 (H, W, 3) RGB (a view of RGBA pixels). mode: shaded, color, normals, depth "
+            "or\n"
+            "class. Without pose: the raycast of the last frame; with a camera-to-world pose (and intrinsics, default\n"
+            "the depth camera's): a new raycast from there.")
+        .def(
+            "extract_mesh",
+            [](Pipeline& p) { return extractOutput<MeshOutput>(p, "extract_mesh", &MainEngine::extractMesh); },
+            "The map's surface by marching cubes, as a voxfuse.Mesh.")
+        .def(
+            "extract_point_cloud",
+            [](Pipeline& p) {
+                return extractOutput<CloudOutput>(p, "extract_point_cloud", &MainEngine::extractPointCloud);
+            },
+            "The map's surface points, as a voxfuse.PointCloud.")
+        .def(
+            "save_map",
+            [](Pipeline& p, const std::string& path) {
+                const auto busy = p.claim("save_map");
+                py::gil_scoped_release no_gil;
+                p.engine().saveMap(path);
+            },
+            py::arg("path"),
+            "Writes the map and the current pose to a .vfm file (written to a temporary file, then renamed).")
+        .def(
+            "load_map",
+            [](Pipeline& p, const std::string& path) {
+                const auto busy = p.claim("load_map");
+                py::gil_scoped_release no_gil;
+                p.engine().loadMap(path);
+            },
+            py::arg("path"),
+            "Replaces the map with a .vfm file's (which must match the settings; see Pipeline.from_map).")
+        .def(
+            "reset",
+            [](Pipeline& p) {
+                const auto busy = p.claim("reset");
+                py::gil_scoped_release no_gil;  // a large dense volume takes a while to clear
+                p.reset();
+            },
+            "Clears the map, the pose, the trajectory and the timings.")
         // The readers claim the pipeline too: a frame being processed on another thread appends to
         // what they copy (the trajectory, the stage times), and the engine's state is mid-update.
-        .def_property_readonly("pose", [](Pipeline& p) {
-                                   const auto busy = p.claim("pose");
-                                   return matrixToArray(p.engine().trackingState().T_world_camera);
-                               }, "The current camera-to-world pose (4, 4).")
-        .def_property_readonly("trajectory", [](Pipeline& p) {
-                                   const auto busy = p.claim("trajectory");
-                                   return timedPosesToArrays(p.trajectory());
-                               }, "(timestamps (N,), camera-to-world poses (N, 4, 4)) of every processed frame that has a pose (lost frames have none).")
-        .def_property_readonly("settings", [](const Pipeline& p) { return p.settings(); },
-                               "A copy of the settings the pipeline was made with: changing it changes nothing (make a new Pipeline).")
+        .def_property_readonly(
+            "pose",
+            [](Pipeline& p) {
+                const auto busy = p.claim("pose");
+                return matrixToArray(p.engine().trackingState().T_world_camera);
+            },
+            "The current camera-to-world pose (4, 4).")
+        .def_property_readonly(
+            "trajectory",
+            [](Pipeline& p) {
+                const auto busy = p.claim("trajectory");
+                return timedPosesToArrays(p.trajectory());
+            },
+            "(timestamps (N,), camera-to-world poses (N, 4, 4)) of every processed frame that has a pose (lost frames "
+            "have none).")
+        .def_property_readonly(
+            "settings", [](const Pipeline& p) { return p.settings(); },
+            "A copy of the settings the pipeline was made with: changing it changes nothing (make a new Pipeline).")
         .def_property_readonly("calib", [](const Pipeline& p) { return p.calib(); })
         .def_property_readonly("frames_processed", &Pipeline::framesProcessed)
-        .def("timings", [](Pipeline& p) {
-                 const auto busy = p.claim("timings");
-                 return timings(p);
-             }, "Per stage: median and mean milliseconds over the frames so far, and the frame count.")
-        .def("summary", [](Pipeline& p) {
-                 const auto busy = p.claim("summary");
-                 return summary(p);
-             }, "The run so far as a dict: device, voxel and index, frames (fused, failed, lost), relocalisation\n"
-             "attempts and successes, timings, memory, blocks.")
+        .def(
+            "timings",
+            [](Pipeline& p) {
+                const auto busy = p.claim("timings");
+                return timings(p);
+            },
+            "Per stage: median and mean milliseconds over the frames so far, and the frame count.")
+        .def(
+            "summary",
+            [](Pipeline& p) {
+                const auto busy = p.claim("summary");
+                return summary(p);
+            },
+            "The run so far as a dict: device, voxel and index, frames (fused, failed, lost), relocalisation\n"
+            "attempts and successes, timings, memory, blocks.")
         .def("__repr__", [](Pipeline& p) {
             const MainEngineSettings& s = p.engine().settings();
-            return std::string("<voxfuse.Pipeline ") + toString(s.voxel_type) + " " + toString(s.index_type) + " on " + deviceName(s.device) + ", " +
-                   std::to_string(p.framesProcessed()) + " frames>";
+            return std::string("<voxfuse.Pipeline ") + toString(s.voxel_type) + " " + toString(s.index_type) + " on " +
+                   deviceName(s.device) + ", " + std::to_string(p.framesProcessed()) + " frames>";
         });
 }
 

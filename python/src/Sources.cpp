@@ -46,7 +46,8 @@ FramePtr nextFrame(Source& s) {
         } catch (const IoError& e) {
             if (!s.skip_unreadable) throw;
             ++s.unreadable;
-            if (PyErr_WarnEx(PyExc_RuntimeWarning, (std::string("skipping unreadable frame: ") + e.what()).c_str(), 1) < 0)
+            if (PyErr_WarnEx(PyExc_RuntimeWarning, (std::string("skipping unreadable frame: ") + e.what()).c_str(), 1) <
+                0)
                 throw py::error_already_set();
         }
     }
@@ -55,16 +56,19 @@ FramePtr nextFrame(Source& s) {
 }  // namespace
 
 void bindSources(py::module_& m) {
-    py::class_<RGBDFrame, FramePtr>(m, "Frame",
-                                    "One frame as read from a source. Its arrays view the decoded images without a copy (writable;\n"
-                                    "np.copy() them to keep them apart from the frame).")
+    py::class_<RGBDFrame, FramePtr>(
+        m, "Frame",
+        "One frame as read from a source. Its arrays view the decoded images without a copy (writable;\n"
+        "np.copy() them to keep them apart from the frame).")
         .def_readonly("index", &RGBDFrame::index, "0-based position in the source.")
-        .def_readonly("timestamp", &RGBDFrame::timestamp_s, "Seconds (the source's clock; index / 30 when it has none).")
+        .def_readonly("timestamp", &RGBDFrame::timestamp_s,
+                      "Seconds (the source's clock; index / 30 when it has none).")
         .def_property_readonly(
             "depth",
             [](const FramePtr& f) {
-                return viewOf<std::uint16_t>(f, f->depth_raw.host(), {f->depth_raw.height(), f->depth_raw.width()},
-                                             {py::ssize_t(f->depth_raw.width() * sizeof(std::uint16_t)), py::ssize_t(sizeof(std::uint16_t))});
+                return viewOf<std::uint16_t>(
+                    f, f->depth_raw.host(), {f->depth_raw.height(), f->depth_raw.width()},
+                    {py::ssize_t(f->depth_raw.width() * sizeof(std::uint16_t)), py::ssize_t(sizeof(std::uint16_t))});
             },
             "Raw depth, uint16 (H, W); 0 = no measurement; metres = raw * calib.depth_scale.")
         .def_property_readonly(
@@ -72,7 +76,8 @@ void bindSources(py::module_& m) {
             [](const FramePtr& f) -> py::object {
                 if (f->rgb.empty()) return py::none();
                 const py::ssize_t w = f->rgb.width();
-                return viewOf<std::uint8_t>(f, reinterpret_cast<const std::uint8_t*>(f->rgb.host()), {f->rgb.height(), w, 3}, {w * 4, 4, 1});
+                return viewOf<std::uint8_t>(f, reinterpret_cast<const std::uint8_t*>(f->rgb.host()),
+                                            {f->rgb.height(), w, 3}, {w * 4, 4, 1});
             },
             "Colour, uint8 (H, W, 3) RGB (a view of RGBA pixels: strides (4W, 4, 1)); None without colour.")
         .def_property_readonly(
@@ -80,7 +85,8 @@ void bindSources(py::module_& m) {
             [](const FramePtr& f) -> py::object {
                 if (f->labels.empty()) return py::none();
                 const py::ssize_t w = f->labels.width();
-                return viewOf<ClassId>(f, f->labels.host(), {f->labels.height(), w}, {py::ssize_t(w * sizeof(ClassId)), py::ssize_t(sizeof(ClassId))});
+                return viewOf<ClassId>(f, f->labels.host(), {f->labels.height(), w},
+                                       {py::ssize_t(w * sizeof(ClassId)), py::ssize_t(sizeof(ClassId))});
             },
             "Semantic classes, uint16 (H, W) (65535: none); None when the frame has none.")
         .def_property_readonly(
@@ -93,18 +99,22 @@ void bindSources(py::module_& m) {
         .def_readonly("depth_path", &RGBDFrame::depth_path, "Where the depth came from.")
         .def("__repr__", [](const RGBDFrame& f) {
             return "<voxfuse.Frame " + std::to_string(f.index) + ", " + std::to_string(f.depth_raw.width()) + "x" +
-                   std::to_string(f.depth_raw.height()) + (f.rgb.empty() ? "" : ", colour") + (f.labels.empty() ? "" : ", labels") + ">";
+                   std::to_string(f.depth_raw.height()) + (f.rgb.empty() ? "" : ", colour") +
+                   (f.labels.empty() ? "" : ", labels") + ">";
         });
 
-    py::class_<Source>(m, "Source", "A recorded sequence or camera; iterate it for its frames (see voxfuse.open_source).")
+    py::class_<Source>(m, "Source",
+                       "A recorded sequence or camera; iterate it for its frames (see voxfuse.open_source).")
         .def("__iter__", [](Source& s) -> Source& { return s; })
         .def("__next__", &nextFrame)
         .def("__len__",
              [](const Source& s) {
-                 if (s.source->frameCount() < 0) throw py::type_error("this source does not know its length in advance");
+                 if (s.source->frameCount() < 0)
+                     throw py::type_error("this source does not know its length in advance");
                  return s.source->frameCount();
              })
-        .def_property_readonly("calib", [](const Source& s) { return s.source->calib(); }, "Its Calibration.")
+        .def_property_readonly(
+            "calib", [](const Source& s) { return s.source->calib(); }, "Its Calibration.")
         .def_property_readonly("description", [](const Source& s) { return s.source->description(); })
         .def_property_readonly(
             "ground_truth", [](const Source& s) { return timedPosesToArrays(s.source->groundTruth()); },
@@ -114,8 +124,8 @@ void bindSources(py::module_& m) {
 
     m.def(
         "open_source",
-        [](const std::string& path, const std::string& calib, const std::string& rgb, const std::string& depth, int first_index,
-           int min_confidence, const std::string& labels, bool threaded, bool skip_unreadable) {
+        [](const std::string& path, const std::string& calib, const std::string& rgb, const std::string& depth,
+           int first_index, int min_confidence, const std::string& labels, bool threaded, bool skip_unreadable) {
             SourceOptions o;
             o.calib_path = calib;
             o.rgb_pattern = rgb;
@@ -130,12 +140,14 @@ void bindSources(py::module_& m) {
                 lo.path = labels;
                 s->source = std::make_unique<LabelledImageSource>(std::move(s->source), lo);
             }
-            if (threaded || s->source->isLive()) s->source = std::make_unique<ThreadedImageSource>(std::move(s->source));
+            if (threaded || s->source->isLive())
+                s->source = std::make_unique<ThreadedImageSource>(std::move(s->source));
             s->skip_unreadable = skip_unreadable;
             return s;
         },
-        py::arg("path"), py::kw_only(), py::arg("calib") = "", py::arg("rgb") = "", py::arg("depth") = "", py::arg("first_index") = 0,
-        py::arg("min_confidence") = 1, py::arg("labels") = "", py::arg("threaded") = false, py::arg("skip_unreadable") = true,
+        py::arg("path"), py::kw_only(), py::arg("calib") = "", py::arg("rgb") = "", py::arg("depth") = "",
+        py::arg("first_index") = 0, py::arg("min_confidence") = 1, py::arg("labels") = "", py::arg("threaded") = false,
+        py::arg("skip_unreadable") = true,
         "Opens what `voxfuse PATH` opens: a TUM RGB-D folder, a per-frame folder (frame-XXXXXX.depth.png), a Stray\n"
         "Scanner capture, an OpenNI .oni recording, or with rgb= and depth= printf patterns a PPM/PGM sequence.\n"
         "calib: an InfiniTAM calib.txt overriding the source's; labels: a folder or list of class images;\n"

@@ -33,8 +33,8 @@ std::vector<TimedPose> timedPoses(const py::handle& timestamps, const py::handle
 void bindTrajectory(py::module_& m) {
     m.def(
         "evaluate_trajectory",
-        [](const py::handle& timestamps, const py::handle& poses, const py::handle& gt_timestamps, const py::handle& gt_poses,
-           double max_time_difference, double time_offset, double max_time_offset) {
+        [](const py::handle& timestamps, const py::handle& poses, const py::handle& gt_timestamps,
+           const py::handle& gt_poses, double max_time_difference, double time_offset, double max_time_offset) {
             TrajectoryErrorOptions o;
             o.max_time_difference_s = max_time_difference;
             o.time_offset_s = time_offset;
@@ -55,15 +55,16 @@ void bindTrajectory(py::module_& m) {
             d["ate_rmse_at_best_time_offset_m"] = e.ate_rmse_at_best_offset_m;
             return d;
         },
-        py::arg("timestamps"), py::arg("poses"), py::arg("gt_timestamps"), py::arg("gt_poses"), py::arg("max_time_difference") = 0.02,
-        py::arg("time_offset") = 0.0, py::arg("max_time_offset") = 0.1,
+        py::arg("timestamps"), py::arg("poses"), py::arg("gt_timestamps"), py::arg("gt_poses"),
+        py::arg("max_time_difference") = 0.02, py::arg("time_offset") = 0.0, py::arg("max_time_offset") = 0.1,
         "ATE and RPE of camera-to-world poses (N, 4, 4) against ground truth, after a rigid alignment (TUM's\n"
         "evaluate_ate / evaluate_rpe); poses pair by nearest timestamp within max_time_difference seconds,\n"
         "after time_offset (s) is added to their timestamps. best_time_offset_s is the offset within\n"
         "max_time_offset of it (1 ms steps) with the least ATE, ate_rmse_at_best_time_offset_m that ATE\n"
         "(NaN when max_time_offset is 0).");
     m.def(
-        "read_tum_trajectory", [](const std::string& path) { return timedPosesToArrays(readTumTrajectory(path)); }, py::arg("path"),
+        "read_tum_trajectory", [](const std::string& path) { return timedPosesToArrays(readTumTrajectory(path)); },
+        py::arg("path"),
         "Reads a TUM trajectory file ('timestamp tx ty tz qx qy qz qw'): (timestamps (N,), poses (N, 4, 4)).");
     m.def(
         "write_tum_trajectory",

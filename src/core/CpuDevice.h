@@ -76,7 +76,8 @@ inline void addLaneProducts(double lanes[kTermLanes], const double* a, const dou
 }
 
 template <class Terms>
-VF_CPU_CLONES NormalEquations<double> sumTermShare(const Terms& terms, RobustKernel kernel, float kernel_scale, int begin, int end) {
+VF_CPU_CLONES NormalEquations<double> sumTermShare(const Terms& terms, RobustKernel kernel, float kernel_scale,
+                                                   int begin, int end) {
     static_assert(kTermBatch % kTermLanes == 0, "a batch is whole lane groups");
     const Terms local = terms;  // see runElements
     double lanes[kTermSums][kTermLanes] = {};
@@ -149,7 +150,8 @@ struct CpuDevice {
         if (n <= 0) return;
         const int chunk = std::max(1, n / (32 * cpuThreadCount()));
         const int chunks = (n + chunk - 1) / chunk;
-        forEachCpuTask(chunks, [&](int c) { cpu_detail::runElements(body, c * chunk, std::min(n, c * chunk + chunk)); });
+        forEachCpuTask(chunks,
+                       [&](int c) { cpu_detail::runElements(body, c * chunk, std::min(n, c * chunk + chunk)); });
     }
 
     // A team is one thread; its shared memory is allocated once per task (one task per thread) and
@@ -244,7 +246,8 @@ struct CpuDevice {
     // as a reduction in completion order would), and threads do not wait on the one whose static half
     // held more of the image's valid pixels.
     template <class Terms>
-    static NormalEquations<double> sumNormalEquations(int n, const Terms& terms, RobustKernel kernel, float kernel_scale, DeviceScratch&) {
+    static NormalEquations<double> sumNormalEquations(int n, const Terms& terms, RobustKernel kernel,
+                                                      float kernel_scale, DeviceScratch&) {
         constexpr int kMaxShares = 64;
         constexpr int kMinShareTerms = 1024;
         const int shares = std::max(1, std::min(kMaxShares, n / kMinShareTerms));

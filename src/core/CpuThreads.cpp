@@ -59,8 +59,8 @@ public:
             // would destroy the condition variable the started workers sleep on (a hang in
             // pthread_cond_destroy): the pool runs with the threads it got instead, and says so.
             threads_ = int(workers_.size()) + 1;
-            std::fprintf(stderr, "voxfuse: warning: only %d of %d CPU threads could be started (%s); running with %d\n", threads_, threads,
-                         e.what(), threads_);
+            std::fprintf(stderr, "voxfuse: warning: only %d of %d CPU threads could be started (%s); running with %d\n",
+                         threads_, threads, e.what(), threads_);
         }
     }
 
@@ -87,7 +87,8 @@ public:
         closed_.store(false);  // seq_cst: ordered after the fields for a worker that reads it as open
         generation_.fetch_add(1);
         wakeSleepers();
-        for (int t = next_.fetch_add(1, std::memory_order_relaxed); t < tasks; t = next_.fetch_add(1, std::memory_order_relaxed))
+        for (int t = next_.fetch_add(1, std::memory_order_relaxed); t < tasks;
+             t = next_.fetch_add(1, std::memory_order_relaxed))
             function(context, t);
         // Every task is claimed; those still running belong to busy workers.
         closed_.store(true);
@@ -141,7 +142,8 @@ private:
                 const TaskFunction function = function_;
                 const void* const context = context_;
                 const int tasks = tasks_;
-                for (int t = next_.fetch_add(1, std::memory_order_relaxed); t < tasks; t = next_.fetch_add(1, std::memory_order_relaxed))
+                for (int t = next_.fetch_add(1, std::memory_order_relaxed); t < tasks;
+                     t = next_.fetch_add(1, std::memory_order_relaxed))
                     function(context, t);
             }
             busy_.fetch_sub(1);
@@ -234,7 +236,8 @@ int cpuThreadCount() {
 
 void setCpuThreadCount(int count) {
     if (count < 0 || count > kMostThreads)
-        throw ConfigError("setCpuThreadCount: " + std::to_string(count) + " is not a thread count from 1 to " + std::to_string(kMostThreads) + " (or 0, the default)");
+        throw ConfigError("setCpuThreadCount: " + std::to_string(count) + " is not a thread count from 1 to " +
+                          std::to_string(kMostThreads) + " (or 0, the default)");
     threads().requested.store(count, std::memory_order_relaxed);
 }
 

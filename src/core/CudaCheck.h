@@ -25,7 +25,8 @@ inline bool succeeded(cudaError_t status) {
 
 inline void check(cudaError_t status, const char* call, const char* file, int line) {
     if (!succeeded(status))
-        throw DeviceError(std::string(call) + " failed at " + file + ":" + std::to_string(line) + ": " + cudaGetErrorString(status));
+        throw DeviceError(std::string(call) + " failed at " + file + ":" + std::to_string(line) + ": " +
+                          cudaGetErrorString(status));
 }
 
 // VOXFUSE_CUDA_SYNC=1 makes every launch wait for its kernel (read once per process): a fault is then
@@ -54,7 +55,8 @@ inline void checkLaunch(const char* file, int line, const char* kernel = nullptr
         waited = true;
     }
     if (status != cudaSuccess)
-        check(status, (launchDescription(kernel) + (waited ? " (VOXFUSE_CUDA_SYNC=1: run to its end)" : "")).c_str(), file, line);
+        check(status, (launchDescription(kernel) + (waited ? " (VOXFUSE_CUDA_SYNC=1: run to its end)" : "")).c_str(),
+              file, line);
 }
 
 // Ceiling division for grid sizes.

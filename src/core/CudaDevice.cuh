@@ -58,7 +58,8 @@ constexpr int kNormalEquationThreads = 128;
 constexpr int kNormalEquationBlocks = 264;  // two per multiprocessor of an H100/H200
 
 struct AddNormalEquations {
-    __device__ NormalEquations<double> operator()(const NormalEquations<double>& a, const NormalEquations<double>& b) const {
+    __device__ NormalEquations<double> operator()(const NormalEquations<double>& a,
+                                                  const NormalEquations<double>& b) const {
         NormalEquations<double> s = a;
         s.add(b);
         return s;
@@ -66,8 +67,9 @@ struct AddNormalEquations {
 };
 
 template <class Terms>
-__global__ void __launch_bounds__(kNormalEquationThreads) sumNormalEquationsKernel(int n, Terms terms, RobustKernel kernel,
-                                                                                     float kernel_scale, NormalEquations<double>* partials) {
+__global__ void __launch_bounds__(kNormalEquationThreads)
+    sumNormalEquationsKernel(int n, Terms terms, RobustKernel kernel, float kernel_scale,
+                             NormalEquations<double>* partials) {
     using BlockReduce = cub::BlockReduce<NormalEquations<double>, kNormalEquationThreads>;
     __shared__ typename BlockReduce::TempStorage temp;
     NormalEquations<double> local = NormalEquations<double>::zero();
@@ -91,7 +93,8 @@ struct CudaDevice {
     template <class Body>
     static void parallelFor(int n, const Body& body) {
         if (n <= 0) return;
-        cuda_detail::parallelForKernel<<<unsigned((n + kThreadsPerBlock - 1) / kThreadsPerBlock), kThreadsPerBlock>>>(n, body);
+        cuda_detail::parallelForKernel<<<unsigned((n + kThreadsPerBlock - 1) / kThreadsPerBlock), kThreadsPerBlock>>>(
+            n, body);
         VF_CUDA_CHECK_LAUNCH_OF(Body);
     }
 
@@ -129,7 +132,8 @@ struct CudaDevice {
         VF_CUDA_CHECK(cub::DeviceSelect::If(nullptr, temp_bytes, first, out, static_cast<int*>(nullptr), n, pred));
         char* base = static_cast<char*>(scratch.get(cuda_detail::alignUp(sizeof(int)) + temp_bytes));
         int* selected = reinterpret_cast<int*>(base);
-        VF_CUDA_CHECK(cub::DeviceSelect::If(base + cuda_detail::alignUp(sizeof(int)), temp_bytes, first, out, selected, n, pred));
+        VF_CUDA_CHECK(
+            cub::DeviceSelect::If(base + cuda_detail::alignUp(sizeof(int)), temp_bytes, first, out, selected, n, pred));
         return read(selected, scratch);
     }
 
@@ -153,7 +157,8 @@ struct CudaDevice {
     template <class Pred>
     static int countIf(int n, const Pred& pred, DeviceScratch& scratch) {
         if (n <= 0) return 0;
-        const auto values = thrust::make_transform_iterator(thrust::counting_iterator<int>(0), cuda_detail::PredicateAsInt<Pred>{pred});
+        const auto values =
+            thrust::make_transform_iterator(thrust::counting_iterator<int>(0), cuda_detail::PredicateAsInt<Pred>{pred});
         std::size_t temp_bytes = 0;
         VF_CUDA_CHECK(cub::DeviceReduce::Sum(nullptr, temp_bytes, values, static_cast<int*>(nullptr), n));
         char* base = static_cast<char*>(scratch.get(cuda_detail::alignUp(sizeof(int)) + temp_bytes));
@@ -167,24 +172,28 @@ struct CudaDevice {
         if (n <= 0) return init;
         const auto values = thrust::make_transform_iterator(thrust::counting_iterator<int>(0), value);
         std::size_t temp_bytes = 0;
-        VF_CUDA_CHECK(cub::DeviceReduce::Reduce(nullptr, temp_bytes, values, static_cast<float*>(nullptr), n, cuda_detail::MaxFloat(), init));
+        VF_CUDA_CHECK(cub::DeviceReduce::Reduce(nullptr, temp_bytes, values, static_cast<float*>(nullptr), n,
+                                                cuda_detail::MaxFloat(), init));
         char* base = static_cast<char*>(scratch.get(cuda_detail::alignUp(sizeof(float)) + temp_bytes));
         float* best = reinterpret_cast<float*>(base);
-        VF_CUDA_CHECK(cub::DeviceReduce::Reduce(base + cuda_detail::alignUp(sizeof(float)), temp_bytes, values, best, n, cuda_detail::MaxFloat(),
-                                                init));
+        VF_CUDA_CHECK(cub::DeviceReduce::Reduce(base + cuda_detail::alignUp(sizeof(float)), temp_bytes, values, best, n,
+                                                cuda_detail::MaxFloat(), init));
         return read(best, scratch);
     }
 
     template <class Terms>
-    static NormalEquations<double> sumNormalEquations(int n, const Terms& terms, RobustKernel kernel, float kernel_scale,
-                                                      DeviceScratch& scratch) {
+    static NormalEquations<double> sumNormalEquations(int n, const Terms& terms, RobustKernel kernel,
+                                                      float kernel_scale, DeviceScratch& scratch) {
         using cuda_detail::kNormalEquationBlocks;
-        auto* partials = static_cast<NormalEquations<double>*>(scratch.get(sizeof(NormalEquations<double>) * kNormalEquationBlocks));
-        cuda_detail::sumNormalEquationsKernel<<<kNormalEquationBlocks, cuda_detail::kNormalEquationThreads>>>(n, terms, kernel, kernel_scale,
-                                                                                                              partials);
+        auto* partials =
+            static_cast<NormalEquations<double>*>(scratch.get(sizeof(NormalEquations<double>) * kNormalEquationBlocks));
+        cuda_detail::sumNormalEquationsKernel<<<kNormalEquationBlocks, cuda_detail::kNormalEquationThreads>>>(
+            n, terms, kernel, kernel_scale, partials);
         VF_CUDA_CHECK_LAUNCH_OF(Terms);
-        auto* host = static_cast<NormalEquations<double>*>(scratch.hostResult(sizeof(NormalEquations<double>) * kNormalEquationBlocks));
-        VF_CUDA_CHECK(cudaMemcpy(host, partials, sizeof(NormalEquations<double>) * kNormalEquationBlocks, cudaMemcpyDeviceToHost));
+        auto* host = static_cast<NormalEquations<double>*>(
+            scratch.hostResult(sizeof(NormalEquations<double>) * kNormalEquationBlocks));
+        VF_CUDA_CHECK(cudaMemcpy(host, partials, sizeof(NormalEquations<double>) * kNormalEquationBlocks,
+                                 cudaMemcpyDeviceToHost));
         NormalEquations<double> total = NormalEquations<double>::zero();
         for (int b = 0; b < kNormalEquationBlocks; ++b) total.add(host[b]);
         return total;

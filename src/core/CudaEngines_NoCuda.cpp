@@ -18,11 +18,13 @@
 namespace voxfuse::cuda {
 namespace {
 [[noreturn]] void noCuda(const char* engine) {
-    throw DeviceError(std::string("the CUDA ") + engine + " is not in this VoxFuse build (rebuild with -DVOXFUSE_CUDA=ON)");
+    throw DeviceError(std::string("the CUDA ") + engine +
+                      " is not in this VoxFuse build (rebuild with -DVOXFUSE_CUDA=ON)");
 }
 }  // namespace
 
-#define VF_INSTANTIATE_STUB(Engine, TVoxel, TIndex) template std::unique_ptr<Engine<TVoxel, TIndex>> make##Engine<TVoxel, TIndex>();
+#define VF_INSTANTIATE_STUB(Engine, TVoxel, TIndex) \
+    template std::unique_ptr<Engine<TVoxel, TIndex>> make##Engine<TVoxel, TIndex>();
 #define VF_STUB(Engine)                                      \
     template <class TVoxel, class TIndex>                    \
     std::unique_ptr<Engine<TVoxel, TIndex>> make##Engine() { \

@@ -9,7 +9,9 @@ const char* deviceName(Device d) { return d == Device::CPU ? "cpu" : "cuda"; }
 
 namespace device_memory {
 namespace {
-[[noreturn]] void noCuda() { throw DeviceError("this VoxFuse build has no CUDA support (rebuild with -DVOXFUSE_CUDA=ON)"); }
+[[noreturn]] void noCuda() {
+    throw DeviceError("this VoxFuse build has no CUDA support (rebuild with -DVOXFUSE_CUDA=ON)");
+}
 }  // namespace
 
 bool builtWithCuda() { return false; }

@@ -21,7 +21,8 @@ bool switchFromText(const char* name, const char* text, Report&& report) {
 }
 
 inline bool switchFromEnvironment(const char* name) {
-    return switchFromText(name, std::getenv(name), [](const std::string& message) { std::fprintf(stderr, "%s\n", message.c_str()); });
+    return switchFromText(name, std::getenv(name),
+                          [](const std::string& message) { std::fprintf(stderr, "%s\n", message.c_str()); });
 }
 
 }  // namespace voxfuse

@@ -12,9 +12,11 @@ namespace voxfuse {
 // `time_of(element)` gives an element's time; `sorted` is ascending in it. nullptr when none fits.
 template <class T, class TimeOf>
 const T* nearestInTime(const std::vector<T>& sorted, double t, double max_dt, TimeOf time_of) {
-    const auto after = std::lower_bound(sorted.begin(), sorted.end(), t, [&](const T& e, double time) { return time_of(e) < time; });
+    const auto after =
+        std::lower_bound(sorted.begin(), sorted.end(), t, [&](const T& e, double time) { return time_of(e) < time; });
     const T* best = after != sorted.end() ? &*after : nullptr;
-    if (after != sorted.begin() && (!best || t - time_of(*std::prev(after)) <= time_of(*best) - t)) best = &*std::prev(after);
+    if (after != sorted.begin() && (!best || t - time_of(*std::prev(after)) <= time_of(*best) - t))
+        best = &*std::prev(after);
     return best && std::fabs(time_of(*best) - t) <= max_dt ? best : nullptr;
 }
 

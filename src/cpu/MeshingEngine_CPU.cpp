@@ -12,7 +12,8 @@ std::unique_ptr<MeshingEngine<TVoxel, TIndex>> makeMeshingEngine() {
     return makeMeshingEngineOn<CpuDevice, TVoxel, TIndex>();
 }
 
-#define VF_INSTANTIATE(TVoxel, TIndex) template std::unique_ptr<MeshingEngine<TVoxel, TIndex>> makeMeshingEngine<TVoxel, TIndex>();
+#define VF_INSTANTIATE(TVoxel, TIndex) \
+    template std::unique_ptr<MeshingEngine<TVoxel, TIndex>> makeMeshingEngine<TVoxel, TIndex>();
 VF_FOR_EACH_ENGINE_PAIR(VF_INSTANTIATE)
 #undef VF_INSTANTIATE
 

@@ -5,7 +5,11 @@
 
 namespace voxfuse::cpu {
 
-std::unique_ptr<DepthTrackerKernels> makeDepthTrackerKernels() { return std::make_unique<DepthTrackerKernelsOn<CpuDevice>>(); }
-std::unique_ptr<ColorTrackerKernels> makeColorTrackerKernels() { return std::make_unique<ColorTrackerKernelsOn<CpuDevice>>(); }
+std::unique_ptr<DepthTrackerKernels> makeDepthTrackerKernels() {
+    return std::make_unique<DepthTrackerKernelsOn<CpuDevice>>();
+}
+std::unique_ptr<ColorTrackerKernels> makeColorTrackerKernels() {
+    return std::make_unique<ColorTrackerKernelsOn<CpuDevice>>();
+}
 
 }  // namespace voxfuse::cpu

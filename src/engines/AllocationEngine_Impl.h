@@ -26,7 +26,9 @@ namespace voxfuse {
 template <class TVoxel>
 class DenseAllocationEngine final : public AllocationEngine<TVoxel, PlainVoxelArray> {
 public:
-    AllocationStats allocate(Scene<TVoxel, PlainVoxelArray>&, const View&, const Mat4f&) override { return AllocationStats(); }
+    AllocationStats allocate(Scene<TVoxel, PlainVoxelArray>&, const View&, const Mat4f&) override {
+        return AllocationStats();
+    }
     int removeEmptyBlocks(Scene<TVoxel, PlainVoxelArray>&) override { return 0; }
 };
 
@@ -35,12 +37,14 @@ class HashAllocationEngine final : public AllocationEngine<TVoxel, VoxelBlockHas
     static constexpr Device kDevice = TDevice::kind;
 
 public:
-    AllocationStats allocate(Scene<TVoxel, VoxelBlockHash>& scene, const View& view, const Mat4f& T_world_camera) override {
+    AllocationStats allocate(Scene<TVoxel, VoxelBlockHash>& scene, const View& view,
+                             const Mat4f& T_world_camera) override {
         requireSceneOn(kDevice, scene, "the hash allocation engine");
         VoxelBlockHash& hash = scene.index();
         AllocationStats& stats = hash.stats();
         stats.blocks_allocated_this_frame = 0;
-        stats.allocation_failures_this_frame = stats.failures_hash_full_this_frame = stats.failures_blocks_full_this_frame = 0;
+        stats.allocation_failures_this_frame = stats.failures_hash_full_this_frame =
+            stats.failures_blocks_full_this_frame = 0;
         stats.missing_block_appends_this_frame = stats.stage1_passes_this_frame = 0;
 
         DepthSegmentFrame frame = makeDepthSegmentFrame(scene.params(), view, T_world_camera);
@@ -85,8 +89,10 @@ public:
         grow(freed_blocks_, buckets);
         grow(freed_excess_, buckets);
         const HashTableState table = hash.state();
-        TDevice::parallelFor(entries, MarkEmptyBlocks<TVoxel>{table.entries, table.stored_slot, scene.voxelData(), on(remove_)});
-        const BucketRemoval count_pass{table, on(remove_), on(freed_blocks_), on(freed_excess_), hash.freeBlocks(), hash.freeExcessEntries()};
+        TDevice::parallelFor(entries,
+                             MarkEmptyBlocks<TVoxel>{table.entries, table.stored_slot, scene.voxelData(), on(remove_)});
+        const BucketRemoval count_pass{
+            table, on(remove_), on(freed_blocks_), on(freed_excess_), hash.freeBlocks(), hash.freeExcessEntries()};
         TDevice::parallelFor(buckets, CountBucketRemovals{count_pass});
         const int freed_blocks = TDevice::exclusiveScan(on(freed_blocks_), on(freed_blocks_), buckets, scratch_);
         const int freed_excess = TDevice::exclusiveScan(on(freed_excess_), on(freed_excess_), buckets, scratch_);
@@ -97,7 +103,8 @@ public:
         stats.blocks_removed_total += freed_blocks;
         stats.blocks_allocated = hash.blocksInUse();
         // Removal moved visibility marks with their entries: the list is rebuilt from them.
-        hash.setVisibleCount(TDevice::selectIndices(entries, EntryIsVisible{hash.entryVisibility()}, hash.visibleEntriesForWriting(), scratch_));
+        hash.setVisibleCount(TDevice::selectIndices(entries, EntryIsVisible{hash.entryVisibility()},
+                                                    hash.visibleEntriesForWriting(), scratch_));
         return freed_blocks;
     }
 
@@ -125,11 +132,13 @@ private:
             const HashTableView table = hash.data();
             std::uint8_t* visibility = hash.state().entry_visibility;
             if constexpr (!TDevice::kOneThreadPerItem) {
-                const MarkBlocksForPixels<256> mark{frame, table, visibility, on(missing_), on(missing_count_), int(missing_.size()),
-                                                    Vec2i{32, 32}};
+                const MarkBlocksForPixels<256> mark{
+                    frame, table, visibility, on(missing_), on(missing_count_), int(missing_.size()), Vec2i{32, 32}};
                 TDevice::parallelFor(mark.elementCount(), mark);
             } else {
-                const MarkBlocksForPixelTeams mark{frame, {table, visibility, on(missing_), on(missing_count_), int(missing_.size()), kMaxCountedAppends}};
+                const MarkBlocksForPixelTeams mark{
+                    frame,
+                    {table, visibility, on(missing_), on(missing_count_), int(missing_.size()), kMaxCountedAppends}};
                 TDevice::template parallelForTeams<TileBlockSet>(mark.itemCount(), mark);
             }
             const int appended = TDevice::read(on(missing_count_), scratch_);
@@ -138,7 +147,8 @@ private:
                                                          ? INT_MAX
                                                          : stats.missing_block_appends_this_frame + appended;
             if (appended <= int(missing_.size()) || int(missing_.size()) >= bound) return appended;
-            missing_.allocate(std::size_t(std::min<long long>(bound, appended + appended / 4ll)), kDevice == Device::CPU, kDevice == Device::CUDA);
+            missing_.allocate(std::size_t(std::min<long long>(bound, appended + appended / 4ll)),
+                              kDevice == Device::CPU, kDevice == Device::CUDA);
         }
     }
 
@@ -166,9 +176,19 @@ private:
 
         const int free_before = hash.freeBlocks();
         for (;;) {
-            const InsertRound r{hash.state(),    on(missing_),       on(target_),     on(claim_),      on(outcome_),
-                                on(needs_excess_), on(excess_wanted_), on(excess_rank_), on(block_wanted_), on(block_rank_),
-                                on(counts_),     hash.freeBlocks(),  hash.freeExcessEntries()};
+            const InsertRound r{hash.state(),
+                                on(missing_),
+                                on(target_),
+                                on(claim_),
+                                on(outcome_),
+                                on(needs_excess_),
+                                on(excess_wanted_),
+                                on(excess_rank_),
+                                on(block_wanted_),
+                                on(block_rank_),
+                                on(counts_),
+                                hash.freeBlocks(),
+                                hash.freeExcessEntries()};
             TDevice::write(on(counts_), InsertRoundCounts{});
             TDevice::parallelFor(count, ClaimInsertTarget{r});
             TDevice::parallelFor(count, DecideInsertWinners{r});
@@ -197,8 +217,9 @@ private:
         VoxelBlockHash& hash = scene.index();
         grow(activation_, std::size_t(hash.entryCount()));
         const HashTableState before = hash.state();
-        const int count = TDevice::selectIndices(hash.entryCount(), EntryNeedsActivation{before.entries, before.entry_visibility},
-                                                 on(activation_), scratch_);
+        const int count =
+            TDevice::selectIndices(hash.entryCount(), EntryNeedsActivation{before.entries, before.entry_visibility},
+                                   on(activation_), scratch_);
         if (count == 0) return 0;
         if (count > hash.freeBlocks()) scene.reserveVoxelBlocks(hash.blocksInUse() + count);
         const int free = hash.freeBlocks();
@@ -219,12 +240,13 @@ private:
     }
 
     // Stage 3: the visible list, in entry order.
-    void buildVisibleList(VoxelBlockHash& hash, const SceneParams& params, const View& view, const Mat4f& T_world_camera) {
-        const BlockProjection projection{rigidInverse(T_world_camera), view.calib.depth, params.voxel_size_m, kIntegrationNearM,
-                                         params.view_frustum_max_m + params.mu_m};
+    void buildVisibleList(VoxelBlockHash& hash, const SceneParams& params, const View& view,
+                          const Mat4f& T_world_camera) {
+        const BlockProjection projection{rigidInverse(T_world_camera), view.calib.depth, params.voxel_size_m,
+                                         kIntegrationNearM, params.view_frustum_max_m + params.mu_m};
         TDevice::parallelFor(hash.entryCount(), UpdateEntryVisibility{hash.state(), projection});
-        const int count = TDevice::selectIndices(hash.entryCount(), EntryIsVisible{hash.entryVisibility()}, hash.visibleEntriesForWriting(),
-                                                 scratch_);
+        const int count = TDevice::selectIndices(hash.entryCount(), EntryIsVisible{hash.entryVisibility()},
+                                                 hash.visibleEntriesForWriting(), scratch_);
         hash.setVisibleListFor(count, T_world_camera, view.calib.depth);
     }
 
@@ -245,8 +267,10 @@ private:
 // The engine factory both layers instantiate.
 template <class TDevice, class TVoxel, class TIndex>
 std::unique_ptr<AllocationEngine<TVoxel, TIndex>> makeAllocationEngineOn() {
-    if constexpr (std::is_same<TIndex, VoxelBlockHash>::value) return std::make_unique<HashAllocationEngine<TDevice, TVoxel>>();
-    else return std::make_unique<DenseAllocationEngine<TVoxel>>();
+    if constexpr (std::is_same<TIndex, VoxelBlockHash>::value)
+        return std::make_unique<HashAllocationEngine<TDevice, TVoxel>>();
+    else
+        return std::make_unique<DenseAllocationEngine<TVoxel>>();
 }
 
 }  // namespace voxfuse

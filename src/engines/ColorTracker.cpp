@@ -22,7 +22,10 @@ double meanCost(const NormalEquations<double>& eq) { return eq.count > 0 ? eq.we
 class ColorTracker final : public Tracker {
 public:
     ColorTracker(const TrackerSettings& settings, Device device)
-        : settings_(settings), low_level_(makeLowLevelEngine(device)), kernels_(makeColorTrackerKernels(device)), frames_(*kernels_) {}
+        : settings_(settings),
+          low_level_(makeLowLevelEngine(device)),
+          kernels_(makeColorTrackerKernels(device)),
+          frames_(*kernels_) {}
 
     void track(TrackingState& state, const View& view, const RenderState& model) override {
         const Timer total;
@@ -64,8 +67,9 @@ public:
 
 private:
     NormalEquations<double> evaluate(int pyramid_level, const Eigen::Matrix4d& T) {
-        return kernels_->accumulate(frames_.points(), frames_.level(pyramid_level), frames_.termParams(pyramid_level, pose::toMat4f(T)),
-                                    settings_.color_kernel, settings_.color_kernel_scale);
+        return kernels_->accumulate(frames_.points(), frames_.level(pyramid_level),
+                                    frames_.termParams(pyramid_level, pose::toMat4f(T)), settings_.color_kernel,
+                                    settings_.color_kernel_scale);
     }
 
     void estimatePose(TrackingState& state) {
@@ -110,7 +114,9 @@ private:
                 T = T_new;
                 eq = eq_new;
                 lambda = std::max(lambda * 0.1, 1e-7);
-                if (x.head<3>().norm() < settings_.min_rotation_step_rad && x.tail<3>().norm() < settings_.min_translation_step_m) break;
+                if (x.head<3>().norm() < settings_.min_rotation_step_rad &&
+                    x.tail<3>().norm() < settings_.min_translation_step_m)
+                    break;
             } else {
                 lambda *= 10.0;
                 if (lambda > kMaxLambda) break;

@@ -31,10 +31,13 @@ public:
         if (settings.kind == TrackerKind::Rgbd) {
             color_kernels_ = makeColorTrackerKernels(device);
             photometric_ = std::make_unique<PhotometricFrames>(*color_kernels_);
-            if (settings.far_field_keyframes > 0) far_field_ = std::make_unique<FarFieldKeyframes>(*color_kernels_, settings, device);
+            if (settings.far_field_keyframes > 0)
+                far_field_ = std::make_unique<FarFieldKeyframes>(*color_kernels_, settings, device);
         }
         pyramid_.resize(settings.levels.size());
-        min_normal_cos_ = settings.max_normal_angle_deg >= 180.f ? -2.f : std::cos(settings.max_normal_angle_deg * float(EIGEN_PI) / 180.f);
+        min_normal_cos_ = settings.max_normal_angle_deg >= 180.f
+                              ? -2.f
+                              : std::cos(settings.max_normal_angle_deg * float(EIGEN_PI) / 180.f);
     }
 
     void track(TrackingState& state, const View& view, const RenderState& model) override {
@@ -60,14 +63,17 @@ public:
             estimatePose(state, view, model, color_ok);
         }
         seen_model_ = seen_model_ || model_ok;
-        if (state.quality == TrackingQuality::Failed) motion_.forget();
-        else motion_.record(state.T_world_camera, view.clock());
+        if (state.quality == TrackingQuality::Failed)
+            motion_.forget();
+        else
+            motion_.record(state.T_world_camera, view.clock());
         if (far_field_) {
             // Before rememberCurrent, which hands the colour pyramid's finest level on.
             if (state.quality == TrackingQuality::Failed)
                 far_field_->forget();
             else if (state.quality == TrackingQuality::Good && color_prepared)
-                far_field_->offer(view, state.T_world_camera, photometric_->level(0), photometric_->termParams(0, state.T_world_camera).T_rgb_depth);
+                far_field_->offer(view, state.T_world_camera, photometric_->level(0),
+                                  photometric_->termParams(0, state.T_world_camera).T_rgb_depth);
         }
         if (photometric_) {
             if (state.quality == TrackingQuality::Failed)
@@ -96,17 +102,21 @@ private:
     // Levels of the current frame: index 0 is full resolution (settings_.levels runs the other way).
     bool preparePyramid(const View& view) {
         valid_pixels_ = 0;
-        if (view.depth.empty() || !view.calib.depth.valid() || view.depth.size() != view.calib.depth.size()) return false;
+        if (view.depth.empty() || !view.calib.depth.valid() || view.depth.size() != view.calib.depth.size())
+            return false;
         for (int i = 0; i < levelCount(); ++i) {
             DepthFrameLevel& level = pyramid_[std::size_t(i)];
             level.intrinsics = view.calib.depth.downsampled(1 << i);
             if (i > 0) {
                 low_level_->downsampleDepth(pyramid_[std::size_t(i - 1)].depth, level.depth, kPyramidMaxDepthDiffM);
             } else {
-                if (settings_.bilateral_filter) low_level_->bilateralFilterDepth(view.depth, level.depth, BilateralFilterParams{});
-                else low_level_->copyDepth(view.depth, level.depth);
+                if (settings_.bilateral_filter)
+                    low_level_->bilateralFilterDepth(view.depth, level.depth, BilateralFilterParams{});
+                else
+                    low_level_->copyDepth(view.depth, level.depth);
                 // After the filter, which mixes only depths close to each other; the coarser levels inherit it.
-                if (settings_.max_tracking_depth_m > 0.f) low_level_->dropDepthBeyond(level.depth, settings_.max_tracking_depth_m);
+                if (settings_.max_tracking_depth_m > 0.f)
+                    low_level_->dropDepthBeyond(level.depth, settings_.max_tracking_depth_m);
             }
             low_level_->computeVertexMap(level.depth, level.intrinsics, level.vertices);
             // Only the normals the level's terms read (a level taking every second pixel reads a quarter).
@@ -124,7 +134,8 @@ private:
         NormalEquations<double> finest = NormalEquations<double>::zero();
         bool robust = false;  // ren and rgbd: least squares has handed over to the kernel
         // Which far-field points the frame sees, judged once at the predicted pose.
-        const Image<ColorPoint>* far_points = use_color && far_field_ ? far_field_->unhiddenPoints(view, pose::toMat4f(T)) : nullptr;
+        const Image<ColorPoint>* far_points =
+            use_color && far_field_ ? far_field_->unhiddenPoints(view, pose::toMat4f(T)) : nullptr;
         for (int li = 0; li < levelCount(); ++li) finest = refineOnLevel(li, model, use_color, far_points, T, robust);
 
         // Quality from the last full-resolution system (evaluated just before the last, small, update).
@@ -145,8 +156,8 @@ private:
 
     // Gauss-Newton on settings level `li` (coarse to fine), updating T and `robust` (see below). Returns
     // the depth system of the last iteration.
-    NormalEquations<double> refineOnLevel(int li, const RenderState& model, bool use_color, const Image<ColorPoint>* far_points, Eigen::Matrix4d& T,
-                                          bool& robust) {
+    NormalEquations<double> refineOnLevel(int li, const RenderState& model, bool use_color,
+                                          const Image<ColorPoint>* far_points, Eigen::Matrix4d& T, bool& robust) {
         const TrackerLevel& ls = settings_.levels[std::size_t(li)];
         const int pi = levelCount() - 1 - li;
         const DepthFrameLevel& level = pyramid_[std::size_t(pi)];
@@ -190,27 +201,29 @@ private:
             if (with_color) {
                 depth_eq = depthSystemMovedBy(converged_depth, moved_since);
             } else {
-                depth_eq = kernels_->accumulate(level, model, params, robust ? final_kernel : RobustKernel::None, settings_.robust_scale_m,
-                                                ls.pixel_step);
+                depth_eq = kernels_->accumulate(level, model, params, robust ? final_kernel : RobustKernel::None,
+                                                settings_.robust_scale_m, ls.pixel_step);
                 converged_depth = depth_eq;
                 moved_since.setZero();
-                depth_pins_translation = settings_.extrapolate_steps && pose::translationConstraint(depth_eq).share(0) >=
-                                                                            double(settings_.poor_translation_constraint);
+                depth_pins_translation =
+                    settings_.extrapolate_steps &&
+                    pose::translationConstraint(depth_eq).share(0) >= double(settings_.poor_translation_constraint);
             }
             stats.iterations = it + 1;
             NormalEquations<double> system = depth_eq;
             if (with_color) {
-                const NormalEquations<double> color_eq =
-                    color_kernels_->accumulate(photometric_->points(), photometric_->level(pi), photometric_->termParams(pi, T_f),
-                                               settings_.color_kernel, settings_.color_kernel_scale);
+                const NormalEquations<double> color_eq = color_kernels_->accumulate(
+                    photometric_->points(), photometric_->level(pi), photometric_->termParams(pi, T_f),
+                    settings_.color_kernel, settings_.color_kernel_scale);
                 if (color_eq.count > 0 && depth_eq.count > 0) {
                     // Fixed for the level at its first colour iteration with terms: a weight that moved
                     // with every step's residuals would make a different cost at each iteration.
                     if (color_weight < 0.0)
-                        color_weight = settings_.color_weight_auto
-                                           ? pose::inverseVarianceWeight(depth_eq, kDepthNoiseFloorM * kDepthNoiseFloorM, color_eq,
-                                                                         kIntensityNoiseFloor * kIntensityNoiseFloor)
-                                           : double(settings_.color_weight);
+                        color_weight =
+                            settings_.color_weight_auto
+                                ? pose::inverseVarianceWeight(depth_eq, kDepthNoiseFloorM * kDepthNoiseFloorM, color_eq,
+                                                              kIntensityNoiseFloor * kIntensityNoiseFloor)
+                                : double(settings_.color_weight);
                     // Per term: the colour points are fixed by the model while the depth pixels shrink 4x
                     // per level, so the colour sum is scaled to the depth term count.
                     const double per_color_term = color_weight * depth_eq.count / color_eq.count;
@@ -218,8 +231,9 @@ private:
                     // The far field's terms count as the model's colour terms do, one for one: they
                     // add constraints, not another colour term to share the weight with.
                     if (far_points)
-                        system.add(color_kernels_->accumulate(*far_points, photometric_->level(pi), photometric_->termParams(pi, T_f),
-                                                              settings_.color_kernel, settings_.color_kernel_scale),
+                        system.add(color_kernels_->accumulate(*far_points, photometric_->level(pi),
+                                                              photometric_->termParams(pi, T_f), settings_.color_kernel,
+                                                              settings_.color_kernel_scale),
                                    per_color_term);
                 }
             }
@@ -233,7 +247,8 @@ private:
             // A level's pixels are 2^pi times the finest's: it stops at steps that much larger (the finer
             // levels refine what it leaves). The test takes the Gauss-Newton step, not the stretched one.
             const double step_scale = (robust ? 1.0 : 10.0) * double(1 << pi);
-            if (x.head<3>().norm() < step_scale * settings_.min_rotation_step_rad && x.tail<3>().norm() < step_scale * settings_.min_translation_step_m) {
+            if (x.head<3>().norm() < step_scale * settings_.min_rotation_step_rad &&
+                x.tail<3>().norm() < step_scale * settings_.min_translation_step_m) {
                 extrapolation.restart();  // the kernel or colour joins: another cost
                 if (!robust) {
                     robust = true;

@@ -19,8 +19,10 @@ const T* imageOn(Device where, const Image<T>& image, MemoryBlock<T>& staging) {
     if (!image.memory().isCurrent(Device::CPU) && !image.memory().isCurrent(Device::CUDA))
         throw DeviceError("a frame image has no current copy");
     staging.allocate(image.pixelCount(), where == Device::CPU, where == Device::CUDA);
-    if (where == Device::CPU) image.memory().readRange(Device::CUDA, 0, staging.host(), image.pixelCount());
-    else staging.writeRange(Device::CUDA, 0, image.host(), image.pixelCount());
+    if (where == Device::CPU)
+        image.memory().readRange(Device::CUDA, 0, staging.host(), image.pixelCount());
+    else
+        staging.writeRange(Device::CUDA, 0, image.host(), image.pixelCount());
     return staging.data(where);
 }
 
@@ -28,7 +30,8 @@ const T* imageOn(Device where, const Image<T>& image, MemoryBlock<T>& staging) {
 template <class TScene>
 void requireSceneOn(Device where, const TScene& scene, const char* engine) {
     if (scene.location() != where)
-        throw DeviceError(std::string(engine) + " on " + deviceName(where) + " got a scene that lives on " + deviceName(scene.location()) +
+        throw DeviceError(std::string(engine) + " on " + deviceName(where) + " got a scene that lives on " +
+                          deviceName(scene.location()) +
                           " (engines and scene must share a device; Scene::copyTo moves a map)");
 }
 

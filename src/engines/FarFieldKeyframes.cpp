@@ -23,15 +23,16 @@ const Image<ColorPoint>* FarFieldKeyframes::unhiddenPoints(const View& view, con
     return &unhidden_;
 }
 
-void FarFieldKeyframes::offer(const View& view, const Mat4f& T_world_camera, const ColorFrameLevel& color, const Mat4f& T_rgb_depth) {
+void FarFieldKeyframes::offer(const View& view, const Mat4f& T_world_camera, const ColorFrameLevel& color,
+                              const Mat4f& T_rgb_depth) {
     if (keep_ <= 0 || view.far_depth.empty() || view.far_depth.size() != view.calib.depth.size()) return;
     if (!keyframes_.empty()) {
         float moved_m = 0.f, turned_deg = 0.f;
         pose::motionBetween(pose::toEigenD(T_world_newest_), pose::toEigenD(T_world_camera), moved_m, turned_deg);
         if (moved_m < spacing_m_ && turned_deg < spacing_deg_) return;
     }
-    kernels_.farFieldPoints(view.far_depth, view.calib.depth, point_step_, T_world_camera, color, T_rgb_depth * rigidInverse(T_world_camera),
-                            candidates_, gradient_sq_);
+    kernels_.farFieldPoints(view.far_depth, view.calib.depth, point_step_, T_world_camera, color,
+                            T_rgb_depth * rigidInverse(T_world_camera), candidates_, gradient_sq_);
     candidates_.memory().updateHost();
     gradient_sq_.memory().updateHost();
     const ColorPoint* points = static_cast<const Image<ColorPoint>&>(candidates_).host();
@@ -43,7 +44,8 @@ void FarFieldKeyframes::offer(const View& view, const Mat4f& T_world_camera, con
         if (points[i].intensity >= 0.f) coloured.push_back(gradient_sq[i]);
     std::vector<ColorPoint> kept;
     if (!coloured.empty()) {
-        const std::size_t below = std::min(coloured.size() - 1, std::size_t(double(coloured.size()) * (1.0 - double(point_share_))));
+        const std::size_t below =
+            std::min(coloured.size() - 1, std::size_t(double(coloured.size()) * (1.0 - double(point_share_))));
         std::nth_element(coloured.begin(), coloured.begin() + std::ptrdiff_t(below), coloured.end());
         const float threshold = coloured[below];
         kept.reserve(coloured.size() - below);

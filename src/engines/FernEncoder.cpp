@@ -48,7 +48,10 @@ float fernDissimilarity(const FernCode& a, const FernCode& b) {
 }
 
 FernEncoder::FernEncoder(const FernSettings& settings, Vec2i frame_size, bool with_intensity, Device device)
-    : settings_(settings), frame_size_(frame_size), with_intensity_(with_intensity && settings.use_intensity), low_level_(makeLowLevelEngine(device)) {
+    : settings_(settings),
+      frame_size_(frame_size),
+      with_intensity_(with_intensity && settings.use_intensity),
+      low_level_(makeLowLevelEngine(device)) {
     if (settings.fern_count < 1 || settings.tests_per_fern < 1 || settings.tests_per_fern > 8)
         throw ConfigError("ferns: need at least one fern of 1 to 8 tests");
     if (settings.image_width < 4 || !(settings.max_depth_m > settings.min_depth_m))
@@ -56,7 +59,8 @@ FernEncoder::FernEncoder(const FernSettings& settings, Vec2i frame_size, bool wi
     if (frame_size.x < 1 || frame_size.y < 1) throw ConfigError("ferns: the frame has no pixels");
     // A frame narrower than the code image is tested at its own size.
     const int width = std::min(settings.image_width, frame_size.x);
-    small_size_ = {width, std::clamp(int(std::lround(float(frame_size.y) * float(width) / float(frame_size.x))), 1, frame_size.y)};
+    small_size_ = {
+        width, std::clamp(int(std::lround(float(frame_size.y) * float(width) / float(frame_size.x))), 1, frame_size.y)};
 
     std::mt19937 rng(settings.seed);
     const int pixels = small_size_.x * small_size_.y;
@@ -65,7 +69,8 @@ FernEncoder::FernEncoder(const FernSettings& settings, Vec2i frame_size, bool wi
         t.pixel = std::min(pixels - 1, int(uniform01(rng) * float(pixels)));
         t.intensity = with_intensity_ && uniform01(rng) < 0.5f;
         const float u = uniform01(rng);
-        t.threshold = t.intensity ? 2.f * u - 1.f : settings.min_depth_m + u * (settings.max_depth_m - settings.min_depth_m);
+        t.threshold =
+            t.intensity ? 2.f * u - 1.f : settings.min_depth_m + u * (settings.max_depth_m - settings.min_depth_m);
     }
 }
 
@@ -73,7 +78,8 @@ FernEncoder::~FernEncoder() = default;
 
 void FernEncoder::shrink(const Image<float>& depth_m, const Image<Vec4u8>& rgb, std::vector<float>& depth_small,
                          std::vector<float>& intensity_small) {
-    if (depth_m.size() != frame_size_) throw ConfigError("ferns: the depth image is not of the size the encoder was made for");
+    if (depth_m.size() != frame_size_)
+        throw ConfigError("ferns: the depth image is not of the size the encoder was made for");
     const std::size_t cells = std::size_t(small_size_.x) * std::size_t(small_size_.y);
     // The averages are taken where the images are (on the GPU only they come down), the rest here.
     low_level_->averageDepthCells(depth_m, small_size_, cells_);

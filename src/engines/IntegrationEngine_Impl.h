@@ -51,20 +51,24 @@ public:
         const PlainVoxelArray::Data index = scene.index().data();
         const std::uint32_t integration_number = scene.takeIntegrationNumber();
         const IntegrationFrame frame = inputs_.frame(kDevice, scene.params(), view, T_world_camera, integration_number);
-        const float max_depth_m = TDevice::maxOf(int(view.depth.pixelCount()), UsableDepth{frame.depth, frame.min_depth_m, frame.max_depth_m},
-                                                 0.f, scratch_);
+        const float max_depth_m =
+            TDevice::maxOf(int(view.depth.pixelCount()), UsableDepth{frame.depth, frame.min_depth_m, frame.max_depth_m},
+                           0.f, scratch_);
         Vec3i lo, hi;  // array coordinates (not offset)
         float far_m;
-        if (!denseIntegrationBox(index, scene.params(), view.calib.depth, T_world_camera, max_depth_m, lo, hi, far_m)) return;
+        if (!denseIntegrationBox(index, scene.params(), view.calib.depth, T_world_camera, max_depth_m, lo, hi, far_m))
+            return;
         if constexpr (!TDevice::kOneThreadPerItem) {
-            TDevice::parallelFor((hi.y - lo.y) * (hi.z - lo.z), IntegrateDenseRow<TVoxel>{scene.voxelData(), index, lo, hi, far_m, frame});
+            TDevice::parallelFor((hi.y - lo.y) * (hi.z - lo.z),
+                                 IntegrateDenseRow<TVoxel>{scene.voxelData(), index, lo, hi, far_m, frame});
         } else {
             // Slabs of whole z-slices, each at most 2^30 voxels (element indices are ints).
             const Vec3i box = hi - lo;
             const int slices_per_launch = std::max(1, (1 << 30) / (box.x * box.y));
             for (int z = 0; z < box.z; z += slices_per_launch) {
                 const int slices = std::min(slices_per_launch, box.z - z);
-                TDevice::parallelFor(box.x * box.y * slices, IntegrateDenseVoxel<TVoxel>{scene.voxelData(), index, lo, box, z, frame});
+                TDevice::parallelFor(box.x * box.y * slices,
+                                     IntegrateDenseVoxel<TVoxel>{scene.voxelData(), index, lo, box, z, frame});
             }
         }
     }
@@ -89,15 +93,18 @@ public:
         requireSceneOn(kDevice, scene, "the integration engine");
         const VoxelBlockHash& hash = scene.index();
         if (!hash.visibleListCovers(T_world_camera, view.calib.depth))
-            throw Error("hash integration: the visible list is not for this view (run the allocation engine on it first)");
-        const IntegrationFrame frame = inputs_.frame(kDevice, scene.params(), view, T_world_camera, scene.takeIntegrationNumber());
+            throw Error(
+                "hash integration: the visible list is not for this view (run the allocation engine on it first)");
+        const IntegrationFrame frame =
+            inputs_.frame(kDevice, scene.params(), view, T_world_camera, scene.takeIntegrationNumber());
         const int blocks = keepBlocksToUpdate(hash, scene.params(), view.calib.depth, frame);
         using Body = IntegrateHashVoxels<TVoxel, TDevice::kOneThreadPerItem ? 1 : kBlockVoxelCount>;
         // At most 2^30 elements per launch (element indices are ints).
         const int blocks_per_launch = (1 << 30) / Body::kElementsPerBlock;
         for (int first = 0; first < blocks; first += blocks_per_launch) {
             const int count = std::min(blocks_per_launch, blocks - first);
-            TDevice::parallelFor(Body::elementCount(count), Body{scene.voxelData(), hash.data().entries, kept_entries_.data(kDevice) + first, count, frame});
+            TDevice::parallelFor(Body::elementCount(count), Body{scene.voxelData(), hash.data().entries,
+                                                                 kept_entries_.data(kDevice) + first, count, frame});
         }
     }
 
@@ -110,21 +117,27 @@ public:
 private:
     // The entries of the visible blocks some voxel of which the frame may update, into kept_entries_
     // (BlockNeedsIntegration); returns how many.
-    int keepBlocksToUpdate(const VoxelBlockHash& hash, const SceneParams& params, const Intrinsics& camera, const IntegrationFrame& frame) {
+    int keepBlocksToUpdate(const VoxelBlockHash& hash, const SceneParams& params, const Intrinsics& camera,
+                           const IntegrationFrame& frame) {
         const int visible = hash.visibleCount();
         if (visible == 0) return 0;
-        const int tiles_x = (camera.width + kDepthTile - 1) / kDepthTile, tiles_y = (camera.height + kDepthTile - 1) / kDepthTile;
+        const int tiles_x = (camera.width + kDepthTile - 1) / kDepthTile,
+                  tiles_y = (camera.height + kDepthTile - 1) / kDepthTile;
         grow(tile_max_, std::size_t(tiles_x) * std::size_t(tiles_y));
         grow(keep_, std::size_t(visible));
         grow(kept_positions_, std::size_t(visible));
         grow(kept_entries_, std::size_t(visible));
-        TDevice::parallelFor(tiles_x * tiles_y, DepthMaxTiles{frame.depth, camera.size(), frame.min_depth_m, frame.max_depth_m, tiles_x,
-                                                              tile_max_.data(kDevice)});
-        const BlockProjection projection{frame.T_depth_world, camera, params.voxel_size_m, frame.near_m, frame.max_depth_m + params.mu_m};
-        TDevice::parallelFor(visible, BlockNeedsIntegration{hash.data().entries, hash.visibleEntries(), projection, params.mu_m,
-                                                            tile_max_.data(kDevice), tiles_x, tiles_y, keep_.data(kDevice)});
-        const int kept = TDevice::selectIndices(visible, BlockIsKept{keep_.data(kDevice)}, kept_positions_.data(kDevice), scratch_);
-        TDevice::parallelFor(kept, GatherEntries{hash.visibleEntries(), kept_positions_.data(kDevice), kept_entries_.data(kDevice)});
+        TDevice::parallelFor(tiles_x * tiles_y, DepthMaxTiles{frame.depth, camera.size(), frame.min_depth_m,
+                                                              frame.max_depth_m, tiles_x, tile_max_.data(kDevice)});
+        const BlockProjection projection{frame.T_depth_world, camera, params.voxel_size_m, frame.near_m,
+                                         frame.max_depth_m + params.mu_m};
+        TDevice::parallelFor(visible,
+                             BlockNeedsIntegration{hash.data().entries, hash.visibleEntries(), projection, params.mu_m,
+                                                   tile_max_.data(kDevice), tiles_x, tiles_y, keep_.data(kDevice)});
+        const int kept =
+            TDevice::selectIndices(visible, BlockIsKept{keep_.data(kDevice)}, kept_positions_.data(kDevice), scratch_);
+        TDevice::parallelFor(
+            kept, GatherEntries{hash.visibleEntries(), kept_positions_.data(kDevice), kept_entries_.data(kDevice)});
         return kept;
     }
 

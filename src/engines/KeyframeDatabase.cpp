@@ -14,18 +14,22 @@ std::vector<KeyframeMatch> KeyframeDatabase::nearest(const FernCode& code, int k
     // A linear scan: 1000 keyframes of 500 ferns are half a million byte compares, well under a millisecond.
     std::vector<KeyframeMatch> all;
     all.reserve(keyframes_.size());
-    for (std::size_t i = 0; i < keyframes_.size(); ++i) all.push_back({int(i), fernDissimilarity(code, keyframes_[i].code)});
+    for (std::size_t i = 0; i < keyframes_.size(); ++i)
+        all.push_back({int(i), fernDissimilarity(code, keyframes_[i].code)});
     // Stored order: slot order rotated so that the oldest comes first.
     const auto age = [&](int slot) { return (slot - oldest_ + size()) % std::max(1, size()); };
     const std::size_t n = std::min(all.size(), std::size_t(std::max(0, k)));
-    std::partial_sort(all.begin(), all.begin() + std::ptrdiff_t(n), all.end(), [&](const KeyframeMatch& a, const KeyframeMatch& b) {
-        return a.dissimilarity != b.dissimilarity ? a.dissimilarity < b.dissimilarity : age(a.keyframe) < age(b.keyframe);
-    });
+    std::partial_sort(all.begin(), all.begin() + std::ptrdiff_t(n), all.end(),
+                      [&](const KeyframeMatch& a, const KeyframeMatch& b) {
+                          return a.dissimilarity != b.dissimilarity ? a.dissimilarity < b.dissimilarity
+                                                                    : age(a.keyframe) < age(b.keyframe);
+                      });
     all.resize(n);
     return all;
 }
 
-bool KeyframeDatabase::addIfNovel(const FernCode& code, const Mat4f& T_world_camera, int frame_index, float min_dissimilarity) {
+bool KeyframeDatabase::addIfNovel(const FernCode& code, const Mat4f& T_world_camera, int frame_index,
+                                  float min_dissimilarity) {
     const std::vector<KeyframeMatch> closest = nearest(code, 1);
     if (!closest.empty() && closest.front().dissimilarity < min_dissimilarity) return false;
     Keyframe keyframe{code, T_world_camera, frame_index};

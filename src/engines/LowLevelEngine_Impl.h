@@ -29,7 +29,8 @@ inline BilateralWeights bilateralWeightsFor(const BilateralFilterParams& p) {
                           std::to_string(p.sigma_space_px) + " px and " + std::to_string(p.sigma_depth_m) + " m)");
     BilateralWeights w{};
     w.radius_px = p.radius_px;
-    for (int k = 0; k <= kMaxBilateralRadius; ++k) w.spatial[k] = std::exp(-float(k * k) / (2.f * p.sigma_space_px * p.sigma_space_px));
+    for (int k = 0; k <= kMaxBilateralRadius; ++k)
+        w.spatial[k] = std::exp(-float(k * k) / (2.f * p.sigma_space_px * p.sigma_space_px));
     w.inv_2_sigma_depth_sq = 1.f / (2.f * p.sigma_depth_m * p.sigma_depth_m);
     return w;
 }
@@ -39,18 +40,20 @@ class LowLevelEngineOn final : public LowLevelEngine {
     static constexpr Device kDevice = TDevice::kind;
 
 public:
-    void convertDepthToMetres(const Image<std::uint16_t>& raw, const DisparityCalib& calib, float fx_depth, float min_m, float max_m,
-                              float gap_tolerance, Image<float>& depth_m) override {
+    void convertDepthToMetres(const Image<std::uint16_t>& raw, const DisparityCalib& calib, float fx_depth, float min_m,
+                              float max_m, float gap_tolerance, Image<float>& depth_m) override {
         const std::uint16_t* in = imageOn(kDevice, raw, raw_staging_);
         float* out = outputOn(kDevice, depth_m, raw.size());
-        TDevice::parallelFor(int(raw.pixelCount()), ConvertDepthPixels{in, raw.size(), calib, fx_depth, min_m, max_m, gap_tolerance, out});
+        TDevice::parallelFor(int(raw.pixelCount()),
+                             ConvertDepthPixels{in, raw.size(), calib, fx_depth, min_m, max_m, gap_tolerance, out});
     }
 
     void bilateralFilterDepth(const Image<float>& in, Image<float>& out, const BilateralFilterParams& p) override {
         const float* src = imageOn(kDevice, in, float_staging_);
         float* dst = outputOn(kDevice, out, in.size());
         if constexpr (TDevice::kOneThreadPerItem) {
-            TDevice::parallelFor(int(in.pixelCount()), BilateralFilterPixels{src, in.size(), bilateralWeightsFor(p), dst});
+            TDevice::parallelFor(int(in.pixelCount()),
+                                 BilateralFilterPixels{src, in.size(), bilateralWeightsFor(p), dst});
         } else {
             const BilateralFilterStrips strips{src, in.size(), bilateralWeightsFor(p), dst};
             TDevice::parallelFor(strips.elementCount(), strips);
@@ -70,12 +73,15 @@ public:
         TDevice::parallelFor(int(depth.pixelCount()), VertexPixels{src, intr, dst});
     }
 
-    void computeNormalMap(const Image<Vec4f>& vertices, Image<Vec4f>& normals, float max_edge_m, int pixel_step) override {
-        if (pixel_step < 1) throw Error("computeNormalMap: the pixel step must be at least 1, got " + std::to_string(pixel_step));
+    void computeNormalMap(const Image<Vec4f>& vertices, Image<Vec4f>& normals, float max_edge_m,
+                          int pixel_step) override {
+        if (pixel_step < 1)
+            throw Error("computeNormalMap: the pixel step must be at least 1, got " + std::to_string(pixel_step));
         const Vec4f* src = imageOn(kDevice, vertices, point_staging_);
         Vec4f* dst = outputOn(kDevice, normals, vertices.size());
-        TDevice::parallelFor(gridSize(vertices.size(), pixel_step),
-                             NormalPixels{src, vertices.size(), max_edge_m, pixelGridOf(vertices.size(), pixel_step), dst});
+        TDevice::parallelFor(
+            gridSize(vertices.size(), pixel_step),
+            NormalPixels{src, vertices.size(), max_edge_m, pixelGridOf(vertices.size(), pixel_step), dst});
     }
 
     void copyDepth(const Image<float>& in, Image<float>& out) override {
@@ -92,31 +98,38 @@ public:
 
     int countValidDepth(const Image<float>& depth, int pixel_step) override {
         const PixelGrid grid = pixelGridOf(depth.size(), pixel_step);
-        return TDevice::countIf(gridSize(depth.size(), pixel_step), DepthIsValid{imageOn(kDevice, depth, float_staging_), grid}, scratch_);
+        return TDevice::countIf(gridSize(depth.size(), pixel_step),
+                                DepthIsValid{imageOn(kDevice, depth, float_staging_), grid}, scratch_);
     }
     int countValidPoints(const Image<Vec4f>& points) override {
-        return TDevice::countIf(int(points.pixelCount()), PointIsValid{imageOn(kDevice, points, point_staging_)}, scratch_);
+        return TDevice::countIf(int(points.pixelCount()), PointIsValid{imageOn(kDevice, points, point_staging_)},
+                                scratch_);
     }
     void averageDepthCells(const Image<float>& depth_m, Vec2i cells, Image<Vec2f>& mean_and_count) override {
         requireCellGrid(cells);
-        averageCells(DepthSample{imageOn(kDevice, depth_m, float_staging_)}, depth_m.size(), cells, outputOn(kDevice, mean_and_count, cells));
+        averageCells(DepthSample{imageOn(kDevice, depth_m, float_staging_)}, depth_m.size(), cells,
+                     outputOn(kDevice, mean_and_count, cells));
     }
     void averageIntensityCells(const Image<Vec4u8>& rgb, Vec2i cells, Image<Vec2f>& mean_and_count) override {
         requireCellGrid(cells);
-        averageCells(IntensitySample{imageOn(kDevice, rgb, rgb_staging_)}, rgb.size(), cells, outputOn(kDevice, mean_and_count, cells));
+        averageCells(IntensitySample{imageOn(kDevice, rgb, rgb_staging_)}, rgb.size(), cells,
+                     outputOn(kDevice, mean_and_count, cells));
     }
     Device device() const override { return kDevice; }
 
 private:
     template <class Sample>
     static void averageCells(const Sample& sample, Vec2i frame, Vec2i cells, Vec2f* out) {
-        if constexpr (TDevice::kOneThreadPerItem) TDevice::parallelFor(cells.x * cells.y, CellAverages<Sample>{sample, frame, cells, out});
-        else TDevice::parallelFor(cells.y, CellRowAverages<Sample>{sample, frame, cells, out});
+        if constexpr (TDevice::kOneThreadPerItem)
+            TDevice::parallelFor(cells.x * cells.y, CellAverages<Sample>{sample, frame, cells, out});
+        else
+            TDevice::parallelFor(cells.y, CellRowAverages<Sample>{sample, frame, cells, out});
     }
     // Cells may hold no pixel (a grid finer than the image): theirs is {0, 0}.
     static void requireCellGrid(Vec2i cells) {
         if (cells.x < 1 || cells.y < 1)
-            throw Error("cell averages: a grid of " + std::to_string(cells.x) + "x" + std::to_string(cells.y) + " cells has no cell");
+            throw Error("cell averages: a grid of " + std::to_string(cells.x) + "x" + std::to_string(cells.y) +
+                        " cells has no cell");
     }
 
     DeviceScratch scratch_{kDevice};

@@ -66,15 +66,18 @@ public:
     // Fills in the stage times (waiting for the GPU's work on the GPU).
     void finish() {
         for (int i = 1; i < marks_; ++i)
-            result_->stages[std::size_t(i - 1)].ms = gpu_ ? double(device_memory::eventElapsedMs(events_[i - 1], events_[i]))
-                                                          : std::chrono::duration<double, std::milli>(times_[i] - times_[i - 1]).count();
+            result_->stages[std::size_t(i - 1)].ms =
+                gpu_ ? double(device_memory::eventElapsedMs(events_[i - 1], events_[i]))
+                     : std::chrono::duration<double, std::milli>(times_[i] - times_[i - 1]).count();
     }
 
 private:
     void mark() {
         if (marks_ >= kMaxStages + 1) throw Error("StageClock: more stages than it can time");
-        if (gpu_) device_memory::recordEvent(events_[marks_]);
-        else times_[marks_] = std::chrono::steady_clock::now();
+        if (gpu_)
+            device_memory::recordEvent(events_[marks_]);
+        else
+            times_[marks_] = std::chrono::steady_clock::now();
         ++marks_;
     }
 
@@ -107,7 +110,8 @@ public:
                 cache_ = std::make_unique<GlobalCache>(sizeof(TVoxel) * kBlockVoxelCount, settings.swap.swap_file);
             }
         }
-        if (settings.relocalisation.enabled) relocaliser_ = std::make_unique<Relocaliser>(settings.relocalisation, calib.depth.size(), settings.device);
+        if (settings.relocalisation.enabled)
+            relocaliser_ = std::make_unique<Relocaliser>(settings.relocalisation, calib.depth.size(), settings.device);
     }
 
     // On the GPU only the frame's images go up (raw depth, colour, classes); everything else stays there.
@@ -123,17 +127,20 @@ public:
                                          settings_.depth_gap_tolerance, view_.depth);
         if (settings_.tracker.kind == TrackerKind::Rgbd && settings_.tracker.far_field_keyframes > 0)
             low_level_->convertDepthToMetres(frame.depth_raw, view_.calib.disparity, view_.calib.depth.fx,
-                                             std::nextafter(settings_.scene.view_frustum_max_m, kInfinity), kInfinity, 0.f, view_.far_depth);
+                                             std::nextafter(settings_.scene.view_frustum_max_m, kInfinity), kInfinity,
+                                             0.f, view_.far_depth);
         copyColor(frame);
         copyLabels(frame);
         view_.frame_index = frame.index;
         view_.timestamp_s = frame.timestamp_s;
         if (view_.depth.size() != view_.calib.depth.size())
-            throw IoError(frame.depth_path, "depth image is " + std::to_string(view_.depth.width()) + "x" +
-                                                std::to_string(view_.depth.height()) + " but the calibration says " +
-                                                std::to_string(view_.calib.depth.width) + "x" + std::to_string(view_.calib.depth.height),
+            throw IoError(frame.depth_path,
+                          "depth image is " + std::to_string(view_.depth.width()) + "x" +
+                              std::to_string(view_.depth.height()) + " but the calibration says " +
+                              std::to_string(view_.calib.depth.width) + "x" + std::to_string(view_.calib.depth.height),
                           frame.index);
-        if (!view_.labels.empty()) checkLabelImageSize(view_.labels.size(), view_.calib, frame.labels_path, frame.index);
+        if (!view_.labels.empty())
+            checkLabelImageSize(view_.labels.size(), view_.calib, frame.labels_path, frame.index);
         if (onGpu()) uploadView();
         clock_.stageDone("depth");
 
@@ -162,7 +169,9 @@ public:
 
         if (swapping_) {
             // Stored copies of the blocks this frame needs come back before it is fused.
-            if constexpr (kHash) allocation_stats_.blocks_swapped_in_this_frame = swapping_->swapIn(scene_, *cache_, settings_.swap.blocks_per_frame);
+            if constexpr (kHash)
+                allocation_stats_.blocks_swapped_in_this_frame =
+                    swapping_->swapIn(scene_, *cache_, settings_.swap.blocks_per_frame);
             clock_.stageDone("swap_in");
         }
 
@@ -177,7 +186,9 @@ public:
 
         if (swapping_) {
             // Blocks that left the view go to the cache.
-            if constexpr (kHash) allocation_stats_.blocks_swapped_out_this_frame = swapping_->swapOut(scene_, *cache_, settings_.swap.blocks_per_frame);
+            if constexpr (kHash)
+                allocation_stats_.blocks_swapped_out_this_frame =
+                    swapping_->swapOut(scene_, *cache_, settings_.swap.blocks_per_frame);
             clock_.stageDone("swap_out");
         }
 
@@ -215,9 +226,12 @@ public:
         return rs;
     }
 
-    void renderLast(RenderMode mode, Image<Vec4u8>& image) override { raycast_->render(scene_, displayRaycast(), mode, image); }
+    void renderLast(RenderMode mode, Image<Vec4u8>& image) override {
+        raycast_->render(scene_, displayRaycast(), mode, image);
+    }
 
-    void renderFromPose(const Mat4f& T_world_camera, const Intrinsics& intrinsics, RenderMode mode, Image<Vec4u8>& image) override {
+    void renderFromPose(const Mat4f& T_world_camera, const Intrinsics& intrinsics, RenderMode mode,
+                        Image<Vec4u8>& image) override {
         requireCameraPose(T_world_camera, "renderFromPose");
         raycast_->raycast(scene_, intrinsics, T_world_camera, free_view_);
         raycast_->render(scene_, free_view_, mode, image);
@@ -229,20 +243,25 @@ public:
         pose.has_origin = has_source_origin_;
         pose.T_source_world = T_source_world_;
         pose.camera = view_.calib.depth;
-        if (onGpu()) writeMapFile(path, scene_.copyTo(Device::CPU), pose, cache_.get());
-        else writeMapFile(path, scene_, pose, cache_.get());
+        if (onGpu())
+            writeMapFile(path, scene_.copyTo(Device::CPU), pose, cache_.get());
+        else
+            writeMapFile(path, scene_, pose, cache_.get());
     }
 
     MapFileInfo loadMap(const std::string& path) override {
         // Read into a new host scene first: a file that fails leaves the engine as it was.
         Scene<TVoxel, TIndex> loaded(settings_.scene, newIndex(), Device::CPU);
         std::unique_ptr<GlobalCache> cache;
-        if (swapping_) cache = std::make_unique<GlobalCache>(sizeof(TVoxel) * kBlockVoxelCount, settings_.swap.swap_file);
+        if (swapping_)
+            cache = std::make_unique<GlobalCache>(sizeof(TVoxel) * kBlockVoxelCount, settings_.swap.swap_file);
         const MapFileInfo info = readMapFile(path, loaded, cache.get());
         if (swapping_) cache_ = std::move(cache);
         scene_ = onGpu() ? loaded.copyTo(Device::CUDA) : std::move(loaded);
-        if constexpr (std::is_same<TIndex, VoxelBlockHash>::value) allocation_stats_ = scene_.index().stats();
-        else allocation_stats_ = AllocationStats();
+        if constexpr (std::is_same<TIndex, VoxelBlockHash>::value)
+            allocation_stats_ = scene_.index().stats();
+        else
+            allocation_stats_ = AllocationStats();
         frames_fused_ = 0;
         tracker_->reset();
         forgetKeyframes();
@@ -276,7 +295,8 @@ public:
     }
 
     std::size_t sceneBytes() const override {
-        if constexpr (std::is_same<TIndex, VoxelBlockHash>::value) return scene_.voxels().bytes() + scene_.index().tableBytes();
+        if constexpr (std::is_same<TIndex, VoxelBlockHash>::value)
+            return scene_.voxels().bytes() + scene_.index().tableBytes();
         return scene_.voxels().bytes();
     }
     AllocationStats allocationStats() const override { return allocation_stats_; }
@@ -284,12 +304,16 @@ public:
     // The map is meshed where it lives; a map with swapped-out blocks is meshed on the CPU from a host
     // copy with every block in it (the whole map may not fit the active budget on the device).
     void extractMesh(Mesh& mesh) override {
-        if (hasStoredBlocks()) hostMeshing().extractMesh(completeHostCopy(), mesh);
-        else meshing_->extractMesh(scene_, mesh);
+        if (hasStoredBlocks())
+            hostMeshing().extractMesh(completeHostCopy(), mesh);
+        else
+            meshing_->extractMesh(scene_, mesh);
     }
     void extractPointCloud(PointCloud& cloud) override {
-        if (hasStoredBlocks()) hostMeshing().extractPointCloud(completeHostCopy(), cloud);
-        else meshing_->extractPointCloud(scene_, cloud);
+        if (hasStoredBlocks())
+            hostMeshing().extractPointCloud(completeHostCopy(), cloud);
+        else
+            meshing_->extractPointCloud(scene_, cloud);
     }
 
 private:
@@ -300,8 +324,8 @@ private:
     // (engines/RaycastEngine.h: each a fraction of the cost). `fused_depth`: that frame's depth, if any.
     void raycastModel(const Image<float>* fused_depth) {
         const int factor = settings_.tracking_raycast_downsample;
-        raycast_->raycast(scene_, factor > 1 ? view_.calib.depth.downsampled(factor) : view_.calib.depth, tracking_.T_world_camera, model_,
-                          RaycastNormals::FromPoints, fused_depth);
+        raycast_->raycast(scene_, factor > 1 ? view_.calib.depth.downsampled(factor) : view_.calib.depth,
+                          tracking_.T_world_camera, model_, RaycastNormals::FromPoints, fused_depth);
         // rgbd aligns the next frame's colours to the map's (frame to model), not to the last frame's:
         // the map holds still while the camera's estimate drifts (docs/DESIGN_NOTES.md, "rgbd is ren plus
         // colour, aligned to the map's colours").
@@ -394,22 +418,26 @@ private:
         // coarse model explains less of the frame, also for right candidates.
         if (!model) {
             const int factor = settings_.tracking_raycast_downsample;
-            raycast_->raycast(scene_, factor > 1 ? view_.calib.depth.downsampled(factor) : view_.calib.depth, T_world_start,
-                              candidate_coarse_model_, RaycastNormals::FromPoints);
+            raycast_->raycast(scene_, factor > 1 ? view_.calib.depth.downsampled(factor) : view_.calib.depth,
+                              T_world_start, candidate_coarse_model_, RaycastNormals::FromPoints);
         }
         tracker_->track(first, view_, model ? *model : candidate_coarse_model_);
         // Too little of the frame explained already: not worth the second refinement.
-        if (first.quality != TrackingQuality::Good || first.inlier_ratio < 0.8f * settings_.relocalisation.min_inlier_ratio) return false;
+        if (first.quality != TrackingQuality::Good ||
+            first.inlier_ratio < 0.8f * settings_.relocalisation.min_inlier_ratio)
+            return false;
         raycast_->raycast(scene_, view_.calib.depth, first.T_world_camera, candidate_model_);
         RelocalisationCheck check;
         check.refined = first;
         tracker_->track(check.refined, view_, candidate_model_);
-        pose::motionBetween(pose::toEigenD(first.T_world_camera), pose::toEigenD(check.refined.T_world_camera), check.step_m, check.step_deg);
+        pose::motionBetween(pose::toEigenD(first.T_world_camera), pose::toEigenD(check.refined.T_world_camera),
+                            check.step_m, check.step_deg);
         if (onGpu()) candidate_model_.updateHost();
         raycastDepth(candidate_model_, candidate_depth_);
         check.depth = compareDepth(view_.depth, candidate_depth_, settings_.relocalisation.agreement_tolerance_m);
         if (!acceptRelocalisation(settings_.relocalisation, check)) return false;
-        if (!withinReach(settings_.relocalisation, tracking_.T_world_camera, check.refined.T_world_camera, elapsed_s)) return false;
+        if (!withinReach(settings_.relocalisation, tracking_.T_world_camera, check.refined.T_world_camera, elapsed_s))
+            return false;
         // Geometry and reach first: only a candidate they take is rendered in colour and compared.
         check.colour = compareCandidateColour();
         if (!acceptRelocalisation(settings_.relocalisation, check)) return false;
@@ -426,8 +454,8 @@ private:
             if (view_.rgb.empty()) return ColourAgreement{};
             raycast_->renderIntensity(scene_, candidate_model_, candidate_intensity_);
             if (onGpu()) candidate_intensity_.memory().updateHost();
-            return compareColour(view_, candidate_depth_, candidate_intensity_, settings_.relocalisation.agreement_tolerance_m,
-                                 settings_.scene.voxel_size_m);
+            return compareColour(view_, candidate_depth_, candidate_intensity_,
+                                 settings_.relocalisation.agreement_tolerance_m, settings_.scene.voxel_size_m);
         }
     }
 
@@ -481,12 +509,15 @@ private:
                 int entry;
                 whole.index().insert({e.pos.x, e.pos.y, e.pos.z}, &entry);
                 TVoxel* block = whole.voxels().host() + std::size_t(whole.index().entry(entry).ptr) * kBlockVoxelCount;
-                if (e.ptr >= 0) std::copy_n(host.voxels().host() + std::size_t(e.ptr) * kBlockVoxelCount, kBlockVoxelCount, block);
-                else std::fill_n(block, kBlockVoxelCount, TVoxel::initial());
+                if (e.ptr >= 0)
+                    std::copy_n(host.voxels().host() + std::size_t(e.ptr) * kBlockVoxelCount, kBlockVoxelCount, block);
+                else
+                    std::fill_n(block, kBlockVoxelCount, TVoxel::initial());
                 const int slot = from.storedSlots()[i];
                 if (slot == kNoStoredCopy) continue;
                 cache_->read(slot, stored.data());
-                for (int v = 0; v < kBlockVoxelCount; ++v) mergeStoredVoxel(block[v], stored[std::size_t(v)], settings_.scene.max_weight);
+                for (int v = 0; v < kBlockVoxelCount; ++v)
+                    mergeStoredVoxel(block[v], stored[std::size_t(v)], settings_.scene.max_weight);
             }
             return whole;
         }
@@ -494,8 +525,10 @@ private:
     }
 
     TIndex newIndex() const {
-        if constexpr (std::is_same<TIndex, VoxelBlockHash>::value) return VoxelBlockHash(settings_.hash);
-        else return PlainVoxelArray(settings_.dense_offset, settings_.dense_size);
+        if constexpr (std::is_same<TIndex, VoxelBlockHash>::value)
+            return VoxelBlockHash(settings_.hash);
+        else
+            return PlainVoxelArray(settings_.dense_offset, settings_.dense_size);
     }
     // Frame images that go to the GPU every frame live in pinned host memory.
     HostMemory frameImageMemory() const { return onGpu() ? HostMemory::Pinned : HostMemory::Pageable; }
@@ -507,8 +540,10 @@ private:
     }
 
     void resetScene() {
-        if constexpr (std::is_same<TIndex, VoxelBlockHash>::value) scene_.clearVoxelBlocks();
-        else integration_->resetScene(scene_);
+        if constexpr (std::is_same<TIndex, VoxelBlockHash>::value)
+            scene_.clearVoxelBlocks();
+        else
+            integration_->resetScene(scene_);
         if (cache_) cache_ = std::make_unique<GlobalCache>(sizeof(TVoxel) * kBlockVoxelCount, settings_.swap.swap_file);
         allocation_stats_ = AllocationStats();
         frames_fused_ = 0;
@@ -530,7 +565,8 @@ private:
             return;
         }
         view_.labels.resize(frame.labels.size(), true, false, frameImageMemory());
-        std::memcpy(static_cast<void*>(view_.labels.host()), frame.labels.host(), frame.labels.pixelCount() * sizeof(ClassId));
+        std::memcpy(static_cast<void*>(view_.labels.host()), frame.labels.host(),
+                    frame.labels.pixelCount() * sizeof(ClassId));
     }
 
     MainEngineSettings settings_;
@@ -542,13 +578,13 @@ private:
     std::unique_ptr<Tracker> tracker_;
     std::unique_ptr<MeshingEngine<TVoxel, TIndex>> meshing_;
     std::unique_ptr<MeshingEngine<TVoxel, TIndex>> host_meshing_;  // swapped maps on the GPU: meshed from a host copy
-    mutable View view_;                  // mutable: view() brings host copies up to date
+    mutable View view_;                                            // mutable: view() brings host copies up to date
     TrackingState tracking_;
-    RenderState model_;                  // what the tracker aligns the next frame to (raycastModel)
-    mutable RenderState display_;        // renders and renderState() (displayRaycast)
-    long long model_version_ = 0;        // model raycasts so far
-    long long views_converted_ = 0;      // frames whose depth view_ took so far (source indices may repeat)
-    long long model_depth_view_ = -1;    // which of them started the last model raycast's rays; -1: none did
+    RenderState model_;                       // what the tracker aligns the next frame to (raycastModel)
+    mutable RenderState display_;             // renders and renderState() (displayRaycast)
+    long long model_version_ = 0;             // model raycasts so far
+    long long views_converted_ = 0;           // frames whose depth view_ took so far (source indices may repeat)
+    long long model_depth_view_ = -1;         // which of them started the last model raycast's rays; -1: none did
     mutable long long display_version_ = -1;  // the model raycast display_ shows
     RenderState free_view_;
     AllocationStats allocation_stats_;
@@ -557,12 +593,12 @@ private:
     Mat4f T_source_world_ = Mat4f::identity();
     std::unique_ptr<Relocaliser> relocaliser_;  // with RelocalisationSettings::enabled
     bool lost_ = false;                         // the last frame had no pose; tracking_ holds the last good one
-    FrameClock last_pose_clock_;                // when the frame of that pose was taken (unknown after a reset or a loaded map)
+    FrameClock last_pose_clock_;  // when the frame of that pose was taken (unknown after a reset or a loaded map)
     int frames_since_relocalisation_ = INT_MAX / 2;
-    RenderState candidate_coarse_model_;        // the model raycast from a relocalisation candidate, as tracking sees it
-    RenderState candidate_model_;               // and from its refined pose at full resolution, for the check
+    RenderState candidate_coarse_model_;  // the model raycast from a relocalisation candidate, as tracking sees it
+    RenderState candidate_model_;         // and from its refined pose at full resolution, for the check
     Image<float> candidate_depth_;
-    Image<float> candidate_intensity_;          // the map's colours seen from it (colour voxel types)
+    Image<float> candidate_intensity_;                  // the map's colours seen from it (colour voxel types)
     std::unique_ptr<SwappingEngine<TVoxel>> swapping_;  // with SwapSettings::enabled (hash only)
     std::unique_ptr<GlobalCache> cache_;
     StageClock clock_;
@@ -572,8 +608,10 @@ template <class TVoxel>
 std::unique_ptr<MainEngine> createForVoxel(const MainEngineSettings& s, const RGBDCalib& calib) {
     switch (s.index_type) {
         case IndexType::Dense:
-            return std::make_unique<MainEngineT<TVoxel, PlainVoxelArray>>(s, calib, PlainVoxelArray(s.dense_offset, s.dense_size));
-        case IndexType::Hash: return std::make_unique<MainEngineT<TVoxel, VoxelBlockHash>>(s, calib, VoxelBlockHash(s.hash));
+            return std::make_unique<MainEngineT<TVoxel, PlainVoxelArray>>(
+                s, calib, PlainVoxelArray(s.dense_offset, s.dense_size));
+        case IndexType::Hash:
+            return std::make_unique<MainEngineT<TVoxel, VoxelBlockHash>>(s, calib, VoxelBlockHash(s.hash));
     }
     throw ConfigError("unknown index type");
 }
@@ -591,12 +629,18 @@ constexpr VoxelType kVoxelTypes[] = {VoxelType::S,    VoxelType::F,      VoxelTy
 template <class F>
 auto visitVoxelType(VoxelType type, F&& f) {
     switch (type) {
-        case VoxelType::S: return f(VoxelTag<VoxelS>{});
-        case VoxelType::F: return f(VoxelTag<VoxelF>{});
-        case VoxelType::SRgb: return f(VoxelTag<VoxelSRgb>{});
-        case VoxelType::FRgb: return f(VoxelTag<VoxelFRgb>{});
-        case VoxelType::SLabel: return f(VoxelTag<VoxelSLabel>{});
-        case VoxelType::SRgbLabel: return f(VoxelTag<VoxelSRgbLabel>{});
+        case VoxelType::S:
+            return f(VoxelTag<VoxelS>{});
+        case VoxelType::F:
+            return f(VoxelTag<VoxelF>{});
+        case VoxelType::SRgb:
+            return f(VoxelTag<VoxelSRgb>{});
+        case VoxelType::FRgb:
+            return f(VoxelTag<VoxelFRgb>{});
+        case VoxelType::SLabel:
+            return f(VoxelTag<VoxelSLabel>{});
+        case VoxelType::SRgbLabel:
+            return f(VoxelTag<VoxelSRgbLabel>{});
     }
     throw ConfigError("unknown voxel type " + std::to_string(int(type)));
 }
@@ -643,7 +687,8 @@ std::size_t voxelBytes(VoxelType type) {
 // voxel blocks grow with the scene).
 double indexBytes(const MainEngineSettings& s) {
     if (s.index_type == IndexType::Dense)
-        return double(s.dense_size.x) * double(s.dense_size.y) * double(s.dense_size.z) * double(voxelBytes(s.voxel_type));
+        return double(s.dense_size.x) * double(s.dense_size.y) * double(s.dense_size.z) *
+               double(voxelBytes(s.voxel_type));
     return double(VoxelBlockHash::tableBytesFor(s.hash));
 }
 
@@ -651,13 +696,15 @@ std::string indexDescription(const MainEngineSettings& s) {
     if (s.index_type == IndexType::Dense)
         return "the dense volume of " + std::to_string(s.dense_size.x) + "x" + std::to_string(s.dense_size.y) + "x" +
                std::to_string(s.dense_size.z) + " '" + toString(s.voxel_type) + "' voxels";
-    return "the hash table of " + std::to_string((long long)s.hash.bucket_count * s.hash.entries_per_bucket + s.hash.excess_entry_count) +
+    return "the hash table of " +
+           std::to_string((long long)s.hash.bucket_count * s.hash.entries_per_bucket + s.hash.excess_entry_count) +
            " entries";
 }
 
 std::string indexRemedy(const MainEngineSettings& s) {
-    return s.index_type == IndexType::Dense ? "use a smaller --volume-size, or the hash index (--index hash), whose memory follows the scene"
-                                            : "use fewer --hash-buckets / --hash-excess";
+    return s.index_type == IndexType::Dense
+               ? "use a smaller --volume-size, or the hash index (--index hash), whose memory follows the scene"
+               : "use fewer --hash-buckets / --hash-excess";
 }
 
 void validateDepthRange(const SceneParams& p) {
@@ -670,17 +717,20 @@ void validateDepthRange(const SceneParams& p) {
 void validateDenseVolume(const MainEngineSettings& s) {
     for (int a = 0; a < 3; ++a) {
         const long long lo = s.dense_offset[a], hi = lo + s.dense_size[a];
-        if (s.dense_size[a] <= 0) throw ConfigError("dense volume size must be positive (--volume-size), got " + std::to_string(s.dense_size[a]) + " on axis " + "xyz"[a]);
+        if (s.dense_size[a] <= 0)
+            throw ConfigError("dense volume size must be positive (--volume-size), got " +
+                              std::to_string(s.dense_size[a]) + " on axis " + "xyz"[a]);
         if (lo < -kMaxDenseCoordinate || hi > kMaxDenseCoordinate)
             throw ConfigError(std::string("the dense volume must lie within +-") + std::to_string(kMaxDenseCoordinate) +
-                              " voxels of the origin (--volume-offset, --volume-size); on axis " + "xyz"[a] + " it spans " +
-                              std::to_string(lo) + " .. " + std::to_string(hi));
+                              " voxels of the origin (--volume-offset, --volume-size); on axis " + "xyz"[a] +
+                              " it spans " + std::to_string(lo) + " .. " + std::to_string(hi));
     }
 }
 
 }  // namespace
 
-int automaticMaxBlockCount(Device device, std::size_t voxel_bytes, const VoxelBlockHashSettings& hash, double available_bytes) {
+int automaticMaxBlockCount(Device device, std::size_t voxel_bytes, const VoxelBlockHashSettings& hash,
+                           double available_bytes) {
     constexpr int kDesignBlocks = 1 << 18, kMostBlocks = 1 << 22;
     if (!(available_bytes > 0.0)) return kDesignBlocks;
     const long long entries = (long long)hash.bucket_count * hash.entries_per_bucket + hash.excess_entry_count;
@@ -706,46 +756,56 @@ std::unique_ptr<MainEngine> MainEngine::create(const MainEngineSettings& request
             s.device, voxelBytes(s.voxel_type), s.hash,
             s.device == Device::CUDA ? double(device_memory::freeDeviceBytes()) : availableHostBytes(false));
     if (!calib.depth.valid()) throw ConfigError("the depth camera calibration is missing or invalid");
-    if (!(s.scene.voxel_size_m > 0.f && std::isfinite(s.scene.voxel_size_m)) || !(s.scene.mu_m > s.scene.voxel_size_m && std::isfinite(s.scene.mu_m)))
-        throw ConfigError("need voxel size > 0 and mu > voxel size, both finite (got voxel " + std::to_string(s.scene.voxel_size_m) +
-                          " m, mu " + std::to_string(s.scene.mu_m) + " m)");
+    if (!(s.scene.voxel_size_m > 0.f && std::isfinite(s.scene.voxel_size_m)) ||
+        !(s.scene.mu_m > s.scene.voxel_size_m && std::isfinite(s.scene.mu_m)))
+        throw ConfigError("need voxel size > 0 and mu > voxel size, both finite (got voxel " +
+                          std::to_string(s.scene.voxel_size_m) + " m, mu " + std::to_string(s.scene.mu_m) + " m)");
     // Every pixel allocates and integrates the blocks within mu of its depth: a band of hundreds of
     // voxels (mu = 8 m at 1 cm) made a frame take seconds to minutes. Usual bands are 2-8 voxels.
     if (s.scene.mu_m > kMaxMuInVoxels * s.scene.voxel_size_m)
-        throw ConfigError("mu " + std::to_string(s.scene.mu_m) + " m is more than " + std::to_string(int(kMaxMuInVoxels)) + " voxels of " +
-                          std::to_string(s.scene.voxel_size_m) + " m (a truncation band is usually 2-8 voxels)");
+        throw ConfigError("mu " + std::to_string(s.scene.mu_m) + " m is more than " +
+                          std::to_string(int(kMaxMuInVoxels)) + " voxels of " + std::to_string(s.scene.voxel_size_m) +
+                          " m (a truncation band is usually 2-8 voxels)");
     if (s.scene.max_weight < 1 || s.scene.max_weight > 255) throw ConfigError("max weight must be in 1..255");
     validateDepthRange(s.scene);
     if (!(s.depth_gap_tolerance >= 0.f && s.depth_gap_tolerance <= 0.5f))
-        throw ConfigError("the depth gap tolerance is a fraction of the depth in [0, 0.5], 0 to keep every gap (--depth-gap-tolerance); got " +
-                          std::to_string(s.depth_gap_tolerance));
+        throw ConfigError(
+            "the depth gap tolerance is a fraction of the depth in [0, 0.5], 0 to keep every gap "
+            "(--depth-gap-tolerance); got " +
+            std::to_string(s.depth_gap_tolerance));
     if (s.index_type == IndexType::Dense) validateDenseVolume(s);
-    if (s.swap.enabled && s.index_type != IndexType::Hash) throw ConfigError("swapping needs the hash index (--index hash)");
+    if (s.swap.enabled && s.index_type != IndexType::Hash)
+        throw ConfigError("swapping needs the hash index (--index hash)");
     if (s.swap.enabled && s.swap.blocks_per_frame < 1) throw ConfigError("swapping moves at least one block per frame");
     if (s.tracking_raycast_downsample != 1 && s.tracking_raycast_downsample != 2 && s.tracking_raycast_downsample != 4)
-        throw ConfigError("the tracking raycast's downsampling must be 1, 2 or 4 (got " + std::to_string(s.tracking_raycast_downsample) + ")");
+        throw ConfigError("the tracking raycast's downsampling must be 1, 2 or 4 (got " +
+                          std::to_string(s.tracking_raycast_downsample) + ")");
     if (s.device == Device::CUDA && !device_memory::cudaAvailable())
         throw DeviceError("CUDA was requested but is not usable: " + device_memory::cudaDescription());
     // Said before the allocation, which would otherwise fail as a bare std::bad_alloc (or, with the
     // kernel's overcommit, kill the process when the memory is first touched).
     const double needed = indexBytes(s), available = availableHostBytes(true);
     if (s.device == Device::CPU && available > 0.0 && needed > available)
-        throw ConfigError(indexDescription(s) + " needs " + gib(needed) + " of memory; this machine has " + gib(available) +
-                          " available: " + indexRemedy(s));
+        throw ConfigError(indexDescription(s) + " needs " + gib(needed) + " of memory; this machine has " +
+                          gib(available) + " available: " + indexRemedy(s));
     try {
-        return visitVoxelType(s.voxel_type, [&](auto tag) { return createForVoxel<typename decltype(tag)::Voxel>(s, calib); });
+        return visitVoxelType(s.voxel_type,
+                              [&](auto tag) { return createForVoxel<typename decltype(tag)::Voxel>(s, calib); });
     } catch (const std::bad_alloc&) {
-        throw ConfigError(indexDescription(s) + " needs " + gib(needed) + " of memory, more than could be allocated: " + indexRemedy(s));
+        throw ConfigError(indexDescription(s) + " needs " + gib(needed) +
+                          " of memory, more than could be allocated: " + indexRemedy(s));
     } catch (const DeviceError& e) {
         if (s.device != Device::CUDA || std::string(e.what()).find("memory") == std::string::npos) throw;
-        throw DeviceError(std::string(e.what()) + " (" + indexDescription(s) + " needs " + gib(needed) + " of GPU memory: " + indexRemedy(s) + ")");
+        throw DeviceError(std::string(e.what()) + " (" + indexDescription(s) + " needs " + gib(needed) +
+                          " of GPU memory: " + indexRemedy(s) + ")");
     }
 }
 
 MainEngineSettings settingsForMap(const MapFileInfo& info, MainEngineSettings base) {
     base.voxel_type = parseVoxelType(info.voxel_type);
     base.index_type = info.hash ? IndexType::Hash : IndexType::Dense;
-    if (info.hash) base.hash = info.hash_settings;
+    if (info.hash)
+        base.hash = info.hash_settings;
     else {
         base.dense_offset = info.dense_offset;
         base.dense_size = info.dense_size;

@@ -24,11 +24,14 @@ void checkLabelled(const char* what, const TSurface& surface, std::size_t elemen
 }
 
 void checkMesh(const char* what, const Mesh& mesh) { checkLabelled(what, mesh, mesh.vertices.size(), "mesh"); }
-void checkCloud(const char* what, const PointCloud& cloud) { checkLabelled(what, cloud, cloud.points.size(), "point cloud"); }
+void checkCloud(const char* what, const PointCloud& cloud) {
+    checkLabelled(what, cloud, cloud.points.size(), "point cloud");
+}
 
 // The rule of triangleClass() on a checked mesh.
 ClassId classOfTriangle(const Mesh& mesh, const Vec3i& t) {
-    const ClassId a = mesh.labels[std::size_t(t.x)], b = mesh.labels[std::size_t(t.y)], c = mesh.labels[std::size_t(t.z)];
+    const ClassId a = mesh.labels[std::size_t(t.x)], b = mesh.labels[std::size_t(t.y)],
+                  c = mesh.labels[std::size_t(t.z)];
     return b == c ? b : a;  // b == c: two or three agree on b; otherwise a agrees with one of them, or none agree
 }
 
@@ -65,13 +68,14 @@ void appendVertex(const Mesh& from, std::size_t v, Mesh& to) {
 
 ClassId triangleClass(const Mesh& mesh, std::size_t triangle) {
     if (triangle >= mesh.triangles.size())
-        throw Error("triangleClass: triangle " + std::to_string(triangle) + " of " + std::to_string(mesh.triangles.size()));
+        throw Error("triangleClass: triangle " + std::to_string(triangle) + " of " +
+                    std::to_string(mesh.triangles.size()));
     if (mesh.labels.size() != mesh.vertices.size()) checkMesh("triangleClass", mesh);  // says what is wrong
     const Vec3i& t = mesh.triangles[triangle];
     for (int k = 0; k < 3; ++k)
         if (t[k] < 0 || std::size_t(t[k]) >= mesh.vertices.size())
-            throw Error("triangleClass: inconsistent data: triangle " + std::to_string(triangle) + " refers to vertex " +
-                        std::to_string(t[k]) + " of " + std::to_string(mesh.vertices.size()));
+            throw Error("triangleClass: inconsistent data: triangle " + std::to_string(triangle) +
+                        " refers to vertex " + std::to_string(t[k]) + " of " + std::to_string(mesh.vertices.size()));
     return classOfTriangle(mesh, t);
 }
 
@@ -107,7 +111,8 @@ Mesh selectClasses(const Mesh& mesh, const std::vector<ClassId>& classes, ClassS
     out.triangles.reserve(kept.size());
     for (const std::size_t t : kept) {
         const Vec3i& tri = mesh.triangles[t];
-        out.triangles.push_back({new_index[std::size_t(tri.x)], new_index[std::size_t(tri.y)], new_index[std::size_t(tri.z)]});
+        out.triangles.push_back(
+            {new_index[std::size_t(tri.x)], new_index[std::size_t(tri.y)], new_index[std::size_t(tri.z)]});
     }
     return out;
 }
@@ -136,7 +141,8 @@ std::vector<ClassMesh> splitByClass(const Mesh& mesh) {
         parts.push_back({c, Mesh()});
     }
     std::vector<int> part_of_triangle(mesh.triangles.size());
-    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) part_of_triangle[t] = part_of_class[classOfTriangle(mesh, mesh.triangles[t])];
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+        part_of_triangle[t] = part_of_class[classOfTriangle(mesh, mesh.triangles[t])];
 
     // The triangle corners of each vertex (a counting sort by vertex), so that the vertices can be
     // visited once in ascending order and each copied into every part that uses it.
@@ -146,7 +152,8 @@ std::vector<ClassMesh> splitByClass(const Mesh& mesh) {
         for (int k = 0; k < 3; ++k) ++first_corner[std::size_t(t[k]) + 1];
     for (std::size_t v = 0; v < mesh.vertices.size(); ++v) first_corner[v + 1] += first_corner[v];
     std::vector<std::size_t> corners_by_vertex(corner_count), next = first_corner;
-    for (std::size_t c = 0; c < corner_count; ++c) corners_by_vertex[next[std::size_t(mesh.triangles[c / 3][int(c % 3)])]++] = c;
+    for (std::size_t c = 0; c < corner_count; ++c)
+        corners_by_vertex[next[std::size_t(mesh.triangles[c / 3][int(c % 3)])]++] = c;
 
     // Each corner's vertex index in its triangle's part.
     std::vector<int> corner_index(corner_count);
@@ -163,7 +170,8 @@ std::vector<ClassMesh> splitByClass(const Mesh& mesh) {
             corner_index[c] = index_in_part[p];
         }
     for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
-        parts[std::size_t(part_of_triangle[t])].mesh.triangles.push_back({corner_index[3 * t], corner_index[3 * t + 1], corner_index[3 * t + 2]});
+        parts[std::size_t(part_of_triangle[t])].mesh.triangles.push_back(
+            {corner_index[3 * t], corner_index[3 * t + 1], corner_index[3 * t + 2]});
     return parts;
 }
 

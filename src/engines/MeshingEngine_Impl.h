@@ -52,30 +52,37 @@ public:
 private:
     void extract(const Scene<TVoxel, TIndex>& scene, HostSurface out) {
         requireSceneOn(kDevice, scene, "the meshing engine");
-        if constexpr (kHash) run(listHashBlocks(scene), scene.params().voxel_size_m, out);
-        else run(meshing::DenseMeshBlocks<TVoxel>::make(scene.index().data(), scene.voxelData()), scene.params().voxel_size_m, out);
+        if constexpr (kHash)
+            run(listHashBlocks(scene), scene.params().voxel_size_m, out);
+        else
+            run(meshing::DenseMeshBlocks<TVoxel>::make(scene.index().data(), scene.voxelData()),
+                scene.params().voxel_size_m, out);
     }
 
     meshing::HashMeshBlocks<TVoxel> listHashBlocks(const Scene<TVoxel, VoxelBlockHash>& scene) {
         const VoxelBlockHash& hash = scene.index();
         const HashTableView view = hash.data();
         grow(entry_ids_, std::size_t(hash.entryCount()));
-        const int count = TDevice::selectIndices(hash.entryCount(), meshing::EntryHasVoxelBlock{view.entries}, entry_ids_.data(kDevice), scratch_);
+        const int count = TDevice::selectIndices(hash.entryCount(), meshing::EntryHasVoxelBlock{view.entries},
+                                                 entry_ids_.data(kDevice), scratch_);
         grow(codes_, std::size_t(count));
-        TDevice::parallelFor(count, meshing::MortonCodeOfEntry{view.entries, entry_ids_.data(kDevice), codes_.data(kDevice)});
+        TDevice::parallelFor(count,
+                             meshing::MortonCodeOfEntry{view.entries, entry_ids_.data(kDevice), codes_.data(kDevice)});
         // A hash holds each block once, so every code is distinct; a repeat means a damaged table, whose
         // surface would come out twice (and the lists below would be read past what sortUnique kept).
         const int distinct = TDevice::sortUnique(codes_.data(kDevice), count, scratch_);
         if (distinct != count)
-            throw Error("meshing: the hash table holds " + std::to_string(count - distinct) + " of its " + std::to_string(count) +
-                        " blocks more than once (a damaged table)");
+            throw Error("meshing: the hash table holds " + std::to_string(count - distinct) + " of its " +
+                        std::to_string(count) + " blocks more than once (a damaged table)");
         grow(positions_, std::size_t(count));
         grow(ptrs_, std::size_t(count));
         // Only blocks in the list are ever looked up: the entries of other voxel blocks need no value.
         grow(list_index_of_ptr_, std::size_t(hash.blockCapacity()));
-        TDevice::parallelFor(count, meshing::ListHashBlock{view, codes_.data(kDevice), positions_.data(kDevice), ptrs_.data(kDevice),
-                                                           list_index_of_ptr_.data(kDevice)});
-        return {view, scene.voxelData(), positions_.data(kDevice), ptrs_.data(kDevice), list_index_of_ptr_.data(kDevice), count};
+        TDevice::parallelFor(count, meshing::ListHashBlock{view, codes_.data(kDevice), positions_.data(kDevice),
+                                                           ptrs_.data(kDevice), list_index_of_ptr_.data(kDevice)});
+        return {
+            view, scene.voxelData(), positions_.data(kDevice), ptrs_.data(kDevice), list_index_of_ptr_.data(kDevice),
+            count};
     }
 
     template <class TBlocks>
@@ -84,10 +91,12 @@ private:
         const int block_count = blocks.count();
         grow(row_signs_, std::size_t(block_count) * kRowsPerBlock);
         grow(signs_, std::size_t(block_count));
-        TDevice::parallelFor(block_count * kRowsPerBlock, FindRowSigns<TVoxel, TBlocks>{blocks, row_signs_.data(kDevice)});
+        TDevice::parallelFor(block_count * kRowsPerBlock,
+                             FindRowSigns<TVoxel, TBlocks>{blocks, row_signs_.data(kDevice)});
         TDevice::parallelFor(block_count, SummariseBlockSigns{row_signs_.data(kDevice), signs_.data(kDevice)});
         grow(meshed_, std::size_t(block_count));
-        const int meshed = TDevice::selectIndices(block_count, BlockMayHoldSurface<TBlocks>{blocks, signs_.data(kDevice)}, meshed_.data(kDevice), scratch_);
+        const int meshed = TDevice::selectIndices(
+            block_count, BlockMayHoldSurface<TBlocks>{blocks, signs_.data(kDevice)}, meshed_.data(kDevice), scratch_);
         if (meshed == 0) return;
         grow(slot_of_block_, std::size_t(block_count));
         slot_of_block_.fill(kDevice, -1, 0, std::size_t(block_count));
@@ -100,17 +109,22 @@ private:
         grow(row_first_triangle_, row_count);
         grow(vertex_count_, std::size_t(meshed));
         grow(triangle_count_, std::size_t(meshed));
-        const MeshedBlockRows rows{neighbours_.data(kDevice), row_edges_.data(kDevice), row_first_vertex_.data(kDevice), row_first_triangle_.data(kDevice),
-                                   vertex_count_.data(kDevice), triangle_count_.data(kDevice)};
+        const MeshedBlockRows rows{neighbours_.data(kDevice),       row_edges_.data(kDevice),
+                                   row_first_vertex_.data(kDevice), row_first_triangle_.data(kDevice),
+                                   vertex_count_.data(kDevice),     triangle_count_.data(kDevice)};
         const bool with_triangles = out.triangles != nullptr;
-        TDevice::template parallelForTeams<CountShared>(meshed, CountBlockSurface<TBlocks>{blocks, row_signs_.data(kDevice), meshed_.data(kDevice), rows,
-                                                                                           with_triangles});
+        TDevice::template parallelForTeams<CountShared>(
+            meshed,
+            CountBlockSurface<TBlocks>{blocks, row_signs_.data(kDevice), meshed_.data(kDevice), rows, with_triangles});
 
         // The scans run in place: the counts become each block's first vertex and triangle.
-        const long long vertex_total = TDevice::exclusiveScan(vertex_count_.data(kDevice), vertex_count_.data(kDevice), meshed, scratch_);
-        const long long triangle_total = TDevice::exclusiveScan(triangle_count_.data(kDevice), triangle_count_.data(kDevice), meshed, scratch_);
+        const long long vertex_total =
+            TDevice::exclusiveScan(vertex_count_.data(kDevice), vertex_count_.data(kDevice), meshed, scratch_);
+        const long long triangle_total =
+            TDevice::exclusiveScan(triangle_count_.data(kDevice), triangle_count_.data(kDevice), meshed, scratch_);
         if (vertex_total > INT_MAX)
-            throw Error("meshing: the surface has " + std::to_string(vertex_total) + " vertices, more than a mesh's int indices address (2^31 - 1)");
+            throw Error("meshing: the surface has " + std::to_string(vertex_total) +
+                        " vertices, more than a mesh's int indices address (2^31 - 1)");
 
         out.positions.resize(std::size_t(vertex_total));
         out.normals.resize(std::size_t(vertex_total));
@@ -120,18 +134,24 @@ private:
         // The emit pass writes into the caller's arrays on the CPU, into buffers of this mesh's size on
         // the GPU (freed when it has come down: between calls meshing holds only its work arrays).
         DeviceSurface on_gpu;
-        SurfaceOutput target{out.positions.data(), out.normals.data(), out.colors.data(), out.labels.data(),
-                             with_triangles ? out.triangles->data() : nullptr, nullptr};
+        SurfaceOutput target{out.positions.data(),
+                             out.normals.data(),
+                             out.colors.data(),
+                             out.labels.data(),
+                             with_triangles ? out.triangles->data() : nullptr,
+                             nullptr};
         if constexpr (kDevice == Device::CUDA) target = on_gpu.allocate(out);
         grow(unresolved_, 1);
         unresolved_.fill(kDevice, 0, 0, 1);
         target.unresolved_corners = unresolved_.data(kDevice);
         TDevice::template parallelForTeams<EmitShared<TVoxel>>(
-            meshed, EmitBlockSurface<TVoxel, TBlocks>{blocks, meshed_.data(kDevice), slot_of_block_.data(kDevice), rows, vertex_count_.data(kDevice),
-                                                      triangle_count_.data(kDevice), voxel_size_m, target});
+            meshed, EmitBlockSurface<TVoxel, TBlocks>{blocks, meshed_.data(kDevice), slot_of_block_.data(kDevice), rows,
+                                                      vertex_count_.data(kDevice), triangle_count_.data(kDevice),
+                                                      voxel_size_m, target});
         const int unresolved = TDevice::read(unresolved_.data(kDevice), scratch_);
         if (unresolved > 0)
-            throw Error("meshing: " + std::to_string(unresolved) + " triangle corners refer to no vertex (the scene changed during meshing?)");
+            throw Error("meshing: " + std::to_string(unresolved) +
+                        " triangle corners refer to no vertex (the scene changed during meshing?)");
         if constexpr (kDevice == Device::CUDA) on_gpu.download(out);
     }
 
@@ -148,7 +168,12 @@ private:
             colors.allocate(out.colors.size(), false, true);
             labels.allocate(out.labels.size(), false, true);
             if (out.triangles) triangles.allocate(out.triangles->size(), false, true);
-            return {positions.device(), normals.device(), colors.device(), labels.device(), out.triangles ? triangles.device() : nullptr, nullptr};
+            return {positions.device(),
+                    normals.device(),
+                    colors.device(),
+                    labels.device(),
+                    out.triangles ? triangles.device() : nullptr,
+                    nullptr};
         }
         void download(HostSurface& out) const {
             positions.readRange(Device::CUDA, 0, out.positions.data(), out.positions.size());

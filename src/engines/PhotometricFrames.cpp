@@ -28,10 +28,12 @@ bool PhotometricFrames::prepare(const View& view, int level_count) {
 }
 
 bool PhotometricFrames::colorModel(const RenderState& model, int step) {
-    const int model_step = depth_width_ > 0 ? std::max(1, (step * model.intrinsics.width + depth_width_ / 2) / depth_width_) : step;
+    const int model_step =
+        depth_width_ > 0 ? std::max(1, (step * model.intrinsics.width + depth_width_ / 2) / depth_width_) : step;
     if (!model.intensity.empty()) {
         // The map's own colours, seen from where the model was raycast: each point projects onto its pixel.
-        kernels_.colorModelPoints(model, model_step, model.intensity, model.intrinsics, rigidInverse(model.T_world_camera), points_);
+        kernels_.colorModelPoints(model, model_step, model.intensity, model.intrinsics,
+                                  rigidInverse(model.T_world_camera), points_);
         return true;
     }
     if (!has_previous_) return false;

@@ -31,7 +31,8 @@ bool cellBefore(const BinnedPoint& a, const BinnedPoint& b) {
 // there is nothing else, and the smallest class wins a tie, so the points' order does not matter.
 ClassId majorityLabel(BinnedPoint* first, BinnedPoint* last, const std::vector<ClassId>& labels) {
     auto label = [&labels](const BinnedPoint& b) { return labels[b.point]; };
-    std::sort(first, last, [&label](const BinnedPoint& a, const BinnedPoint& b) { return label(a) < label(b); });  // kNoLabel last
+    std::sort(first, last,
+              [&label](const BinnedPoint& a, const BinnedPoint& b) { return label(a) < label(b); });  // kNoLabel last
     ClassId best = kNoLabel;
     std::ptrdiff_t best_count = 0;
     for (BinnedPoint *begin = first, *end = first; begin != last && label(*begin) != kNoLabel; begin = end) {
@@ -47,9 +48,11 @@ ClassId majorityLabel(BinnedPoint* first, BinnedPoint* last, const std::vector<C
 }  // namespace
 
 PointCloud downsampleVoxelGrid(const PointCloud& cloud, float cell_m) {
-    if (!(cell_m > 0.f) || !std::isfinite(cell_m)) throw ConfigError("downsampling: the cell size must be a positive number (got " + std::to_string(cell_m) + ")");
+    if (!(cell_m > 0.f) || !std::isfinite(cell_m))
+        throw ConfigError("downsampling: the cell size must be a positive number (got " + std::to_string(cell_m) + ")");
     const std::size_t n = cloud.points.size();
-    if (const std::string why = inconsistency(cloud); !why.empty()) throw Error("downsampling: inconsistent cloud: " + why);
+    if (const std::string why = inconsistency(cloud); !why.empty())
+        throw Error("downsampling: inconsistent cloud: " + why);
     if (n > std::size_t(UINT32_MAX)) throw Error("downsampling: more than 2^32 points");
 
     // Cell of every finite point.
@@ -73,7 +76,9 @@ PointCloud downsampleVoxelGrid(const PointCloud& cloud, float cell_m) {
         }
         if (share_out_of_range) out_of_range = true;
     });
-    if (out_of_range) throw ConfigError("downsampling: cells of " + std::to_string(cell_m) + " m are too small for the cloud's extent");
+    if (out_of_range)
+        throw ConfigError("downsampling: cells of " + std::to_string(cell_m) +
+                          " m are too small for the cloud's extent");
     std::size_t kept = 0;
     for (std::size_t i = 0; i < n; ++i)
         if (keep[i]) binned[kept++] = binned[i];
@@ -106,12 +111,15 @@ PointCloud downsampleVoxelGrid(const PointCloud& cloud, float cell_m) {
             }
             const double count = double(end - begin);
             out.points[r] = Vec3f{float(sum_p[0] / count), float(sum_p[1] / count), float(sum_p[2] / count)};
-            if (cloud.hasNormals()) out.normals[r] = normalize(Vec3f{float(sum_n[0]), float(sum_n[1]), float(sum_n[2])});
+            if (cloud.hasNormals())
+                out.normals[r] = normalize(Vec3f{float(sum_n[0]), float(sum_n[1]), float(sum_n[2])});
             if (cloud.hasColors())
-                out.colors[r] = Vec3u8{std::uint8_t(std::lround(sum_c[0] / count)), std::uint8_t(std::lround(sum_c[1] / count)),
-                                       std::uint8_t(std::lround(sum_c[2] / count))};
+                out.colors[r] =
+                    Vec3u8{std::uint8_t(std::lround(sum_c[0] / count)), std::uint8_t(std::lround(sum_c[1] / count)),
+                           std::uint8_t(std::lround(sum_c[2] / count))};
             // Last: it reorders the run (the sums above needed input order).
-            if (cloud.hasLabels()) out.labels[r] = majorityLabel(binned.data() + begin, binned.data() + end, cloud.labels);
+            if (cloud.hasLabels())
+                out.labels[r] = majorityLabel(binned.data() + begin, binned.data() + end, cloud.labels);
         }
     });
     return out;

@@ -87,7 +87,9 @@ inline bool solveUpdate(const NormalEquations<double>& eq, LevelMotion motion, d
     for (int i = 0; i < n; ++i) g(i) = eq.gradient[first + i];
     if (lambda > 0.0) H.diagonal() *= 1.0 + lambda;
     const Eigen::LDLT<Eigen::MatrixXd> ldlt(H);
-    if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 1e-12 * std::max(1.0, ldlt.vectorD().maxCoeff()))) return false;
+    if (ldlt.info() != Eigen::Success ||
+        !(ldlt.vectorD().minCoeff() > 1e-12 * std::max(1.0, ldlt.vectorD().maxCoeff())))
+        return false;
     const Eigen::VectorXd sub = ldlt.solve(-g);
     if (!sub.allFinite()) return false;
     x.setZero();
@@ -168,14 +170,17 @@ inline TranslationConstraint translationConstraint(const NormalEquations<double>
 // The robust variance of a system's residuals: sum of w r^2 over the terms it took, per term. For
 // residuals well inside the kernel's scale it is their variance; outliers count by the kernel's
 // weight (Huber: linearly; Tukey: not at all), so a few do not inflate it.
-inline double robustVariance(const NormalEquations<double>& eq) { return eq.count > 0 ? eq.weighted_cost / eq.count : 0.0; }
+inline double robustVariance(const NormalEquations<double>& eq) {
+    return eq.count > 0 ? eq.weighted_cost / eq.count : 0.0;
+}
 
 // Inverse-variance weighting of two kinds of terms: the weight of a term of `b` against a term of `a`
 // when each counts by the inverse of its own noise (maximum likelihood for Gaussian noise), the noise
 // being each system's robust variance, but at least its floor (a system whose residuals vanish, e.g.
 // a model seen in exactly the frame that built it, must not take all the weight). 0 when either has
 // no terms.
-inline double inverseVarianceWeight(const NormalEquations<double>& a, double a_floor, const NormalEquations<double>& b, double b_floor) {
+inline double inverseVarianceWeight(const NormalEquations<double>& a, double a_floor, const NormalEquations<double>& b,
+                                    double b_floor) {
     if (a.count == 0 || b.count == 0) return 0.0;
     return std::max(robustVariance(a), a_floor) / std::max(robustVariance(b), b_floor);
 }

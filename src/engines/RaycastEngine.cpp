@@ -8,7 +8,8 @@ namespace voxfuse {
 
 void raycastDepth(const RenderState& rs, Image<float>& depth_m) {
     if (!rs.points_world.memory().isCurrent(Device::CPU))
-        throw DeviceError("raycastDepth reads the raycast in host memory: bring it up to date first (RenderState::updateHost)");
+        throw DeviceError(
+            "raycastDepth reads the raycast in host memory: bring it up to date first (RenderState::updateHost)");
     depth_m.resize(rs.points_world.size());
     const Mat4f T_camera_world = rigidInverse(rs.T_world_camera);
     const Vec4f* points = rs.points_world.host();

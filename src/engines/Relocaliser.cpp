@@ -10,7 +10,8 @@
 namespace voxfuse {
 
 DepthAgreement compareDepth(const Image<float>& frame_depth_m, const Image<float>& model_depth_m, float tolerance_m) {
-    if (frame_depth_m.size() != model_depth_m.size()) throw ConfigError("compareDepth: the frame and the model differ in size");
+    if (frame_depth_m.size() != model_depth_m.size())
+        throw ConfigError("compareDepth: the frame and the model differ in size");
     std::size_t valid = 0, both = 0, agree = 0;
     const float* frame = frame_depth_m.host();
     const float* model = model_depth_m.host();
@@ -79,13 +80,14 @@ private:
 
 }  // namespace
 
-ColourAgreement compareColour(const View& view, const Image<float>& model_depth_m, const Image<float>& model_intensity, float tolerance_m,
-                              float voxel_size_m, int min_textured_cells) {
+ColourAgreement compareColour(const View& view, const Image<float>& model_depth_m, const Image<float>& model_intensity,
+                              float tolerance_m, float voxel_size_m, int min_textured_cells) {
     ColourAgreement a;
     const Image<float>& frame_depth_m = view.depth;
     if (view.rgb.empty() || model_intensity.empty() || !view.calib.rgb.valid()) return a;
     if (frame_depth_m.size() != model_depth_m.size() || model_intensity.size() != model_depth_m.size())
-        throw ConfigError("compareColour: the frame's depth, the model's depth and the model's intensities differ in size");
+        throw ConfigError(
+            "compareColour: the frame's depth, the model's depth and the model's intensities differ in size");
     const Intrinsics& depth_camera = view.calib.depth;
     const Intrinsics rgb_camera = view.colourCamera();  // at the colour image's resolution
     const Mat4f T_rgb_depth = rigidInverse(view.calib.T_depth_rgb);
@@ -98,7 +100,8 @@ ColourAgreement compareColour(const View& view, const Image<float>& model_depth_
     const float* model_grey = model_intensity.host();
     const BoxIntensity frame_intensity(view.rgb);
     // Half the footprint, in colour pixels, of the model's colour at one metre.
-    const float half_footprint_px_m = 0.5f * kColourFootprintVoxels * voxel_size_m * 0.5f * (rgb_camera.fx + rgb_camera.fy);
+    const float half_footprint_px_m =
+        0.5f * kColourFootprintVoxels * voxel_size_m * 0.5f * (rgb_camera.fx + rgb_camera.fy);
     for (int v = 0; v < height; ++v)
         for (int u = 0; u < width; ++u) {
             const int i = u + v * width;
@@ -138,12 +141,14 @@ ColourAgreement compareColour(const View& view, const Image<float>& model_depth_
 bool acceptRelocalisation(const RelocalisationSettings& s, const RelocalisationCheck& c) {
     // Every comparison is false for a NaN, so a NaN measure rejects.
     return c.refined.quality == TrackingQuality::Good && c.refined.inlier_ratio >= s.min_inlier_ratio &&
-           c.refined.residual_m <= s.max_residual_m && c.depth.overlap >= s.min_overlap && c.depth.agreement >= s.min_agreement &&
-           c.step_m <= s.max_refinement_step_m && c.step_deg <= s.max_refinement_step_deg &&
+           c.refined.residual_m <= s.max_residual_m && c.depth.overlap >= s.min_overlap &&
+           c.depth.agreement >= s.min_agreement && c.step_m <= s.max_refinement_step_m &&
+           c.step_deg <= s.max_refinement_step_deg &&
            (!c.colour.compared || c.colour.correlation >= s.min_colour_correlation);
 }
 
-bool withinReach(const RelocalisationSettings& s, const Mat4f& T_world_last, const Mat4f& T_world_candidate, double elapsed_s) {
+bool withinReach(const RelocalisationSettings& s, const Mat4f& T_world_last, const Mat4f& T_world_candidate,
+                 double elapsed_s) {
     if (!(s.max_speed_m_per_s > 0.f) || !(elapsed_s > 0.0)) return true;
     const Vec3f d = T_world_candidate.translation() - T_world_last.translation();
     return double(std::sqrt(dot(d, d))) <= double(s.max_speed_m_per_s) * elapsed_s;
@@ -152,7 +157,8 @@ bool withinReach(const RelocalisationSettings& s, const Mat4f& T_world_last, con
 Relocaliser::Relocaliser(const RelocalisationSettings& settings, Vec2i frame_size, Device device)
     : settings_(settings), frame_size_(frame_size), device_(device), database_(settings.max_keyframes) {
     if (settings.candidates < 1) throw ConfigError("relocalisation tries at least one keyframe per frame");
-    if (!(settings.max_speed_m_per_s >= 0.f)) throw ConfigError("the relocalisation speed limit is a speed in m/s, 0 for none");
+    if (!(settings.max_speed_m_per_s >= 0.f))
+        throw ConfigError("the relocalisation speed limit is a speed in m/s, 0 for none");
     if (!(settings.keyframe_min_dissimilarity >= 0.f && settings.keyframe_min_dissimilarity <= 1.f))
         throw ConfigError("the keyframe dissimilarity threshold lies in [0, 1]");
     if (!(settings.min_colour_correlation >= -1.f && settings.min_colour_correlation <= 1.f))
@@ -176,7 +182,8 @@ bool Relocaliser::looksLost(const TrackingState& tracked) const {
 
 void Relocaliser::rememberGoodFrame(const TrackingState& tracked) {
     recent_inlier_ratios_.push_back(tracked.inlier_ratio);
-    if (int(recent_inlier_ratios_.size()) > settings_.recent_frames) recent_inlier_ratios_.erase(recent_inlier_ratios_.begin());
+    if (int(recent_inlier_ratios_.size()) > settings_.recent_frames)
+        recent_inlier_ratios_.erase(recent_inlier_ratios_.begin());
 }
 
 bool Relocaliser::addKeyframe(const View& view, const Mat4f& T_world_camera) {

@@ -31,9 +31,11 @@ public:
         TDevice::parallelFor(count, GatherStoredSlots{listed_.data(kDevice), table.stored_slot, slots_.data(kDevice)});
         slots_.readRange(kDevice, 0, slots_host_.data(), std::size_t(count));
         cache.take(slots_host_.data(), count, transfer_.host());
-        if (kDevice == Device::CUDA) transfer_.writeRange(kDevice, 0, transfer_.host(), std::size_t(count) * kBlockVoxelCount);
-        TDevice::parallelFor(count * kBlockVoxelCount, MergeStoredBlocks<TVoxel>{scene.voxelData(), table.entries, listed_.data(kDevice),
-                                                                                 transfer_.data(kDevice), scene.params().max_weight});
+        if (kDevice == Device::CUDA)
+            transfer_.writeRange(kDevice, 0, transfer_.host(), std::size_t(count) * kBlockVoxelCount);
+        TDevice::parallelFor(count * kBlockVoxelCount,
+                             MergeStoredBlocks<TVoxel>{scene.voxelData(), table.entries, listed_.data(kDevice),
+                                                       transfer_.data(kDevice), scene.params().max_weight});
         TDevice::parallelFor(count, ClearStoredSlots{listed_.data(kDevice), table.stored_slot});
         hash.addStoredBlocks(-count);
         return count;
@@ -44,15 +46,20 @@ public:
         VoxelBlockHash& hash = scene.index();
         if (max_blocks <= 0) return 0;
         const HashTableState table = hash.state();
-        const int count = select(hash, EntryCanSwapOut<TVoxel>{table.entries, table.entry_visibility, table.stored_slot, scene.voxelData()}, max_blocks);
+        const int count = select(
+            hash, EntryCanSwapOut<TVoxel>{table.entries, table.entry_visibility, table.stored_slot, scene.voxelData()},
+            max_blocks);
         if (count == 0) return 0;
         prepareTransfer(cache, max_blocks);
         TDevice::parallelFor(count * kBlockVoxelCount,
-                             GatherBlockVoxels<TVoxel>{scene.voxelData(), table.entries, listed_.data(kDevice), transfer_.data(kDevice)});
-        if (kDevice == Device::CUDA) transfer_.readRange(kDevice, 0, transfer_.host(), std::size_t(count) * kBlockVoxelCount);
+                             GatherBlockVoxels<TVoxel>{scene.voxelData(), table.entries, listed_.data(kDevice),
+                                                       transfer_.data(kDevice)});
+        if (kDevice == Device::CUDA)
+            transfer_.readRange(kDevice, 0, transfer_.host(), std::size_t(count) * kBlockVoxelCount);
         cache.store(transfer_.host(), count, slots_host_.data());
         slots_.writeRange(kDevice, 0, slots_host_.data(), std::size_t(count));
-        TDevice::parallelFor(count, MarkSwappedOut{table, listed_.data(kDevice), slots_.data(kDevice), hash.freeBlocks()});
+        TDevice::parallelFor(count,
+                             MarkSwappedOut{table, listed_.data(kDevice), slots_.data(kDevice), hash.freeBlocks()});
         hash.popFreeStacks(-count, 0);
         hash.addStoredBlocks(count);
         AllocationStats& stats = hash.stats();
@@ -73,18 +80,19 @@ private:
     // The fixed-size transfer buffers, for max_blocks blocks.
     void prepareTransfer(const GlobalCache& cache, int max_blocks) {
         if (cache.blockBytes() != sizeof(TVoxel) * kBlockVoxelCount)
-            throw ConfigError("swapping: the global cache holds blocks of " + std::to_string(cache.blockBytes()) + " bytes, not " +
-                              std::to_string(sizeof(TVoxel) * kBlockVoxelCount));
+            throw ConfigError("swapping: the global cache holds blocks of " + std::to_string(cache.blockBytes()) +
+                              " bytes, not " + std::to_string(sizeof(TVoxel) * kBlockVoxelCount));
         const std::size_t voxels = std::size_t(max_blocks) * kBlockVoxelCount;
         if (transfer_.size() != voxels) transfer_.allocate(voxels, true, kDevice == Device::CUDA, HostMemory::Pinned);
-        if (slots_.size() != std::size_t(max_blocks)) slots_.allocate(std::size_t(max_blocks), kDevice == Device::CPU, kDevice == Device::CUDA);
+        if (slots_.size() != std::size_t(max_blocks))
+            slots_.allocate(std::size_t(max_blocks), kDevice == Device::CPU, kDevice == Device::CUDA);
         slots_host_.resize(std::size_t(max_blocks));
     }
 
     DeviceScratch scratch_{kDevice};
-    MemoryBlock<int> listed_;        // entries selected this call
-    MemoryBlock<TVoxel> transfer_;   // the transfer buffer: host (pinned) and, on the GPU, device
-    MemoryBlock<int> slots_;         // cache slots of the listed blocks, on the device
+    MemoryBlock<int> listed_;       // entries selected this call
+    MemoryBlock<TVoxel> transfer_;  // the transfer buffer: host (pinned) and, on the GPU, device
+    MemoryBlock<int> slots_;        // cache slots of the listed blocks, on the device
     std::vector<int> slots_host_;
 };
 

@@ -20,12 +20,17 @@ class DepthTrackerKernelsOn final : public DepthTrackerKernels {
     static constexpr Device kDevice = TDevice::kind;
 
 public:
-    NormalEquations<double> accumulate(const DepthFrameLevel& level, const RenderState& model, const DepthTermParams& params,
-                                       RobustKernel kernel, float kernel_scale_m, int pixel_step) override {
-        const PointToPlaneTerms terms{imageOn(kDevice, level.vertices, vertices_), imageOn(kDevice, level.normals, normals_),
-                                      imageOn(kDevice, model.points_world, model_points_), imageOn(kDevice, model.normals_world, model_normals_),
-                                      params, pixelGridOf(level.vertices.size(), pixel_step)};
-        return TDevice::sumNormalEquations(gridSize(level.vertices.size(), pixel_step), terms, kernel, kernel_scale_m, scratch_);
+    NormalEquations<double> accumulate(const DepthFrameLevel& level, const RenderState& model,
+                                       const DepthTermParams& params, RobustKernel kernel, float kernel_scale_m,
+                                       int pixel_step) override {
+        const PointToPlaneTerms terms{imageOn(kDevice, level.vertices, vertices_),
+                                      imageOn(kDevice, level.normals, normals_),
+                                      imageOn(kDevice, model.points_world, model_points_),
+                                      imageOn(kDevice, model.normals_world, model_normals_),
+                                      params,
+                                      pixelGridOf(level.vertices.size(), pixel_step)};
+        return TDevice::sumNormalEquations(gridSize(level.vertices.size(), pixel_step), terms, kernel, kernel_scale_m,
+                                           scratch_);
     }
 
 private:
@@ -46,16 +51,18 @@ public:
     void downsampleIntensity(const Image<float>& in, Image<float>& out) override {
         const Vec2i size{in.width() / 2, in.height() / 2};
         const float* src = imageOn(kDevice, in, floats_);
-        TDevice::parallelFor(size.x * size.y, DownsampleIntensityPixels{src, in.size(), size.x, outputOn(kDevice, out, size)});
+        TDevice::parallelFor(size.x * size.y,
+                             DownsampleIntensityPixels{src, in.size(), size.x, outputOn(kDevice, out, size)});
     }
 
     void sobelGradient(const Image<float>& intensity, Image<Vec2f>& gradient) override {
         const float* src = imageOn(kDevice, intensity, floats_);
-        TDevice::parallelFor(int(intensity.pixelCount()), SobelPixels{src, intensity.size(), outputOn(kDevice, gradient, intensity.size())});
+        TDevice::parallelFor(int(intensity.pixelCount()),
+                             SobelPixels{src, intensity.size(), outputOn(kDevice, gradient, intensity.size())});
     }
 
-    void colorModelPoints(const RenderState& model, int step, const Image<float>& intensity, const Intrinsics& rgb, const Mat4f& T_rgb_world,
-                          Image<ColorPoint>& points) override {
+    void colorModelPoints(const RenderState& model, int step, const Image<float>& intensity, const Intrinsics& rgb,
+                          const Mat4f& T_rgb_world, Image<ColorPoint>& points) override {
         const Vec2i size{model.points_world.width() / step, model.points_world.height() / step};
         const ColorModelPoints body{imageOn(kDevice, model.points_world, model_points_),
                                     model.points_world.width(),
@@ -69,8 +76,9 @@ public:
         TDevice::parallelFor(size.x * size.y, body);
     }
 
-    void farFieldPoints(const Image<float>& far_depth, const Intrinsics& depth_camera, int step, const Mat4f& T_world_camera,
-                        const ColorFrameLevel& color, const Mat4f& T_rgb_world, Image<ColorPoint>& points, Image<float>& gradient_sq) override {
+    void farFieldPoints(const Image<float>& far_depth, const Intrinsics& depth_camera, int step,
+                        const Mat4f& T_world_camera, const ColorFrameLevel& color, const Mat4f& T_rgb_world,
+                        Image<ColorPoint>& points, Image<float>& gradient_sq) override {
         const Vec2i size{far_depth.width() / step, far_depth.height() / step};
         const FarFieldPoints body{imageOn(kDevice, far_depth, far_depth_),
                                   far_depth.size(),
@@ -88,15 +96,21 @@ public:
         TDevice::parallelFor(size.x * size.y, body);
     }
 
-    void unhiddenFarFieldPoints(const Image<ColorPoint>& points, const Image<float>& depth, const Intrinsics& depth_camera,
-                                const Mat4f& T_camera_world, Image<ColorPoint>& unhidden) override {
-        const UnhiddenFarFieldPoints body{imageOn(kDevice, points, points_), imageOn(kDevice, depth, far_depth_), depth.size(), T_camera_world,
-                                          depth_camera, outputOn(kDevice, unhidden, points.size())};
+    void unhiddenFarFieldPoints(const Image<ColorPoint>& points, const Image<float>& depth,
+                                const Intrinsics& depth_camera, const Mat4f& T_camera_world,
+                                Image<ColorPoint>& unhidden) override {
+        const UnhiddenFarFieldPoints body{imageOn(kDevice, points, points_),
+                                          imageOn(kDevice, depth, far_depth_),
+                                          depth.size(),
+                                          T_camera_world,
+                                          depth_camera,
+                                          outputOn(kDevice, unhidden, points.size())};
         TDevice::parallelFor(int(points.pixelCount()), body);
     }
 
-    NormalEquations<double> accumulate(const Image<ColorPoint>& points, const ColorFrameLevel& level, const ColorTermParams& params,
-                                       RobustKernel kernel, float kernel_scale) override {
+    NormalEquations<double> accumulate(const Image<ColorPoint>& points, const ColorFrameLevel& level,
+                                       const ColorTermParams& params, RobustKernel kernel,
+                                       float kernel_scale) override {
         const PhotometricTerms terms{imageOn(kDevice, points, points_), imageOn(kDevice, level.intensity, floats_),
                                      imageOn(kDevice, level.gradient, gradients_), level.intensity.size(), params};
         return TDevice::sumNormalEquations(int(points.pixelCount()), terms, kernel, kernel_scale, scratch_);

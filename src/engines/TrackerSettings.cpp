@@ -38,11 +38,14 @@ bool findInvalidSetting(const TrackerSettings& s, std::vector<std::string>& keys
     for (const TrackerLevel& l : s.levels) {
         if (l.motion != LevelMotion::Rotation && l.motion != LevelMotion::Translation && l.motion != LevelMotion::Both)
             return fail({"levels"}, "level types are r, t or b");
-        if (l.max_iterations < 1 || l.max_iterations > 1000) return fail({"iterations"}, "iterations must be in 1..1000");
-        if (!(l.max_distance_m > 0.f && std::isfinite(l.max_distance_m))) return fail({"max_distance_m"}, "distance thresholds must be > 0");
+        if (l.max_iterations < 1 || l.max_iterations > 1000)
+            return fail({"iterations"}, "iterations must be in 1..1000");
+        if (!(l.max_distance_m > 0.f && std::isfinite(l.max_distance_m)))
+            return fail({"max_distance_m"}, "distance thresholds must be > 0");
         if (l.pixel_step < 1 || l.pixel_step > 8) return fail({"pixel_step"}, "pixel steps must be in 1..8");
     }
-    if (!(s.max_normal_angle_deg > 0.f && s.max_normal_angle_deg <= 180.f)) return fail({"max_normal_angle_deg"}, "must be in (0, 180]");
+    if (!(s.max_normal_angle_deg > 0.f && s.max_normal_angle_deg <= 180.f))
+        return fail({"max_normal_angle_deg"}, "must be in (0, 180]");
     if (!(s.min_rotation_step_rad >= 0.f)) return fail({"min_rotation_step_rad"}, "must be >= 0");
     if (!(s.min_translation_step_m >= 0.f)) return fail({"min_translation_step_m"}, "must be >= 0");
     if (!(s.max_normal_edge_m > 0.f)) return fail({"max_normal_edge_m"}, "must be > 0");
@@ -55,15 +58,22 @@ bool findInvalidSetting(const TrackerSettings& s, std::vector<std::string>& keys
     if (s.color_point_step < 1 || s.color_point_step > 16) return fail({"color_point_step"}, "must be in 1..16");
     if (!(s.color_kernel_scale > 0.f)) return fail({"color_kernel_scale"}, "must be > 0");
     if (!(s.color_weight >= 0.f && std::isfinite(s.color_weight))) return fail({"color_weight"}, "must be >= 0");
-    if (s.far_field_keyframes < 0 || s.far_field_keyframes > 16) return fail({"far_field_keyframes"}, "must be in 0..16 (0: off)");
-    if (!(s.far_field_spacing_m >= 0.f && std::isfinite(s.far_field_spacing_m))) return fail({"far_field_spacing_m"}, "must be >= 0");
-    if (!(s.far_field_spacing_deg >= 0.f && std::isfinite(s.far_field_spacing_deg))) return fail({"far_field_spacing_deg"}, "must be >= 0");
-    if (!(s.far_field_point_share > 0.f && s.far_field_point_share <= 1.f)) return fail({"far_field_point_share"}, "must be in (0, 1]");
-    for (auto [key, v] : {std::pair{"good_inlier_ratio", s.good_inlier_ratio}, {"failed_inlier_ratio", s.failed_inlier_ratio},
-                          {"good_condition", s.good_condition}, {"failed_condition", s.failed_condition}})
+    if (s.far_field_keyframes < 0 || s.far_field_keyframes > 16)
+        return fail({"far_field_keyframes"}, "must be in 0..16 (0: off)");
+    if (!(s.far_field_spacing_m >= 0.f && std::isfinite(s.far_field_spacing_m)))
+        return fail({"far_field_spacing_m"}, "must be >= 0");
+    if (!(s.far_field_spacing_deg >= 0.f && std::isfinite(s.far_field_spacing_deg)))
+        return fail({"far_field_spacing_deg"}, "must be >= 0");
+    if (!(s.far_field_point_share > 0.f && s.far_field_point_share <= 1.f))
+        return fail({"far_field_point_share"}, "must be in (0, 1]");
+    for (auto [key, v] : {std::pair{"good_inlier_ratio", s.good_inlier_ratio},
+                          {"failed_inlier_ratio", s.failed_inlier_ratio},
+                          {"good_condition", s.good_condition},
+                          {"failed_condition", s.failed_condition}})
         if (!(v >= 0.f && v <= 1.f)) return fail({key}, "must be in [0, 1]");
     if (s.failed_inlier_ratio > s.good_inlier_ratio)
-        return fail({"failed_inlier_ratio", "good_inlier_ratio"}, "failed_inlier_ratio must not exceed good_inlier_ratio");
+        return fail({"failed_inlier_ratio", "good_inlier_ratio"},
+                    "failed_inlier_ratio must not exceed good_inlier_ratio");
     if (s.failed_condition > s.good_condition)
         return fail({"failed_condition", "good_condition"}, "failed_condition must not exceed good_condition");
     if (!(s.poor_residual_m > 0.f)) return fail({"poor_residual_m"}, "must be > 0");
@@ -101,10 +111,14 @@ std::vector<TrackerLevel> levelsFor(const std::string& types) {
 
 const char* toString(TrackerKind kind) {
     switch (kind) {
-        case TrackerKind::Icp: return "icp";
-        case TrackerKind::Color: return "color";
-        case TrackerKind::Ren: return "ren";
-        case TrackerKind::Rgbd: return "rgbd";
+        case TrackerKind::Icp:
+            return "icp";
+        case TrackerKind::Color:
+            return "color";
+        case TrackerKind::Ren:
+            return "ren";
+        case TrackerKind::Rgbd:
+            return "rgbd";
     }
     return "?";
 }
@@ -120,7 +134,8 @@ TrackerKind parseTrackerKind(const std::string& name) {
 void validateTrackerSettings(const TrackerSettings& settings) {
     std::vector<std::string> keys;
     std::string reason;
-    if (findInvalidSetting(settings, keys, reason)) throw ConfigError("tracker setting " + keys.front() + ": " + reason);
+    if (findInvalidSetting(settings, keys, reason))
+        throw ConfigError("tracker setting " + keys.front() + ": " + reason);
 }
 
 namespace {
@@ -156,9 +171,12 @@ TrackerSettings parseTrackerSettingsText(const std::string& text, const std::str
     };
     auto setBool = [&](bool& field) {
         return [&field](const std::string& v) -> std::string {
-            if (v == "true" || v == "on" || v == "1") field = true;
-            else if (v == "false" || v == "off" || v == "0") field = false;
-            else return "expected true or false, got '" + v + "'";
+            if (v == "true" || v == "on" || v == "1")
+                field = true;
+            else if (v == "false" || v == "off" || v == "0")
+                field = false;
+            else
+                return "expected true or false, got '" + v + "'";
             return {};
         };
     };
@@ -194,7 +212,8 @@ TrackerSettings parseTrackerSettingsText(const std::string& text, const std::str
         {"levels",
          [&](const std::string& v) -> std::string {
              for (char c : v)
-                 if (c != 'r' && c != 't' && c != 'b') return "level types are r (rotation), t (translation) or b (both), got '" + v + "'";
+                 if (c != 'r' && c != 't' && c != 'b')
+                     return "level types are r (rotation), t (translation) or b (both), got '" + v + "'";
              if (v.empty() || v.size() > 8) return "need 1 to 8 levels, got '" + v + "'";
              s.levels = levelsFor(v);
              return {};
@@ -261,7 +280,8 @@ TrackerSettings parseTrackerSettingsText(const std::string& text, const std::str
         if (setter == setters.end()) throw ParseError(name, line_number, "unknown tracker setting '" + key + "'");
         if (value.empty()) throw ParseError(name, line_number, "no value for '" + key + "'");
         if (line_number < first_override_line && line_of.count(key))
-            throw ParseError(name, line_number, "'" + key + "' is set twice (first on line " + std::to_string(line_of[key]) + ")");
+            throw ParseError(name, line_number,
+                             "'" + key + "' is set twice (first on line " + std::to_string(line_of[key]) + ")");
         const std::string error = setter->second(value);
         if (!error.empty()) throw ParseError(name, line_number, key + ": " + error);
         line_of[key] = line_number;
@@ -271,19 +291,23 @@ TrackerSettings parseTrackerSettingsText(const std::string& text, const std::str
     auto applyList = [&](const char* key, const std::vector<double>& list, auto apply) {
         if (!line_of.count(key)) return;
         if (list.size() != 1 && list.size() != n)
-            throw ParseError(name, line_of[key], std::string(key) + ": expected 1 or " + std::to_string(n) + " values (one per level of levels = " +
-                                                     levelsText(s.levels) + "), got " + std::to_string(list.size()));
+            throw ParseError(name, line_of[key],
+                             std::string(key) + ": expected 1 or " + std::to_string(n) +
+                                 " values (one per level of levels = " + levelsText(s.levels) + "), got " +
+                                 std::to_string(list.size()));
         for (std::size_t i = 0; i < n; ++i) apply(s.levels[i], list.size() == 1 ? list[0] : list[i]);
     };
     applyList("iterations", iterations, [&](TrackerLevel& l, double v) {
         if (v != std::floor(v) || v < 1 || v > 1000)
-            throw ParseError(name, line_of["iterations"], "iterations: expected integers in 1..1000, got " + formatNumber(v));
+            throw ParseError(name, line_of["iterations"],
+                             "iterations: expected integers in 1..1000, got " + formatNumber(v));
         l.max_iterations = int(v);
     });
     applyList("max_distance_m", distances, [](TrackerLevel& l, double v) { l.max_distance_m = float(v); });
     applyList("pixel_step", pixel_steps, [&](TrackerLevel& l, double v) {
         if (v != std::floor(v) || v < 1 || v > 8)
-            throw ParseError(name, line_of["pixel_step"], "pixel_step: expected integers in 1..8, got " + formatNumber(v));
+            throw ParseError(name, line_of["pixel_step"],
+                             "pixel_step: expected integers in 1..8, got " + formatNumber(v));
         l.pixel_step = int(v);
     });
 
@@ -334,7 +358,8 @@ TrackerSettings trackerSettingsWith(const TrackerOverrides& o) {
     } catch (const ParseError& e) {
         // A line after the file's is one of the single values: no line number to give for those.
         if (e.line() <= file_lines) throw;
-        throw ConfigError(o.origin + (o.settings_file.empty() ? "" : " (over " + o.settings_file + ")") + ": " + e.reason());
+        throw ConfigError(o.origin + (o.settings_file.empty() ? "" : " (over " + o.settings_file + ")") + ": " +
+                          e.reason());
     }
 }
 

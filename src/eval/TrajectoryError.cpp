@@ -24,7 +24,8 @@ Eigen::Matrix4d toEigenD(const Mat4f& m) {
 }
 
 std::vector<TimedPose> sortedByTime(std::vector<TimedPose> poses) {
-    std::stable_sort(poses.begin(), poses.end(), [](const TimedPose& a, const TimedPose& b) { return a.timestamp_s < b.timestamp_s; });
+    std::stable_sort(poses.begin(), poses.end(),
+                     [](const TimedPose& a, const TimedPose& b) { return a.timestamp_s < b.timestamp_s; });
     return poses;
 }
 
@@ -36,7 +37,8 @@ int nearest(const std::vector<TimedPose>& poses, double t, double max_dt) {
 
 double rotationAngleRad(const Eigen::Matrix3d& R) { return std::acos(std::clamp((R.trace() - 1.0) / 2.0, -1.0, 1.0)); }
 
-void computeAte(const std::vector<TimedPose>& est, const std::vector<TimedPose>& gt, const TrajectoryErrorOptions& o, TrajectoryError& e) {
+void computeAte(const std::vector<TimedPose>& est, const std::vector<TimedPose>& gt, const TrajectoryErrorOptions& o,
+                TrajectoryError& e) {
     std::vector<Eigen::Vector3d> src, dst;
     for (const TimedPose& p : est) {
         const int j = nearest(gt, p.timestamp_s + o.time_offset_s, o.max_time_difference_s);
@@ -73,17 +75,21 @@ void computeAte(const std::vector<TimedPose>& est, const std::vector<TimedPose>&
         for (int c = 0; c < 4; ++c) e.T_truth_estimate(r, c) = float(T(r, c));
 }
 
-void computeRpe(const std::vector<TimedPose>& est, const std::vector<TimedPose>& gt, const TrajectoryErrorOptions& o, TrajectoryError& e) {
+void computeRpe(const std::vector<TimedPose>& est, const std::vector<TimedPose>& gt, const TrajectoryErrorOptions& o,
+                TrajectoryError& e) {
     double sum_trans = 0.0, sum_rot = 0.0;
     for (std::size_t i = 0; i < est.size(); ++i) {
         const double t0 = est[i].timestamp_s;
         const int j = nearest(est, t0 + o.rpe_delta_s, o.max_time_difference_s);
         if (j < 0 || est[std::size_t(j)].timestamp_s <= t0) continue;
         const double t1 = est[std::size_t(j)].timestamp_s;
-        const int g0 = nearest(gt, t0 + o.time_offset_s, o.max_time_difference_s), g1 = nearest(gt, t1 + o.time_offset_s, o.max_time_difference_s);
+        const int g0 = nearest(gt, t0 + o.time_offset_s, o.max_time_difference_s),
+                  g1 = nearest(gt, t1 + o.time_offset_s, o.max_time_difference_s);
         if (g0 < 0 || g1 < 0) continue;
-        const Eigen::Matrix4d A = toEigenD(est[i].T_world_camera).inverse() * toEigenD(est[std::size_t(j)].T_world_camera);
-        const Eigen::Matrix4d B = toEigenD(gt[std::size_t(g0)].T_world_camera).inverse() * toEigenD(gt[std::size_t(g1)].T_world_camera);
+        const Eigen::Matrix4d A =
+            toEigenD(est[i].T_world_camera).inverse() * toEigenD(est[std::size_t(j)].T_world_camera);
+        const Eigen::Matrix4d B =
+            toEigenD(gt[std::size_t(g0)].T_world_camera).inverse() * toEigenD(gt[std::size_t(g1)].T_world_camera);
         const Eigen::Matrix4d E = A * B.inverse();
         const double dt = t1 - t0;
         const double trans = E.topRightCorner<3, 1>().norm() / dt;
@@ -97,7 +103,8 @@ void computeRpe(const std::vector<TimedPose>& est, const std::vector<TimedPose>&
 }
 
 // The offset search (TrajectoryError::best_time_offset_s).
-void searchTimeOffset(const std::vector<TimedPose>& est, const std::vector<TimedPose>& gt, const TrajectoryErrorOptions& o, TrajectoryError& e) {
+void searchTimeOffset(const std::vector<TimedPose>& est, const std::vector<TimedPose>& gt,
+                      const TrajectoryErrorOptions& o, TrajectoryError& e) {
     e.best_time_offset_s = e.ate_rmse_at_best_offset_m = kNaN;
     if (!(o.max_time_offset_s > 0.0) || e.pairs < 3) return;
     constexpr double kStep_s = 0.001;
@@ -129,8 +136,10 @@ void searchTimeOffset(const std::vector<TimedPose>& est, const std::vector<Timed
 
 TrajectoryError evaluateTrajectory(const std::vector<TimedPose>& estimated, const std::vector<TimedPose>& ground_truth,
                                    const TrajectoryErrorOptions& options) {
-    if (!std::isfinite(options.time_offset_s) || !(options.max_time_offset_s >= 0.0 && options.max_time_offset_s <= 1.0))
-        throw ConfigError("trajectory error: the time offset must be finite and the offset search at most 1 s either way");
+    if (!std::isfinite(options.time_offset_s) ||
+        !(options.max_time_offset_s >= 0.0 && options.max_time_offset_s <= 1.0))
+        throw ConfigError(
+            "trajectory error: the time offset must be finite and the offset search at most 1 s either way");
     const std::vector<TimedPose> est = sortedByTime(estimated), gt = sortedByTime(ground_truth);
     TrajectoryError e;
     computeAte(est, gt, options, e);

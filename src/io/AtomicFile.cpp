@@ -60,18 +60,29 @@ void moveIntoPlace(const std::string& temporary, const std::string& path) {
 
 std::string writeFailureReason(const std::string& path, int error_number) {
     switch (error_number) {
-        case ENOSPC: return "disk full (no space left on the device)";
-        case EDQUOT: return "disk quota exceeded";
-        case EROFS: return "read-only file system";
+        case ENOSPC:
+            return "disk full (no space left on the device)";
+        case EDQUOT:
+            return "disk quota exceeded";
+        case EROFS:
+            return "read-only file system";
         case EACCES:
-        case EPERM: return "permission denied";
-        case ENOENT: return "no such folder";
-        case EISDIR: return "is a folder, not a file";
-        case ENOTDIR: return "a part of the path is not a folder";
-        case EFBIG: return "file too large (for the file system, or the process's file size limit)";
-        case ENAMETOOLONG: return "file name too long";
-        case EIO: return "input/output error (a failing disk or a lost network share?)";
-        default: break;
+        case EPERM:
+            return "permission denied";
+        case ENOENT:
+            return "no such folder";
+        case EISDIR:
+            return "is a folder, not a file";
+        case ENOTDIR:
+            return "a part of the path is not a folder";
+        case EFBIG:
+            return "file too large (for the file system, or the process's file size limit)";
+        case ENAMETOOLONG:
+            return "file name too long";
+        case EIO:
+            return "input/output error (a failing disk or a lost network share?)";
+        default:
+            break;
     }
     // Streams do not always keep errno: a folder without free space says it all the same.
     if (diskFull(folderOf(path))) return "disk full (no space left on the device)";

@@ -41,7 +41,9 @@ public:
     const std::string& line() const { return line_; }
     const std::string& path() const { return lines_.path(); }
     [[noreturn]] void fail(const std::string& reason) const { failAt(lines_.lineNumber(), reason); }
-    [[noreturn]] void failAt(int line_number, const std::string& reason) const { throw ParseError(path(), line_number, reason); }
+    [[noreturn]] void failAt(int line_number, const std::string& reason) const {
+        throw ParseError(path(), line_number, reason);
+    }
 
 private:
     text::LineReader lines_;
@@ -52,14 +54,16 @@ private:
 std::vector<double> readNumbers(CalibLineReader& reader, std::size_t count, const std::string& what) {
     const auto tokens = reader.next(what);
     if (tokens.size() != count)
-        reader.fail("expected " + std::to_string(count) + " numbers (" + what + "), got " + std::to_string(tokens.size()) + ": " +
-                    text::excerpt(reader.line()));
+        reader.fail("expected " + std::to_string(count) + " numbers (" + what + "), got " +
+                    std::to_string(tokens.size()) + ": " + text::excerpt(reader.line()));
     std::vector<double> values;
     std::string bad;
-    if (!text::parseDoubles(tokens, values, bad)) reader.fail("not a number: " + text::excerpt(bad) + " (" + what + ")");
+    if (!text::parseDoubles(tokens, values, bad))
+        reader.fail("not a number: " + text::excerpt(bad) + " (" + what + ")");
     for (std::size_t i = 0; i < values.size(); ++i)
         if (!text::finiteAsFloat(values[i]))
-            reader.fail("non-finite value " + text::excerpt(tokens[i]) + " in " + what + " (numbers are stored as floats)");
+            reader.fail("non-finite value " + text::excerpt(tokens[i]) + " in " + what +
+                        " (numbers are stored as floats)");
     return values;
 }
 
@@ -69,23 +73,26 @@ Intrinsics readCamera(CalibLineReader& reader, const std::string& camera) {
         const std::string what = camera + " image size: width height";
         const auto tokens = reader.next(what);
         if (tokens.size() != 2)
-            reader.fail("expected 2 integers (" + what + "), got " + std::to_string(tokens.size()) + ": " + text::excerpt(reader.line()));
+            reader.fail("expected 2 integers (" + what + "), got " + std::to_string(tokens.size()) + ": " +
+                        text::excerpt(reader.line()));
         for (int i = 0; i < 2; ++i) {
             int& v = i == 0 ? k.width : k.height;
             if (!text::parseInt(tokens[std::size_t(i)], v))
                 reader.fail("not an integer: " + text::excerpt(tokens[std::size_t(i)]) + " (" + what + ")");
         }
         if (k.width <= 0 || k.height <= 0)
-            reader.fail(camera + " image size must be positive, got " + std::to_string(k.width) + "x" + std::to_string(k.height));
+            reader.fail(camera + " image size must be positive, got " + std::to_string(k.width) + "x" +
+                        std::to_string(k.height));
         if (k.width > kMaxImageSide || k.height > kMaxImageSide)
-            reader.fail(camera + " image size " + std::to_string(k.width) + "x" + std::to_string(k.height) + " is larger than " +
-                        std::to_string(kMaxImageSide) + " pixels on a side");
+            reader.fail(camera + " image size " + std::to_string(k.width) + "x" + std::to_string(k.height) +
+                        " is larger than " + std::to_string(kMaxImageSide) + " pixels on a side");
     }
     {
         const auto f = readNumbers(reader, 2, camera + " focal lengths: fx fy");
         k.fx = float(f[0]);
         k.fy = float(f[1]);
-        if (!(k.fx > 0.f) || !(k.fy > 0.f)) reader.fail(camera + " focal lengths must be positive, got " + text::excerpt(reader.line()));
+        if (!(k.fx > 0.f) || !(k.fy > 0.f))
+            reader.fail(camera + " focal lengths must be positive, got " + text::excerpt(reader.line()));
         const std::string problem = focalLengthProblem(k);
         if (!problem.empty()) reader.fail(camera + " " + problem);
     }
@@ -95,8 +102,9 @@ Intrinsics readCamera(CalibLineReader& reader, const std::string& camera) {
         k.cy = float(c[1]);
         // Pixel centres are at integers: the image spans -0.5 .. size - 0.5.
         if (!(k.cx >= -0.5f && k.cx <= float(k.width) - 0.5f && k.cy >= -0.5f && k.cy <= float(k.height) - 0.5f))
-            reader.fail(camera + " principal point (" + text::formatFloat(k.cx) + ", " + text::formatFloat(k.cy) + ") lies outside its " +
-                        std::to_string(k.width) + "x" + std::to_string(k.height) + " image (are fx fy and cx cy swapped?)");
+            reader.fail(camera + " principal point (" + text::formatFloat(k.cx) + ", " + text::formatFloat(k.cy) +
+                        ") lies outside its " + std::to_string(k.width) + "x" + std::to_string(k.height) +
+                        " image (are fx fy and cx cy swapped?)");
     }
     return k;
 }
@@ -129,7 +137,8 @@ DisparityCalib readDisparity(CalibLineReader& reader) {
     if (explicit_keyword) {
         keyword = std::string(tokens[0]);
         if (keyword != "kinect" && keyword != "affine")
-            reader.fail("unknown disparity calibration type " + text::excerpt(keyword) + " (expected 'kinect' or 'affine')");
+            reader.fail("unknown disparity calibration type " + text::excerpt(keyword) +
+                        " (expected 'kinect' or 'affine')");
         tokens.erase(tokens.begin());
     }
     if (tokens.size() != 2)
@@ -140,7 +149,8 @@ DisparityCalib readDisparity(CalibLineReader& reader) {
     std::string bad;
     if (!text::parseDoubles(tokens, v, bad)) reader.fail("not a number: " + text::excerpt(bad) + " (" + what + ")");
     if (!text::finiteAsFloat(v[0]) || !text::finiteAsFloat(v[1]))
-        reader.fail("non-finite value in the disparity calibration (numbers are stored as floats): " + text::excerpt(reader.line()));
+        reader.fail("non-finite value in the disparity calibration (numbers are stored as floats): " +
+                    text::excerpt(reader.line()));
     if (keyword == "affine") {
         if (!(float(v[0]) > 0.f)) reader.fail("affine depth scale must be positive, got " + std::string(tokens[0]));
         return DisparityCalib::affine(float(v[0]), float(v[1]));
@@ -166,13 +176,15 @@ void readDistortionLines(CalibLineReader& reader, RGBDCalib& calib) {
         seen = true;
         tokens.erase(tokens.begin());
         if (tokens.size() != 5)
-            reader.fail("expected 5 numbers after '" + keyword + "' (k1 k2 p1 p2 k3), got " + std::to_string(tokens.size()) + ": " +
-                        text::excerpt(reader.line()));
+            reader.fail("expected 5 numbers after '" + keyword + "' (k1 k2 p1 p2 k3), got " +
+                        std::to_string(tokens.size()) + ": " + text::excerpt(reader.line()));
         std::vector<double> v;
         std::string bad;
-        if (!text::parseDoubles(tokens, v, bad)) reader.fail("not a number: " + text::excerpt(bad) + " (" + keyword + ")");
+        if (!text::parseDoubles(tokens, v, bad))
+            reader.fail("not a number: " + text::excerpt(bad) + " (" + keyword + ")");
         for (double x : v)
-            if (!text::finiteAsFloat(x)) reader.fail("non-finite value in " + keyword + " (numbers are stored as floats)");
+            if (!text::finiteAsFloat(x))
+                reader.fail("non-finite value in " + keyword + " (numbers are stored as floats)");
         LensDistortion& d = is_rgb ? calib.rgb_distortion : calib.depth_distortion;
         d = LensDistortion{float(v[0]), float(v[1]), float(v[2]), float(v[3]), float(v[4])};
     }
@@ -185,7 +197,8 @@ std::string numbers(std::initializer_list<float> values) {
 }
 
 std::string cameraBlock(const Intrinsics& k) {
-    return std::to_string(k.width) + " " + std::to_string(k.height) + "\n" + numbers({k.fx, k.fy}) + numbers({k.cx, k.cy});
+    return std::to_string(k.width) + " " + std::to_string(k.height) + "\n" + numbers({k.fx, k.fy}) +
+           numbers({k.cx, k.cy});
 }
 
 }  // namespace
@@ -193,10 +206,13 @@ std::string cameraBlock(const Intrinsics& k) {
 std::string focalLengthProblem(const Intrinsics& k) {
     // A side of s pixels seen at focal length f spans 2 atan(s / 2f): 170 degrees at f = 0.0437 s,
     // 1 degree at f = 57.3 s.
-    const auto implausible = [](float f, int side) { return !(f >= 0.0437f * float(side) && f <= 57.3f * float(side)); };
+    const auto implausible = [](float f, int side) {
+        return !(f >= 0.0437f * float(side) && f <= 57.3f * float(side));
+    };
     if (!implausible(k.fx, k.width) && !implausible(k.fy, k.height)) return "";
-    return "focal lengths (" + text::formatFloat(k.fx) + ", " + text::formatFloat(k.fy) + " pixels) give no field of view between 1 and " +
-           "170 degrees across the " + std::to_string(k.width) + "x" + std::to_string(k.height) + " image (a typo, or units other than pixels?)";
+    return "focal lengths (" + text::formatFloat(k.fx) + ", " + text::formatFloat(k.fy) +
+           " pixels) give no field of view between 1 and " + "170 degrees across the " + std::to_string(k.width) + "x" +
+           std::to_string(k.height) + " image (a typo, or units other than pixels?)";
 }
 
 RGBDCalib readCalib(const std::string& path) {
@@ -216,11 +232,12 @@ void writeCalib(const std::string& path, const RGBDCalib& calib) {
     const Mat4f& T = calib.T_depth_rgb;
     out << cameraBlock(calib.rgb) << '\n' << cameraBlock(calib.depth) << '\n';
     for (int r = 0; r < 3; ++r) out << numbers({T(r, 0), T(r, 1), T(r, 2), T(r, 3)});
-    out << '\n' << (calib.disparity.type == DisparityCalib::Type::Kinect ? "kinect " : "affine ")
+    out << '\n'
+        << (calib.disparity.type == DisparityCalib::Type::Kinect ? "kinect " : "affine ")
         << numbers({calib.disparity.a, calib.disparity.b});
     // Written only when present, so that files without distortion stay readable by older readers.
-    for (const auto& [keyword, d] : {std::pair{"distortion_rgb ", calib.rgb_distortion},
-                                     std::pair{"distortion_depth ", calib.depth_distortion}})
+    for (const auto& [keyword, d] :
+         {std::pair{"distortion_rgb ", calib.rgb_distortion}, std::pair{"distortion_depth ", calib.depth_distortion}})
         if (d.any()) out << keyword << numbers({d.k1, d.k2, d.p1, d.p2, d.k3});
     file.commit();
 }
@@ -239,10 +256,18 @@ RGBDCalib tumCalib(int freiburg) {
     // to the colour camera, so both share them.
     Intrinsics k;
     switch (freiburg) {
-        case 1: k = Intrinsics{640, 480, 517.3f, 516.5f, 318.6f, 255.3f}; break;
-        case 2: k = Intrinsics{640, 480, 520.9f, 521.0f, 325.1f, 249.7f}; break;
-        case 3: k = Intrinsics{640, 480, 535.4f, 539.2f, 320.1f, 247.6f}; break;
-        default: throw ConfigError("tumCalib: the TUM sequences come from freiburg 1, 2 or 3, got " + std::to_string(freiburg));
+        case 1:
+            k = Intrinsics{640, 480, 517.3f, 516.5f, 318.6f, 255.3f};
+            break;
+        case 2:
+            k = Intrinsics{640, 480, 520.9f, 521.0f, 325.1f, 249.7f};
+            break;
+        case 3:
+            k = Intrinsics{640, 480, 535.4f, 539.2f, 320.1f, 247.6f};
+            break;
+        default:
+            throw ConfigError("tumCalib: the TUM sequences come from freiburg 1, 2 or 3, got " +
+                              std::to_string(freiburg));
     }
     RGBDCalib calib;
     calib.rgb = k;

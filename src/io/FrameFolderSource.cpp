@@ -49,7 +49,8 @@ void FrameFolderSource::findFrames() {
         int number = 0;
         const std::string name = it->path().filename().string();
         if (!parseDepthFileName(name, number)) continue;
-        const std::string stem = (fs::path(folder_) / name.substr(0, name.size() - std::string(".depth.png").size())).string();
+        const std::string stem =
+            (fs::path(folder_) / name.substr(0, name.size() - std::string(".depth.png").size())).string();
         FrameFiles files{number, stem, it->path().string(), "", false, Mat4f::identity()};
         for (const char* colour_suffix : {".color.png", ".color.jpg"})
             if (frame_reading::fileExists(stem + colour_suffix)) {
@@ -60,7 +61,8 @@ void FrameFolderSource::findFrames() {
     }
     if (ec) throw IoError(folder_, "cannot list folder: " + ec.message());
     if (frames_.empty()) throw IoError(folder_, "no frame-XXXXXX.depth.png files");
-    std::sort(frames_.begin(), frames_.end(), [](const FrameFiles& a, const FrameFiles& b) { return a.number < b.number; });
+    std::sort(frames_.begin(), frames_.end(),
+              [](const FrameFiles& a, const FrameFiles& b) { return a.number < b.number; });
 }
 
 void FrameFolderSource::loadPoses() {
@@ -75,13 +77,17 @@ void FrameFolderSource::loadPoses() {
             continue;
         }
         if (!std::all_of(m.begin(), m.end(), [](double v) { return text::finiteAsFloat(v); }))
-            throw IoError(pose_path, "non-finite values in the 4x4 pose (stored as floats); a frame without a pose has -inf in all of its top three rows");
+            throw IoError(pose_path,
+                          "non-finite values in the 4x4 pose (stored as floats); a frame without a pose has -inf in "
+                          "all of its top three rows");
         if (std::abs(m[12]) > 1e-6 || std::abs(m[13]) > 1e-6 || std::abs(m[14]) > 1e-6 || std::abs(m[15] - 1.0) > 1e-6)
             throw IoError(pose_path, "the last row of a 4x4 camera-to-world pose must be 0 0 0 1");
         const double R[9] = {m[0], m[1], m[2], m[4], m[5], m[6], m[8], m[9], m[10]};
         std::string problem = text::rotationProblem(R);
-        if (!problem.empty()) problem = "the rotation of the 4x4 camera-to-world pose is " + problem;
-        else problem = text::positionProblem(m[3], m[7], m[11]);
+        if (!problem.empty())
+            problem = "the rotation of the 4x4 camera-to-world pose is " + problem;
+        else
+            problem = text::positionProblem(m[3], m[7], m[11]);
         if (!problem.empty()) throw IoError(pose_path, problem);
         for (int i = 0; i < 16; ++i) f.T_world_camera.m[i] = float(m[std::size_t(i)]);
         f.has_pose = true;
@@ -103,7 +109,8 @@ void FrameFolderSource::calibrateFromK() {
     const std::vector<double> K = text::readNumberMatrix(k_path, 3, 3);
     if (!std::all_of(K.begin(), K.end(), [](double v) { return text::finiteAsFloat(v); }))
         throw IoError(k_path, "non-finite value in K (stored as floats)");
-    if (!(float(K[0]) > 0.f) || !(float(K[4]) > 0.f)) throw IoError(k_path, "focal lengths K(0,0) and K(1,1) must be positive");
+    if (!(float(K[0]) > 0.f) || !(float(K[4]) > 0.f))
+        throw IoError(k_path, "focal lengths K(0,0) and K(1,1) must be positive");
     if (K[1] != 0.0 || K[3] != 0.0 || K[6] != 0.0 || K[7] != 0.0 || K[8] != 1.0)
         throw IoError(k_path, "expected K = [fx 0 cx; 0 fy cy; 0 0 1] (no skew)");
 
@@ -112,18 +119,24 @@ void FrameFolderSource::calibrateFromK() {
     Intrinsics depth{first_depth.width(), first_depth.height(), float(K[0]), float(K[4]), float(K[2]), float(K[5])};
     const std::string focal_problem = focalLengthProblem(depth);
     if (!focal_problem.empty()) throw IoError(k_path, focal_problem + " (" + frames_.front().depth_path + ")");
-    if (!(depth.cx >= -0.5f && depth.cx <= float(depth.width) - 0.5f && depth.cy >= -0.5f && depth.cy <= float(depth.height) - 0.5f))
-        throw IoError(k_path, "the principal point (" + text::formatFloat(depth.cx) + ", " + text::formatFloat(depth.cy) +
-                                  ") lies outside the " + std::to_string(depth.width) + "x" + std::to_string(depth.height) +
-                                  " depth images (" + frames_.front().depth_path + ")");
+    if (!(depth.cx >= -0.5f && depth.cx <= float(depth.width) - 0.5f && depth.cy >= -0.5f &&
+          depth.cy <= float(depth.height) - 0.5f))
+        throw IoError(k_path, "the principal point (" + text::formatFloat(depth.cx) + ", " +
+                                  text::formatFloat(depth.cy) + ") lies outside the " + std::to_string(depth.width) +
+                                  "x" + std::to_string(depth.height) + " depth images (" + frames_.front().depth_path +
+                                  ")");
     Intrinsics rgb = depth;
     if (!frames_.front().colour_path.empty()) {
         const Vec2i colour_size = readColorImage(frames_.front().colour_path).size();
         if (colour_size != depth.size()) {
             // Same field of view at another resolution; keeps pixel centres consistent (see Intrinsics::downsampled).
             const float sx = float(colour_size.x) / float(depth.width), sy = float(colour_size.y) / float(depth.height);
-            rgb = Intrinsics{colour_size.x, colour_size.y, depth.fx * sx, depth.fy * sy,
-                             (depth.cx + 0.5f) * sx - 0.5f, (depth.cy + 0.5f) * sy - 0.5f};
+            rgb = Intrinsics{colour_size.x,
+                             colour_size.y,
+                             depth.fx * sx,
+                             depth.fy * sy,
+                             (depth.cx + 0.5f) * sx - 0.5f,
+                             (depth.cy + 0.5f) * sy - 0.5f};
         }
     }
     calib_.rgb = rgb;
@@ -136,7 +149,8 @@ bool FrameFolderSource::next(RGBDFrame& frame) {
     if (position_ >= frames_.size()) return false;
     const int index = int(position_);
     const FrameFiles& f = frames_[position_++];  // moves on even if this frame throws
-    frame_reading::readDepthAndColour(f.depth_path, f.colour_path, index, calib_.depth, calib_.rgb, read_.depth_raw, read_.rgb);
+    frame_reading::readDepthAndColour(f.depth_path, f.colour_path, index, calib_.depth, calib_.rgb, read_.depth_raw,
+                                      read_.rgb);
     read_.handOver(frame, !f.colour_path.empty());
     frame.index = index;
     frame.file_number = f.number;
@@ -151,7 +165,9 @@ std::string FrameFolderSource::description() const {
     return "frame folder " + folder_ + " (" + std::to_string(frames_.size()) + " frames, numbers " +
            std::to_string(frames_.front().number) + ".." + std::to_string(frames_.back().number) + ", " +
            std::to_string(ground_truth_.size()) + " with poses" +
-           (lost_poses_ > 0 ? ", " + std::to_string(lost_poses_) + " whose pose files mark lost tracking (-inf)" : std::string()) + ")";
+           (lost_poses_ > 0 ? ", " + std::to_string(lost_poses_) + " whose pose files mark lost tracking (-inf)"
+                            : std::string()) +
+           ")";
 }
 
 }  // namespace voxfuse

@@ -27,8 +27,9 @@ std::string sizeText(Vec2i size) { return std::to_string(size.x) + "x" + std::to
 // A wrong-sized image would be silently misread by every later stage, so it is a frame error here.
 void requireSize(const std::string& path, int frame, Vec2i actual, const Intrinsics& camera, const char* what) {
     if (actual != camera.size())
-        throw IoError(path, std::string(what) + " image is " + sizeText(actual) + " but the calibration's " + what +
-                                " camera is " + sizeText(camera.size()),
+        throw IoError(path,
+                      std::string(what) + " image is " + sizeText(actual) + " but the calibration's " + what +
+                          " camera is " + sizeText(camera.size()),
                       frame);
 }
 
@@ -66,7 +67,8 @@ std::vector<ListedImage> readTimestampedImageList(const std::string& list_path, 
         if (text::isBlankOrComment(line)) continue;
         const auto tokens = text::splitWhitespace(line);
         if (tokens.size() != 2)
-            throw ParseError(list_path, line_number, "expected 'timestamp filename', got " + std::to_string(tokens.size()) + " fields");
+            throw ParseError(list_path, line_number,
+                             "expected 'timestamp filename', got " + std::to_string(tokens.size()) + " fields");
         double time = 0.0;
         if (!text::parseDouble(tokens[0], time) || !std::isfinite(time))
             throw ParseError(list_path, line_number, "not a timestamp: " + text::excerpt(tokens[0]));
@@ -90,8 +92,9 @@ void readColour(const std::string& path, int frame, const Intrinsics& rgb_camera
     requireSize(path, frame, rgb.size(), rgb_camera, "rgb");
 }
 
-void readDepthAndColour(const std::string& depth_path, const std::string& colour_path, int frame, const Intrinsics& depth_camera,
-                        const Intrinsics& rgb_camera, Image<std::uint16_t>& depth, Image<Vec4u8>& rgb) {
+void readDepthAndColour(const std::string& depth_path, const std::string& colour_path, int frame,
+                        const Intrinsics& depth_camera, const Intrinsics& rgb_camera, Image<std::uint16_t>& depth,
+                        Image<Vec4u8>& rgb) {
     if (colour_path.empty()) return readDepth(depth_path, frame, depth_camera, depth);
     std::future<void> colour;
     try {

@@ -41,9 +41,11 @@ void readColour(const std::string& path, int frame, const Intrinsics& rgb_camera
 
 // Both images of one frame (the colour only when `colour_path` is not empty), decoded at the same
 // time, the colour on a second thread: they do not depend on each other, and decoding them one after
-// the other is a noticeable part of a frame's time. One after the other when no thread can be had. Both are waited for; when both fail, the depth's error is the one thrown.
-void readDepthAndColour(const std::string& depth_path, const std::string& colour_path, int frame, const Intrinsics& depth_camera,
-                        const Intrinsics& rgb_camera, Image<std::uint16_t>& depth, Image<Vec4u8>& rgb);
+// the other is a noticeable part of a frame's time. One after the other when no thread can be had. Both are waited for;
+// when both fail, the depth's error is the one thrown.
+void readDepthAndColour(const std::string& depth_path, const std::string& colour_path, int frame,
+                        const Intrinsics& depth_camera, const Intrinsics& rgb_camera, Image<std::uint16_t>& depth,
+                        Image<Vec4u8>& rgb);
 
 }  // namespace frame_reading
 }  // namespace voxfuse

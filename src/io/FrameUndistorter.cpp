@@ -30,7 +30,7 @@ std::string sizeText(Vec2i size) { return std::to_string(size.x) + "x" + std::to
 }  // namespace
 
 std::unique_ptr<FrameUndistorter::Maps> FrameUndistorter::makeMaps(const Intrinsics& k, const LensDistortion& d,
-                                                                  int map_type) {
+                                                                   int map_type) {
     if (!d.any()) return nullptr;
     if (!k.valid()) throw ConfigError("FrameUndistorter: a camera with lens distortion has invalid intrinsics");
     const cv::Matx33d K(k.fx, 0.0, k.cx, 0.0, k.fy, k.cy, 0.0, 0.0, 1.0);
@@ -57,8 +57,11 @@ FrameUndistorter::FrameUndistorter(const RGBDCalib& calib)
 
 FrameUndistorter::~FrameUndistorter() = default;
 FrameUndistorter::FrameUndistorter(FrameUndistorter&& other) noexcept
-    : rgb_maps_(std::move(other.rgb_maps_)), depth_maps_(std::move(other.depth_maps_)), undistorted_(other.undistorted_),
-      label_distortion_(other.label_distortion_), label_maps_(std::move(other.label_maps_)) {}
+    : rgb_maps_(std::move(other.rgb_maps_)),
+      depth_maps_(std::move(other.depth_maps_)),
+      undistorted_(other.undistorted_),
+      label_distortion_(other.label_distortion_),
+      label_maps_(std::move(other.label_maps_)) {}
 
 FrameUndistorter& FrameUndistorter::operator=(FrameUndistorter&& other) noexcept {
     rgb_maps_ = std::move(other.rgb_maps_);
@@ -105,8 +108,8 @@ void FrameUndistorter::apply(RGBDFrame& frame, FrameImageBuffers& scratch) const
         {
             const std::lock_guard<std::mutex> lock(label_maps_mutex_);
             if (!label_maps_ || label_maps_->size != frame.labels.size())
-                label_maps_ = makeMaps(undistorted_.labelCamera().resized(frame.labels.width(), frame.labels.height()), label_distortion_,
-                                       CV_32FC1);
+                label_maps_ = makeMaps(undistorted_.labelCamera().resized(frame.labels.width(), frame.labels.height()),
+                                       label_distortion_, CV_32FC1);
             maps = label_maps_;
         }
         Image<ClassId> out(frame.labels.size());

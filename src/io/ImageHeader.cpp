@@ -12,9 +12,13 @@ namespace {
 
 constexpr std::size_t kHeadBytes = 4096;
 
-std::uint32_t be32(const unsigned char* p) { return (std::uint32_t(p[0]) << 24) | (std::uint32_t(p[1]) << 16) | (std::uint32_t(p[2]) << 8) | p[3]; }
+std::uint32_t be32(const unsigned char* p) {
+    return (std::uint32_t(p[0]) << 24) | (std::uint32_t(p[1]) << 16) | (std::uint32_t(p[2]) << 8) | p[3];
+}
 std::uint16_t be16(const unsigned char* p) { return std::uint16_t((p[0] << 8) | p[1]); }
-std::uint32_t le32(const unsigned char* p) { return (std::uint32_t(p[3]) << 24) | (std::uint32_t(p[2]) << 16) | (std::uint32_t(p[1]) << 8) | p[0]; }
+std::uint32_t le32(const unsigned char* p) {
+    return (std::uint32_t(p[3]) << 24) | (std::uint32_t(p[2]) << 16) | (std::uint32_t(p[1]) << 8) | p[0];
+}
 
 // PNG: width and height are the first fields of the IHDR chunk.
 void readPng(const std::vector<unsigned char>& b, Header& h) {
@@ -134,12 +138,18 @@ Header read(const std::string& path) {
 
 const char* name(Format format) {
     switch (format) {
-        case Format::Png: return "PNG";
-        case Format::Jpeg: return "JPEG";
-        case Format::Netpbm: return "PPM/PGM";
-        case Format::Tiff: return "TIFF";
-        case Format::Bmp: return "BMP";
-        case Format::Unknown: break;
+        case Format::Png:
+            return "PNG";
+        case Format::Jpeg:
+            return "JPEG";
+        case Format::Netpbm:
+            return "PPM/PGM";
+        case Format::Tiff:
+            return "TIFF";
+        case Format::Bmp:
+            return "BMP";
+        case Format::Unknown:
+            break;
     }
     return "unknown format";
 }

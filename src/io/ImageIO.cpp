@@ -48,7 +48,8 @@ void readWholeFile(const std::string& path, std::vector<unsigned char>& bytes) {
     if (size < 0) throw IoError(path, "read error");
     // 2^26 pixels of 16-bit RGBA are 512 MiB even uncompressed: a larger file is no frame's image.
     if (size > (std::streamoff(1) << 30))
-        throw IoError(path, "the file has " + std::to_string(size >> 20) + " MiB: too large for an image of a frame (at most 1 GiB)");
+        throw IoError(path, "the file has " + std::to_string(size >> 20) +
+                                " MiB: too large for an image of a frame (at most 1 GiB)");
     bytes.resize(std::size_t(size));
     in.seekg(0);
     if (!in.read(reinterpret_cast<char*>(bytes.data()), size)) throw IoError(path, "read error");
@@ -108,7 +109,8 @@ private:
 
     void checkMagic(char expected_kind, const char* format_name) const {
         const std::string expected = std::string("P") + expected_kind;
-        if (bytes_.size() < 2) fail("wrong magic: the file is too short to hold '" + expected + "' (" + format_name + ")");
+        if (bytes_.size() < 2)
+            fail("wrong magic: the file is too short to hold '" + expected + "' (" + format_name + ")");
         std::string got;
         for (int i = 0; i < 2; ++i) {
             const unsigned char c = bytes_[std::size_t(i)];
@@ -135,7 +137,8 @@ private:
         skipWhitespaceAndComments();
         if (pos_ >= bytes_.size()) fail(std::string("bad header: file ends before the ") + what);
         if (!std::isdigit(bytes_[pos_]))
-            fail(std::string("bad header: expected the ") + what + " (a decimal number), got '" + char(bytes_[pos_]) + "'");
+            fail(std::string("bad header: expected the ") + what + " (a decimal number), got '" + char(bytes_[pos_]) +
+                 "'");
         long long value = 0;
         while (pos_ < bytes_.size() && std::isdigit(bytes_[pos_])) {
             value = value * 10 + (bytes_[pos_] - '0');
@@ -158,7 +161,8 @@ void requirePixelBytes(const std::string& path, const std::vector<unsigned char>
     const std::size_t available = bytes.size() - h.data_offset;
     if (available < needed)
         throw IoError(path, "truncated: " + std::to_string(h.width) + "x" + std::to_string(h.height) + " needs " +
-                                std::to_string(needed) + " bytes of pixel data, the file has " + std::to_string(available));
+                                std::to_string(needed) + " bytes of pixel data, the file has " +
+                                std::to_string(available));
 }
 
 void writeWholeFile(const std::string& path, const std::string& header, const std::vector<unsigned char>& data) {
@@ -179,14 +183,30 @@ std::string netpbmHeader(const char* magic, Vec2i size, int maxval) {
 std::string describeMat(const cv::Mat& m) {
     std::string depth;
     switch (m.depth()) {
-        case CV_8U: depth = "8-bit"; break;
-        case CV_8S: depth = "8-bit signed"; break;
-        case CV_16U: depth = "16-bit"; break;
-        case CV_16S: depth = "16-bit signed"; break;
-        case CV_32S: depth = "32-bit integer"; break;
-        case CV_32F: depth = "32-bit float"; break;
-        case CV_64F: depth = "64-bit float"; break;
-        default: depth = "unknown-depth"; break;
+        case CV_8U:
+            depth = "8-bit";
+            break;
+        case CV_8S:
+            depth = "8-bit signed";
+            break;
+        case CV_16U:
+            depth = "16-bit";
+            break;
+        case CV_16S:
+            depth = "16-bit signed";
+            break;
+        case CV_32S:
+            depth = "32-bit integer";
+            break;
+        case CV_32F:
+            depth = "32-bit float";
+            break;
+        case CV_64F:
+            depth = "64-bit float";
+            break;
+        default:
+            depth = "unknown-depth";
+            break;
     }
     return depth + " " + std::to_string(m.channels()) + "-channel";
 }
@@ -199,13 +219,15 @@ image_header::Header requirePlausibleImage(const std::string& path) {
         throw IoError(path, "cannot decode image: not a format VoxFuse reads (PNG, JPEG, PPM/PGM, TIFF or BMP)");
     const char* format = image_header::name(h.format);
     if (h.width >= 0 && double(h.width) * double(h.height) > kMaxImagePixels)
-        throw IoError(path, std::string("the ") + format + " says it is " + std::to_string(h.width) + "x" + std::to_string(h.height) +
+        throw IoError(path, std::string("the ") + format + " says it is " + std::to_string(h.width) + "x" +
+                                std::to_string(h.height) +
                                 " pixels: too large for an image of a frame (corrupt header?)");
     std::error_code ec;
     const std::uintmax_t size = std::filesystem::file_size(path, ec);
     if (!ec && h.minimum_bytes > size)
-        throw IoError(path, std::string("truncated: a ") + std::to_string(h.width) + "x" + std::to_string(h.height) + " " + format +
-                                " needs " + std::to_string(h.minimum_bytes) + " bytes, the file has " + std::to_string(size));
+        throw IoError(path, std::string("truncated: a ") + std::to_string(h.width) + "x" + std::to_string(h.height) +
+                                " " + format + " needs " + std::to_string(h.minimum_bytes) + " bytes, the file has " +
+                                std::to_string(size));
     return h;
 }
 
@@ -354,7 +376,8 @@ bool readJpeg(const std::string& path, Image<Vec4u8>& image) {
     const std::unique_ptr<void, int (*)(tjhandle)> tj(tjInitDecompress(), tjDestroy);
     if (!tj) throw IoError(path, "cannot start the JPEG decoder");
     int width = 0, height = 0, subsampling = 0, colorspace = 0;
-    if (tjDecompressHeader3(tj.get(), bytes.data(), static_cast<unsigned long>(bytes.size()), &width, &height, &subsampling, &colorspace) != 0)
+    if (tjDecompressHeader3(tj.get(), bytes.data(), static_cast<unsigned long>(bytes.size()), &width, &height,
+                            &subsampling, &colorspace) != 0)
         throw IoError(path, std::string("corrupt JPEG: ") + tjGetErrorStr2(tj.get()));
     if (colorspace == TJCS_CMYK || colorspace == TJCS_YCCK) return false;
     if (width <= 0 || height <= 0) throw IoError(path, "corrupt JPEG: the header gives no image size");
@@ -362,9 +385,11 @@ bool readJpeg(const std::string& path, Image<Vec4u8>& image) {
         throw IoError(path, "the JPEG says it is " + std::to_string(width) + "x" + std::to_string(height) +
                                 " pixels: too large for an image of a frame (corrupt header?)");
     image.resize(Vec2i{width, height});
-    if (tjDecompress2(tj.get(), bytes.data(), static_cast<unsigned long>(bytes.size()), reinterpret_cast<unsigned char*>(image.host()), width, 0,
-                      height, TJPF_RGBA, TJFLAG_STOPONWARNING) != 0)
-        throw IoError(path, std::string("corrupt JPEG: ") + tjGetErrorStr2(tj.get()) + " (the file is damaged or truncated)");
+    if (tjDecompress2(tj.get(), bytes.data(), static_cast<unsigned long>(bytes.size()),
+                      reinterpret_cast<unsigned char*>(image.host()), width, 0, height, TJPF_RGBA,
+                      TJFLAG_STOPONWARNING) != 0)
+        throw IoError(path,
+                      std::string("corrupt JPEG: ") + tjGetErrorStr2(tj.get()) + " (the file is damaged or truncated)");
     return true;
 }
 
@@ -384,8 +409,12 @@ void readColorImage(const std::string& path, Image<Vec4u8>& rgba) {
         throw IoError(path, "unsupported colour image: " + describeMat(*m) + " (expected 8- or 16-bit)");
     }
     const int channels = m->channels();
-    const int to_rgba = channels == 1 ? cv::COLOR_GRAY2RGBA : channels == 3 ? cv::COLOR_BGR2RGBA : channels == 4 ? cv::COLOR_BGRA2RGBA : -1;
-    if (to_rgba < 0) throw IoError(path, "unsupported colour image: " + describeMat(*m) + " (expected 1, 3 or 4 channels)");
+    const int to_rgba = channels == 1   ? cv::COLOR_GRAY2RGBA
+                        : channels == 3 ? cv::COLOR_BGR2RGBA
+                        : channels == 4 ? cv::COLOR_BGRA2RGBA
+                                        : -1;
+    if (to_rgba < 0)
+        throw IoError(path, "unsupported colour image: " + describeMat(*m) + " (expected 1, 3 or 4 channels)");
     rgba.resize(Vec2i{m->cols, m->rows});
     cv::Mat into = matOver(rgba);
     cv::cvtColor(*m, into, to_rgba);
@@ -439,7 +468,8 @@ cv::Mat readRawClassIds(const std::string& path) {
         requireImageFile(path);
         const auto bytes = readWholeFile(path);
         const NetpbmHeader h = NetpbmHeaderParser(path, bytes).parse('5', "binary PGM label image");
-        if (h.maxval < 1 || h.maxval > 65535) throw IoError(path, "maxval " + std::to_string(h.maxval) + " out of range (1..65535)");
+        if (h.maxval < 1 || h.maxval > 65535)
+            throw IoError(path, "maxval " + std::to_string(h.maxval) + " out of range (1..65535)");
         const bool wide = h.maxval > 255;  // two bytes per sample, big-endian
         requirePixelBytes(path, bytes, h, wide ? 2 : 1);
         cv::Mat m(h.height, h.width, wide ? CV_16UC1 : CV_8UC1);
@@ -461,7 +491,8 @@ cv::Mat readRawClassIds(const std::string& path) {
                      std::memcmp(head, "\x89PNG\r\n\x1a\n", 8) == 0 && std::memcmp(head + 12, "IHDR", 4) == 0;
     const int bits = head[24];
     const bool grey = head[25] == 0;
-    if (png && grey && (bits == 1 || bits == 2 || bits == 4) && m.type() == CV_8UC1) m /= 255 / ((1 << bits) - 1);  // exact: 255, 85, 17
+    if (png && grey && (bits == 1 || bits == 2 || bits == 4) && m.type() == CV_8UC1)
+        m /= 255 / ((1 << bits) - 1);  // exact: 255, 85, 17
     return m;
 }
 
@@ -469,7 +500,8 @@ cv::Mat readRawClassIds(const std::string& path) {
 
 Image<ClassId> readLabelImage(const std::string& path, int ignore_id) {
     if (ignore_id < -1 || ignore_id > 65535)
-        throw ConfigError("label ignore id " + std::to_string(ignore_id) + " out of range: expected -1 (none) or 0..65535");
+        throw ConfigError("label ignore id " + std::to_string(ignore_id) +
+                          " out of range: expected -1 (none) or 0..65535");
     const cv::Mat m = readRawClassIds(path);
     const std::string requirement = "label images must be single-channel 8- or 16-bit class ids; ";
     // IMREAD_UNCHANGED expands palette PNGs to BGR, so their indices are lost: say what to do about it.

@@ -127,7 +127,8 @@ LabelledImageSource::LabelledImageSource(std::unique_ptr<ImageSource> source, co
         readFolder();
     } else if (fs::is_regular_file(options_.path, ec)) {
         if (isLabelImageName(options_.path) || isJpegName(options_.path))
-            throw IoError(options_.path, "this is an image; labels need a folder of label images or a list file of them");
+            throw IoError(options_.path,
+                          "this is an image; labels need a folder of label images or a list file of them");
         is_list_ = true;
         readList();
     } else {
@@ -173,9 +174,10 @@ void LabelledImageSource::readFolder() {
     if (match_ == LabelStreamOptions::Match::Timestamp) {
         const auto bad = std::find_if(found.begin(), found.end(), [](const Found& f) { return !f.decimal; });
         if (bad != found.end())
-            throw IoError(folder, "timestamp matching needs label files named by their time in seconds (e.g. "
-                                  "1305031102.175304.png); '" +
-                                      fs::path(bad->path).filename().string() + "' is not");
+            throw IoError(folder,
+                          "timestamp matching needs label files named by their time in seconds (e.g. "
+                          "1305031102.175304.png); '" +
+                              fs::path(bad->path).filename().string() + "' is not");
         std::sort(found.begin(), found.end(), [](const Found& a, const Found& b) {
             return a.time_s != b.time_s ? a.time_s < b.time_s : a.path < b.path;
         });
@@ -206,7 +208,8 @@ void LabelledImageSource::readFolder() {
 
 void LabelledImageSource::readList() {
     const std::string& path = options_.path;
-    match_ = options_.match == LabelStreamOptions::Match::Automatic ? LabelStreamOptions::Match::Timestamp : options_.match;
+    match_ =
+        options_.match == LabelStreamOptions::Match::Automatic ? LabelStreamOptions::Match::Timestamp : options_.match;
     for (frame_reading::ListedImage& listed : frame_reading::readTimestampedImageList(path, missing_listed_files_)) {
         // By index a missing file keeps its line's place, so that the frames after it keep theirs.
         if (listed.on_disk)
@@ -228,13 +231,15 @@ const LabelledImageSource::LabelImage* LabelledImageSource::find(const RGBDFrame
     if (match_ == LabelStreamOptions::Match::Index) {
         // Numbered labels meet frames numbered by their files by number: frame-000017 takes 17, however
         // the numbers skip. Otherwise the frame's place in the source is the image's place.
-        const long long at = first_number_ >= 0 && frame.file_number >= 0 ? frame.file_number - first_number_ : frame.index;
+        const long long at =
+            first_number_ >= 0 && frame.file_number >= 0 ? frame.file_number - first_number_ : frame.index;
         if (at < 0 || std::size_t(at) >= images_.size()) return nullptr;
         const LabelImage& image = images_[std::size_t(at)];
         return image.path.empty() ? nullptr : &image;
     }
     const double t = frame.rgb_timestamp_s >= 0.0 ? frame.rgb_timestamp_s : frame.timestamp_s;
-    return nearestInTime(images_, t, options_.max_time_difference_s, [](const LabelImage& image) { return image.time_s; });
+    return nearestInTime(images_, t, options_.max_time_difference_s,
+                         [](const LabelImage& image) { return image.time_s; });
 }
 
 bool LabelledImageSource::next(RGBDFrame& frame) {

@@ -129,7 +129,9 @@ private:
         buffer_.resize(want);
         in_.read(reinterpret_cast<char*>(buffer_.data() + have), std::streamsize(want - have));
         buffer_.resize(have + std::size_t(in_.gcount()));
-        if (buffer_.size() < n) fail("truncated: the file ends inside the map (" + std::to_string(taken_ + buffer_.size()) + " bytes read)");
+        if (buffer_.size() < n)
+            fail("truncated: the file ends inside the map (" + std::to_string(taken_ + buffer_.size()) +
+                 " bytes read)");
     }
     std::ifstream& in_;
     std::string path_;
@@ -148,8 +150,10 @@ constexpr std::uint32_t voxelRecordBytes() {
 
 template <class TVoxel>
 void writeVoxelRecord(FieldWriter& w, const TVoxel& v) {
-    if constexpr (sizeof(v.sdf) == 2) w.i16(v.sdf);
-    else w.f32(v.sdf);
+    if constexpr (sizeof(v.sdf) == 2)
+        w.i16(v.sdf);
+    else
+        w.f32(v.sdf);
     w.u8(v.w_depth);
     if constexpr (TVoxel::hasColor) {
         w.u8(v.w_color);
@@ -241,8 +245,8 @@ MapFileInfo readHeader(FieldReader& r) {
     MapFileInfo info;
     info.version = r.u32();
     if (info.version == 0 || info.version > kMapFileVersion)
-        r.fail("map file version " + std::to_string(info.version) + " is not one this VoxFuse reads (up to " + std::to_string(kMapFileVersion) +
-               ")");
+        r.fail("map file version " + std::to_string(info.version) + " is not one this VoxFuse reads (up to " +
+               std::to_string(kMapFileVersion) + ")");
     const std::uint32_t header_bytes = r.u32();
     r.resetCrc();
     char name[kVoxelTypeNameBytes + 1] = {};
@@ -278,51 +282,63 @@ MapFileInfo readHeader(FieldReader& r) {
     info.record_count = r.u64();
     const std::uint32_t computed = r.crc();
     if (r.u32() != computed) r.fail("corrupt: the header's checksum does not match");
-    if (header_bytes != kHeaderBytes) r.fail("corrupt: header size " + std::to_string(header_bytes) + " is not version 1's");
+    if (header_bytes != kHeaderBytes)
+        r.fail("corrupt: header size " + std::to_string(header_bytes) + " is not version 1's");
     if (index > 1) r.fail("corrupt: unknown index type " + std::to_string(index));
     bool known = false;
 #define VF_KNOWN_VOXEL(TVoxel, TIndex) \
     if (info.voxel_type == TVoxel::name) known = known || voxel_bytes == voxelRecordBytes<TVoxel>();
     VF_FOR_EACH_ENGINE_PAIR(VF_KNOWN_VOXEL)
 #undef VF_KNOWN_VOXEL
-    if (!known) r.fail("unknown voxel type '" + info.voxel_type + "' with " + std::to_string(voxel_bytes) + "-byte records");
+    if (!known)
+        r.fail("unknown voxel type '" + info.voxel_type + "' with " + std::to_string(voxel_bytes) + "-byte records");
     if (!(info.scene.voxel_size_m > 0.f) || !(info.scene.mu_m > info.scene.voxel_size_m) || info.scene.max_weight < 1 ||
-        info.scene.max_weight > 255 || !finite(info.T_world_camera) || !finite(info.T_source_world) || info.camera.width < 0 ||
-        info.camera.height < 0 || info.camera.width > 1 << 16 || info.camera.height > 1 << 16 ||
-        !(std::isfinite(info.camera.fx) && std::isfinite(info.camera.fy) && std::isfinite(info.camera.cx) && std::isfinite(info.camera.cy)))
+        info.scene.max_weight > 255 || !finite(info.T_world_camera) || !finite(info.T_source_world) ||
+        info.camera.width < 0 || info.camera.height < 0 || info.camera.width > 1 << 16 ||
+        info.camera.height > 1 << 16 ||
+        !(std::isfinite(info.camera.fx) && std::isfinite(info.camera.fy) && std::isfinite(info.camera.cx) &&
+          std::isfinite(info.camera.cy)))
         r.fail("corrupt: the scene settings, poses or camera are out of range");
     // Rays are cast from the resume pose as soon as the map is loaded: it must be a camera's.
     for (const Mat4f* pose : {&info.T_world_camera, &info.T_source_world}) {
         const std::string problem = text::rigidPoseProblem(pose->m);
-        if (!problem.empty()) r.fail("corrupt: " + std::string(pose == &info.T_world_camera ? "the resume pose: " : "the world origin: ") + problem);
+        if (!problem.empty())
+            r.fail("corrupt: " +
+                   std::string(pose == &info.T_world_camera ? "the resume pose: " : "the world origin: ") + problem);
     }
     // What a map of this version can hold; the engine's own checks would refuse the rest without
     // naming the file.
     const VoxelBlockHashSettings& h = info.hash_settings;
-    if (info.hash && (h.bucket_count < 1 || (h.entries_per_bucket != 1 && h.entries_per_bucket != 2) || h.excess_entry_count < 0 ||
-                      (long long)h.bucket_count * h.entries_per_bucket + h.excess_entry_count > INT_MAX || h.max_block_count < 1 ||
-                      h.max_block_count > (1 << 22) || h.blocks_per_growth < 1))
+    if (info.hash &&
+        (h.bucket_count < 1 || (h.entries_per_bucket != 1 && h.entries_per_bucket != 2) || h.excess_entry_count < 0 ||
+         (long long)h.bucket_count * h.entries_per_bucket + h.excess_entry_count > INT_MAX || h.max_block_count < 1 ||
+         h.max_block_count > (1 << 22) || h.blocks_per_growth < 1))
         r.fail("corrupt: the hash settings are out of range (" + std::to_string(h.bucket_count) + " buckets of " +
-               std::to_string(h.entries_per_bucket) + ", " + std::to_string(h.excess_entry_count) + " excess entries, at most " +
-               std::to_string(h.max_block_count) + " blocks)");
+               std::to_string(h.entries_per_bucket) + ", " + std::to_string(h.excess_entry_count) +
+               " excess entries, at most " + std::to_string(h.max_block_count) + " blocks)");
     if (!info.hash)
         for (int a = 0; a < 3; ++a)
-            if (info.dense_size[a] < 1 || info.dense_size[a] > (1 << 16) || std::abs((long long)info.dense_offset[a]) > (1 << 24))
-                r.fail("corrupt: the dense volume is out of range (offset " + std::to_string(info.dense_offset[a]) + ", size " +
-                       std::to_string(info.dense_size[a]) + " on axis " + "xyz"[a] + ")");
-    if (!info.hash && info.record_count != std::uint64_t(info.dense_size.x) * std::uint64_t(info.dense_size.y) * std::uint64_t(info.dense_size.z))
-        r.fail("corrupt: " + std::to_string(info.record_count) + " voxels for a " + std::to_string(info.dense_size.x) + "x" +
-               std::to_string(info.dense_size.y) + "x" + std::to_string(info.dense_size.z) + " volume");
+            if (info.dense_size[a] < 1 || info.dense_size[a] > (1 << 16) ||
+                std::abs((long long)info.dense_offset[a]) > (1 << 24))
+                r.fail("corrupt: the dense volume is out of range (offset " + std::to_string(info.dense_offset[a]) +
+                       ", size " + std::to_string(info.dense_size[a]) + " on axis " + "xyz"[a] + ")");
+    if (!info.hash && info.record_count != std::uint64_t(info.dense_size.x) * std::uint64_t(info.dense_size.y) *
+                                               std::uint64_t(info.dense_size.z))
+        r.fail("corrupt: " + std::to_string(info.record_count) + " voxels for a " + std::to_string(info.dense_size.x) +
+               "x" + std::to_string(info.dense_size.y) + "x" + std::to_string(info.dense_size.z) + " volume");
     if (info.hash && info.record_count > std::uint64_t(1) << 22)
-        r.fail("corrupt: " + std::to_string(info.record_count) + " blocks, more than a map can hold (" + std::to_string(1 << 22) + ")");
+        r.fail("corrupt: " + std::to_string(info.record_count) + " blocks, more than a map can hold (" +
+               std::to_string(1 << 22) + ")");
     // The file must hold what the header lists before memory is reserved for it: a short or damaged
     // file is refused here, not after gigabytes were allocated for blocks that are not there.
     const std::uint64_t record_bytes = info.hash ? 6 + std::uint64_t(kBlockVoxelCount) * voxel_bytes : voxel_bytes;
-    const std::uint64_t expected = r.taken() + info.record_count * record_bytes + 4 + 8;  // records, checksum, end marker
+    const std::uint64_t expected =
+        r.taken() + info.record_count * record_bytes + 4 + 8;  // records, checksum, end marker
     const std::int64_t actual = r.fileBytes();
     if (actual >= 0 && std::uint64_t(actual) < expected)
-        r.fail("truncated: the header lists " + std::to_string(info.record_count) + (info.hash ? " blocks" : " voxels") + " (" +
-               std::to_string(expected) + " bytes in all), the file has " + std::to_string(actual) + " bytes");
+        r.fail("truncated: the header lists " + std::to_string(info.record_count) +
+               (info.hash ? " blocks" : " voxels") + " (" + std::to_string(expected) + " bytes in all), the file has " +
+               std::to_string(actual) + " bytes");
     return info;
 }
 
@@ -330,9 +346,11 @@ MapFileInfo readHeader(FieldReader& r) {
 
 // Every block of a hash map, active or stored, as (key, entry) in (z, y, x) order.
 template <class TVoxel>
-std::vector<std::pair<std::uint64_t, int>> mapBlocks(const Scene<TVoxel, VoxelBlockHash>& scene, const GlobalCache* cache) {
+std::vector<std::pair<std::uint64_t, int>> mapBlocks(const Scene<TVoxel, VoxelBlockHash>& scene,
+                                                     const GlobalCache* cache) {
     const VoxelBlockHash& hash = scene.index();
-    if (hash.storedBlocks() > 0 && !cache) throw Error("writeMapFile: the map has swapped blocks; give its global cache");
+    if (hash.storedBlocks() > 0 && !cache)
+        throw Error("writeMapFile: the map has swapped blocks; give its global cache");
     std::vector<std::pair<std::uint64_t, int>> blocks;
     for (int i = 0; i < hash.entryCount(); ++i) {
         const HashEntry& e = hash.entry(i);
@@ -354,11 +372,15 @@ void writeBody(FieldWriter& w, const Scene<TVoxel, VoxelBlockHash>& scene, const
         w.i16(std::int16_t(b.y));
         w.i16(std::int16_t(b.z));
         const int ptr = hash.entry(entry).ptr, slot = stored_slot[entry];
-        if (ptr >= 0) std::copy(voxels + std::size_t(ptr) * kBlockVoxelCount, voxels + std::size_t(ptr + 1) * kBlockVoxelCount, block.begin());
-        else std::fill(block.begin(), block.end(), TVoxel::initial());
+        if (ptr >= 0)
+            std::copy(voxels + std::size_t(ptr) * kBlockVoxelCount, voxels + std::size_t(ptr + 1) * kBlockVoxelCount,
+                      block.begin());
+        else
+            std::fill(block.begin(), block.end(), TVoxel::initial());
         if (slot != kNoStoredCopy) {
             cache->read(slot, stored.data());
-            for (int v = 0; v < kBlockVoxelCount; ++v) mergeStoredVoxel(block[std::size_t(v)], stored[std::size_t(v)], scene.params().max_weight);
+            for (int v = 0; v < kBlockVoxelCount; ++v)
+                mergeStoredVoxel(block[std::size_t(v)], stored[std::size_t(v)], scene.params().max_weight);
         }
         for (const TVoxel& v : block) writeVoxelRecord(w, v);
         w.flushIfFull();
@@ -388,7 +410,8 @@ void readBody(FieldReader& r, const MapFileInfo& info, Scene<TVoxel, VoxelBlockH
     VoxelBlockHash& hash = scene.index();
     if (!cache && info.record_count > std::uint64_t(hash.settings().max_block_count))
         r.fail(std::to_string(info.record_count) + " blocks, more than the voxel array's maximum of " +
-               std::to_string(hash.settings().max_block_count) + " (continue it with swapping, or a larger --max-blocks)");
+               std::to_string(hash.settings().max_block_count) +
+               " (continue it with swapping, or a larger --max-blocks)");
     if (!cache) scene.reserveVoxelBlocks(int(info.record_count));
     std::vector<TVoxel> block(kBlockVoxelCount);
     std::uint64_t previous_key = 0;
@@ -398,7 +421,8 @@ void readBody(FieldReader& r, const MapFileInfo& info, Scene<TVoxel, VoxelBlockH
         b.y = r.i16();
         b.z = r.i16();
         const std::uint64_t key = blockKey(b);
-        if (key == kOutOfRangeBlockKey) r.fail("corrupt: block " + std::to_string(k) + " lies outside the storable coordinates");
+        if (key == kOutOfRangeBlockKey)
+            r.fail("corrupt: block " + std::to_string(k) + " lies outside the storable coordinates");
         if (k > 0 && key <= previous_key) r.fail("corrupt: blocks are not in (z, y, x) order, or one is listed twice");
         previous_key = key;
         for (TVoxel& v : block) v = readVoxelRecord<TVoxel>(r);
@@ -411,7 +435,8 @@ void readBody(FieldReader& r, const MapFileInfo& info, Scene<TVoxel, VoxelBlockH
         } else {
             if (hash.insert(b, &entry) != VoxelBlockHash::InsertResult::Inserted)
                 r.fail("the map's blocks do not fit its hash settings (block " + std::to_string(k) + ")");
-            std::copy(block.begin(), block.end(), scene.voxels().host() + std::size_t(hash.entry(entry).ptr) * kBlockVoxelCount);
+            std::copy(block.begin(), block.end(),
+                      scene.voxels().host() + std::size_t(hash.entry(entry).ptr) * kBlockVoxelCount);
         }
     }
     hash.stats().blocks_allocated = hash.blocksInUse();
@@ -422,7 +447,8 @@ void readBody(FieldReader& r, const MapFileInfo& info, Scene<TVoxel, VoxelBlockH
 template <class TVoxel>
 void readBody(FieldReader& r, const MapFileInfo& info, Scene<TVoxel, PlainVoxelArray>& scene, GlobalCache*) {
     if (info.record_count != scene.voxels().size())
-        r.fail("corrupt: " + std::to_string(info.record_count) + " voxels for a " + std::to_string(scene.voxels().size()) + "-voxel volume");
+        r.fail("corrupt: " + std::to_string(info.record_count) + " voxels for a " +
+               std::to_string(scene.voxels().size()) + "-voxel volume");
     TVoxel* voxels = scene.voxels().host();
     for (std::size_t i = 0; i < scene.voxels().size(); ++i) voxels[i] = readVoxelRecord<TVoxel>(r);
 }
@@ -444,12 +470,14 @@ template <class TVoxel, class TIndex>
 void requireFits(FieldReader& r, const MapFileInfo& file, const Scene<TVoxel, TIndex>& scene) {
     MapFileInfo mine;
     describeIndex(mine, scene);
-    if (file.voxel_type != TVoxel::name) r.fail("the map holds '" + file.voxel_type + "' voxels, not '" + TVoxel::name + "'");
+    if (file.voxel_type != TVoxel::name)
+        r.fail("the map holds '" + file.voxel_type + "' voxels, not '" + TVoxel::name + "'");
     if (file.hash != mine.hash) r.fail(std::string("the map uses the ") + (file.hash ? "hash" : "dense") + " index");
     if (file.hash) {
         const VoxelBlockHashSettings &a = file.hash_settings, &b = mine.hash_settings;
         // The table's shape must match; the voxel array's size need not (a map can outgrow it, with swapping).
-        if (a.bucket_count != b.bucket_count || a.entries_per_bucket != b.entries_per_bucket || a.excess_entry_count != b.excess_entry_count)
+        if (a.bucket_count != b.bucket_count || a.entries_per_bucket != b.entries_per_bucket ||
+            a.excess_entry_count != b.excess_entry_count)
             r.fail("the map's hash table settings differ from the scene's");
     } else if (file.dense_offset != mine.dense_offset || file.dense_size != mine.dense_size) {
         r.fail("the map's dense volume differs from the scene's");
@@ -469,8 +497,10 @@ MapFileInfo readMapFileInfo(const std::string& path) {
 }
 
 template <class TVoxel, class TIndex>
-void writeMapFile(const std::string& path, const Scene<TVoxel, TIndex>& scene, const MapFileInfo& pose, const GlobalCache* cache) {
-    if (scene.location() != Device::CPU) throw DeviceError("writeMapFile: the scene must be in host memory (Scene::copyTo(Device::CPU))");
+void writeMapFile(const std::string& path, const Scene<TVoxel, TIndex>& scene, const MapFileInfo& pose,
+                  const GlobalCache* cache) {
+    if (scene.location() != Device::CPU)
+        throw DeviceError("writeMapFile: the scene must be in host memory (Scene::copyTo(Device::CPU))");
     MapFileInfo info = pose;
     info.version = kMapFileVersion;
     info.voxel_type = TVoxel::name;
@@ -521,8 +551,9 @@ MapFileInfo readMapFile(const std::string& path, Scene<TVoxel, TIndex>& scene, G
     return info;
 }
 
-#define VF_INSTANTIATE(TVoxel, TIndex)                                                                                         \
-    template void writeMapFile<TVoxel, TIndex>(const std::string&, const Scene<TVoxel, TIndex>&, const MapFileInfo&, const GlobalCache*); \
+#define VF_INSTANTIATE(TVoxel, TIndex)                                                                               \
+    template void writeMapFile<TVoxel, TIndex>(const std::string&, const Scene<TVoxel, TIndex>&, const MapFileInfo&, \
+                                               const GlobalCache*);                                                  \
     template MapFileInfo readMapFile<TVoxel, TIndex>(const std::string&, Scene<TVoxel, TIndex>&, GlobalCache*);
 VF_FOR_EACH_ENGINE_PAIR(VF_INSTANTIATE)
 #undef VF_INSTANTIATE

@@ -78,15 +78,16 @@ void checkConsistent(const std::string& path, const TSurface& surface) {
 
 // The label property has ScanNet's name and type (its *_vh_clean_2.labels.ply files), which their tools read.
 std::string plyVertexHeader(std::size_t count, bool normals, bool colors, bool labels) {
-    std::string h = "element vertex " + std::to_string(count) + "\nproperty float x\nproperty float y\nproperty float z\n";
+    std::string h =
+        "element vertex " + std::to_string(count) + "\nproperty float x\nproperty float y\nproperty float z\n";
     if (normals) h += "property float nx\nproperty float ny\nproperty float nz\n";
     if (colors) h += "property uchar red\nproperty uchar green\nproperty uchar blue\n";
     if (labels) h += "property ushort label\n";
     return h;
 }
 
-void writePlyVertices(BinaryFile& file, const std::vector<Vec3f>& points, const std::vector<Vec3f>& normals, const std::vector<Vec3u8>& colors,
-                      const std::vector<ClassId>& labels) {
+void writePlyVertices(BinaryFile& file, const std::vector<Vec3f>& points, const std::vector<Vec3f>& normals,
+                      const std::vector<Vec3u8>& colors, const std::vector<ClassId>& labels) {
     for (std::size_t i = 0; i < points.size(); ++i) {
         file.vec3(points[i]);
         if (!normals.empty()) file.vec3(normals[i]);
@@ -123,8 +124,9 @@ void writeMeshPly(const std::string& path, const Mesh& mesh) {
     checkConsistent(path, mesh);
     BinaryFile file(path);
     file.text("ply\nformat binary_little_endian 1.0\ncomment written by VoxFuse\n" +
-              plyVertexHeader(mesh.vertices.size(), mesh.hasNormals(), mesh.hasColors(), mesh.hasLabels()) + "element face " +
-              std::to_string(mesh.triangles.size()) + "\nproperty list uchar int vertex_indices\nend_header\n");
+              plyVertexHeader(mesh.vertices.size(), mesh.hasNormals(), mesh.hasColors(), mesh.hasLabels()) +
+              "element face " + std::to_string(mesh.triangles.size()) +
+              "\nproperty list uchar int vertex_indices\nend_header\n");
     writePlyVertices(file, mesh.vertices, mesh.normals, mesh.colors, mesh.labels);
     for (const Vec3i& t : mesh.triangles) {
         file.u8(3);
@@ -137,7 +139,8 @@ void writePointCloudPly(const std::string& path, const PointCloud& cloud) {
     checkConsistent(path, cloud);
     BinaryFile file(path);
     file.text("ply\nformat binary_little_endian 1.0\ncomment written by VoxFuse\n" +
-              plyVertexHeader(cloud.points.size(), cloud.hasNormals(), cloud.hasColors(), cloud.hasLabels()) + "end_header\n");
+              plyVertexHeader(cloud.points.size(), cloud.hasNormals(), cloud.hasColors(), cloud.hasLabels()) +
+              "end_header\n");
     writePlyVertices(file, cloud.points, cloud.normals, cloud.colors, cloud.labels);
     file.finish();
 }
@@ -176,14 +179,16 @@ void writeMeshObj(const std::string& path, const Mesh& mesh) {
 
 void writeMeshStl(const std::string& path, const Mesh& mesh) {
     checkConsistent(path, mesh);
-    if (mesh.triangles.size() > std::size_t(UINT32_MAX)) throw IoError(path, "too many triangles for STL (at most 2^32 - 1)");
+    if (mesh.triangles.size() > std::size_t(UINT32_MAX))
+        throw IoError(path, "too many triangles for STL (at most 2^32 - 1)");
     BinaryFile file(path);
     std::string header = "binary STL written by VoxFuse";
     header.resize(80, ' ');  // must not start with "solid": readers would take it for ASCII STL
     file.text(header);
     file.u32(std::uint32_t(mesh.triangles.size()));
     for (const Vec3i& t : mesh.triangles) {
-        const Vec3f a = mesh.vertices[std::size_t(t.x)], b = mesh.vertices[std::size_t(t.y)], c = mesh.vertices[std::size_t(t.z)];
+        const Vec3f a = mesh.vertices[std::size_t(t.x)], b = mesh.vertices[std::size_t(t.y)],
+                    c = mesh.vertices[std::size_t(t.z)];
         file.vec3(normalize(cross(b - a, c - a)));
         file.vec3(a);
         file.vec3(b);

@@ -20,10 +20,11 @@ namespace fs = std::filesystem;
 namespace {
 
 std::string accepted() {
-    return std::string("expected one of: a TUM RGB-D folder (rgb.txt + depth.txt); a per-frame folder "
-                       "(frame-XXXXXX.depth.png); a Stray Scanner capture (odometry.csv + depth/ + rgb.mp4); a PPM/PGM "
-                       "sequence (file patterns and a calibration: --rgb, --depth and --calib on the command line); an .oni "
-                       "recording") +
+    return std::string(
+               "expected one of: a TUM RGB-D folder (rgb.txt + depth.txt); a per-frame folder "
+               "(frame-XXXXXX.depth.png); a Stray Scanner capture (odometry.csv + depth/ + rgb.mp4); a PPM/PGM "
+               "sequence (file patterns and a calibration: --rgb, --depth and --calib on the command line); an .oni "
+               "recording") +
            (OpenNISource::available() ? "" : " (not in this build: no OpenNI2)");
 }
 
@@ -53,9 +54,13 @@ std::string resolvePattern(const std::string& path, const std::string& pattern) 
 std::unique_ptr<ImageSource> openImageSource(const std::string& path, const SourceOptions& options) {
     if (!options.rgb_pattern.empty() || !options.depth_pattern.empty()) {
         // Named by the folder, else by the pattern given: an empty name reads as ": ..." in a message.
-        const std::string named = !path.empty() ? path : !options.rgb_pattern.empty() ? options.rgb_pattern : options.depth_pattern;
+        const std::string named = !path.empty()                  ? path
+                                  : !options.rgb_pattern.empty() ? options.rgb_pattern
+                                                                 : options.depth_pattern;
         if (options.depth_pattern.empty())
-            throw IoError(named, "a PPM/PGM sequence needs a depth file pattern (--depth; SourceOptions::depth_pattern), not only an rgb one");
+            throw IoError(named,
+                          "a PPM/PGM sequence needs a depth file pattern (--depth; SourceOptions::depth_pattern), not "
+                          "only an rgb one");
         if (options.calib_path.empty())
             throw IoError(named, "a PPM/PGM sequence needs a calibration file (--calib; SourceOptions::calib_path)");
         return std::make_unique<PpmPgmSource>(resolvePattern(path, options.rgb_pattern),

@@ -71,8 +71,8 @@ void preferVgaMode(openni::VideoStream& stream, std::initializer_list<openni::Pi
     for (openni::PixelFormat format : formats)
         for (int i = 0; i < modes.getSize(); ++i) {
             const openni::VideoMode& m = modes[i];
-            if (m.getResolutionX() == 640 && m.getResolutionY() == 480 && m.getFps() == 30 && m.getPixelFormat() == format &&
-                stream.setVideoMode(m) == openni::STATUS_OK)
+            if (m.getResolutionX() == 640 && m.getResolutionY() == 480 && m.getFps() == 30 &&
+                m.getPixelFormat() == format && stream.setVideoMode(m) == openni::STATUS_OK)
                 return;
         }
 }
@@ -116,7 +116,8 @@ struct OpenNISource::Impl {
     bool readRecord(std::optional<DepthRecord>& depth_record, std::optional<ColourRecord>& colour_record);
     Image<std::uint16_t> convertDepth(const openni::VideoFrameRef& f) const;
     Image<Vec4u8> convertColour(const openni::VideoFrameRef& f) const;
-    void checkFrame(const openni::VideoFrameRef& f, int bytes_per_pixel, const char* what, const Intrinsics& camera) const;
+    void checkFrame(const openni::VideoFrameRef& f, int bytes_per_pixel, const char* what,
+                    const Intrinsics& camera) const;
     [[noreturn]] void failOpening(const std::string& reason) const { throw IoError(name, reason); }
     [[noreturn]] void failFrame(const std::string& reason) const { throw IoError(name, reason, delivered); }
 
@@ -135,8 +136,8 @@ struct OpenNISource::Impl {
     std::string calib_origin;
     int depth_total = -1, colour_total = -1;  // frames in a recording
     int depth_read = 0, colour_read = 0;
-    int delivered = 0;       // frames handed out (the next frame's index)
-    bool stalled = false;    // a recording that stopped delivering frames
+    int delivered = 0;     // frames handed out (the next frame's index)
+    bool stalled = false;  // a recording that stopped delivering frames
 
     std::optional<DepthRecord> pending;    // the depth frame next() delivers
     std::optional<DepthRecord> following;  // a depth frame read while looking ahead for colour
@@ -147,7 +148,8 @@ void OpenNISource::Impl::openStreams() {
     if (!device.hasSensor(openni::SENSOR_DEPTH)) failOpening("has no depth stream");
     if (depth.create(device, openni::SENSOR_DEPTH) != openni::STATUS_OK)
         failOpening("cannot create the depth stream: " + extendedError());
-    has_colour = device.hasSensor(openni::SENSOR_COLOR) && colour.create(device, openni::SENSOR_COLOR) == openni::STATUS_OK;
+    has_colour =
+        device.hasSensor(openni::SENSOR_COLOR) && colour.create(device, openni::SENSOR_COLOR) == openni::STATUS_OK;
     if (live) {
         preferVgaMode(depth, {openni::PIXEL_FORMAT_DEPTH_1_MM, openni::PIXEL_FORMAT_DEPTH_100_UM});
         if (has_colour) preferVgaMode(colour, {openni::PIXEL_FORMAT_RGB888});
@@ -177,7 +179,8 @@ void OpenNISource::Impl::openStreams() {
         if (depth_total <= 0) failOpening("the recording holds no depth frames");
     }
     if (depth.start() != openni::STATUS_OK) failOpening("cannot start the depth stream: " + extendedError());
-    if (has_colour && colour.start() != openni::STATUS_OK) failOpening("cannot start the colour stream: " + extendedError());
+    if (has_colour && colour.start() != openni::STATUS_OK)
+        failOpening("cannot start the colour stream: " + extendedError());
 }
 
 void OpenNISource::Impl::registerDepthToColour() {
@@ -213,13 +216,15 @@ void OpenNISource::Impl::calibrate(const std::string& calib_path) {
             const openni::VideoMode m = colour.getVideoMode();
             if (calib.rgb.size() != Vec2i{m.getResolutionX(), m.getResolutionY()})
                 throw IoError(calib_path, "the RGB camera is " + sizeText(calib.rgb.width, calib.rgb.height) + " but " +
-                                              name + " streams colour at " + sizeText(m.getResolutionX(), m.getResolutionY()));
+                                              name + " streams colour at " +
+                                              sizeText(m.getResolutionX(), m.getResolutionY()));
         }
         calib_origin = calib_path;
         return;
     }
     bool depth_from_fov = false, colour_from_fov = false;
-    calib.depth = intrinsicsFromFieldOfView(dw, dh, depth.getHorizontalFieldOfView(), depth.getVerticalFieldOfView(), depth_from_fov);
+    calib.depth = intrinsicsFromFieldOfView(dw, dh, depth.getHorizontalFieldOfView(), depth.getVerticalFieldOfView(),
+                                            depth_from_fov);
     calib.rgb = calib.depth;
     if (has_colour) {
         const openni::VideoMode m = colour.getVideoMode();
@@ -227,7 +232,11 @@ void OpenNISource::Impl::calibrate(const std::string& calib_path) {
                                               colour.getVerticalFieldOfView(), colour_from_fov);
         if (registered) {  // depth now sees through the colour camera
             const float sx = float(dw) / float(calib.rgb.width), sy = float(dh) / float(calib.rgb.height);
-            calib.depth = Intrinsics{dw, dh, calib.rgb.fx * sx, calib.rgb.fy * sy, (calib.rgb.cx + 0.5f) * sx - 0.5f,
+            calib.depth = Intrinsics{dw,
+                                     dh,
+                                     calib.rgb.fx * sx,
+                                     calib.rgb.fy * sy,
+                                     (calib.rgb.cx + 0.5f) * sx - 0.5f,
                                      (calib.rgb.cy + 0.5f) * sy - 0.5f};
             depth_from_fov = colour_from_fov;
         }
@@ -235,15 +244,16 @@ void OpenNISource::Impl::calibrate(const std::string& calib_path) {
     calib.T_depth_rgb = Mat4f::identity();  // registered; unregistered: the baseline is unknown here
     calib.disparity = DisparityCalib::affine(
         depth_mode.getPixelFormat() == openni::PIXEL_FORMAT_DEPTH_100_UM ? 0.0001f : 0.001f, 0.f);
-    calib_origin = depth_from_fov ? "the streams' fields of view" : "Kinect v1 defaults (the stream reports no field of view)";
+    calib_origin =
+        depth_from_fov ? "the streams' fields of view" : "Kinect v1 defaults (the stream reports no field of view)";
 }
 
 void OpenNISource::Impl::checkFrame(const openni::VideoFrameRef& f, int bytes_per_pixel, const char* what,
                                     const Intrinsics& camera) const {
     const int w = f.getWidth(), h = f.getHeight(), stride = f.getStrideInBytes();
     if (w <= 0 || h <= 0 || stride < w * bytes_per_pixel || f.getDataSize() < stride * h || f.getData() == nullptr)
-        failFrame(std::string("malformed ") + what + " frame (" + sizeText(w, h) + ", stride " + std::to_string(stride) +
-                  ", " + std::to_string(f.getDataSize()) + " bytes)");
+        failFrame(std::string("malformed ") + what + " frame (" + sizeText(w, h) + ", stride " +
+                  std::to_string(stride) + ", " + std::to_string(f.getDataSize()) + " bytes)");
     if (Vec2i{w, h} != camera.size())
         failFrame(std::string(what) + " frame is " + sizeText(w, h) + " but the calibration's " + what + " camera is " +
                   sizeText(camera.width, camera.height));
@@ -277,7 +287,8 @@ Image<Vec4u8> OpenNISource::Impl::convertColour(const openni::VideoFrameRef& f) 
     const int w = f.getWidth(), h = f.getHeight();
     Image<Vec4u8> image({w, h});
     for (int y = 0; y < h; ++y) {
-        const std::uint8_t* row = static_cast<const std::uint8_t*>(f.getData()) + std::size_t(y) * std::size_t(f.getStrideInBytes());
+        const std::uint8_t* row =
+            static_cast<const std::uint8_t*>(f.getData()) + std::size_t(y) * std::size_t(f.getStrideInBytes());
         for (int x = 0; x < w; ++x) {
             const std::uint8_t* p = row + (unmirror_colour ? w - 1 - x : x) * (grey ? 1 : 3);
             image.at(x, y) = grey ? Vec4u8{p[0], p[0], p[0], 255} : Vec4u8{p[0], p[1], p[2], 255};
@@ -286,16 +297,20 @@ Image<Vec4u8> OpenNISource::Impl::convertColour(const openni::VideoFrameRef& f) 
     return image;
 }
 
-bool OpenNISource::Impl::readRecord(std::optional<DepthRecord>& depth_record, std::optional<ColourRecord>& colour_record) {
+bool OpenNISource::Impl::readRecord(std::optional<DepthRecord>& depth_record,
+                                    std::optional<ColourRecord>& colour_record) {
     if (stalled) return false;
     if (!live && depth_read >= depth_total && colour_read >= colour_total) return false;
     openni::VideoStream* streams[2] = {&depth, &colour};
     int ready = -1;
     if (openni::OpenNI::waitForAnyStream(streams, has_colour ? 2 : 1, &ready, kFrameTimeoutMs) != openni::STATUS_OK) {
-        if (live) failFrame("no frame from the camera for " + std::to_string(kFrameTimeoutMs / 1000) + " s (unplugged, or busy?)");
+        if (live)
+            failFrame("no frame from the camera for " + std::to_string(kFrameTimeoutMs / 1000) +
+                      " s (unplugged, or busy?)");
         stalled = true;
         failFrame("playback stalled after " + std::to_string(depth_read) + " of " + std::to_string(depth_total) +
-                  " depth frames (no frame for " + std::to_string(kFrameTimeoutMs / 1000) + " s; a damaged recording?)");
+                  " depth frames (no frame for " + std::to_string(kFrameTimeoutMs / 1000) +
+                  " s; a damaged recording?)");
     }
     openni::VideoFrameRef f;
     if (streams[ready]->readFrame(&f) != openni::STATUS_OK || !f.isValid())
@@ -342,7 +357,8 @@ std::string OpenNISource::Impl::description() const {
     const openni::VideoMode m = depth.getVideoMode();
     std::string text = live ? "OpenNI2 camera " + name : "OpenNI2 recording " + name;
     text += " (depth " + sizeText(m.getResolutionX(), m.getResolutionY());
-    if (!live) text += ", " + std::to_string(depth_total) + " depth and " + std::to_string(colour_total) + " colour frames";
+    if (!live)
+        text += ", " + std::to_string(depth_total) + " depth and " + std::to_string(colour_total) + " colour frames";
     text += ", " + registration_note;
     if (unmirror_depth || unmirror_colour) text += ", mirrored frames flipped back";
     return text + ", calibration from " + calib_origin + ")";
@@ -382,8 +398,8 @@ std::unique_ptr<OpenNISource> OpenNISource::openDevice(const std::string& uri, c
     if (impl->device.open(uri.empty() ? openni::ANY_DEVICE : uri.c_str()) != openni::STATUS_OK) {
         std::string connected;
         for (int i = 0; i < devices.getSize(); ++i) connected += std::string(i ? ", " : "") + devices[i].getUri();
-        throw IoError(impl->name, "cannot open the camera (" + extendedError() + "); connected cameras: " +
-                                      (connected.empty() ? std::string("none") : connected));
+        throw IoError(impl->name, "cannot open the camera (" + extendedError() +
+                                      "); connected cameras: " + (connected.empty() ? std::string("none") : connected));
     }
     if (impl->device.isFile()) throw IoError(uri, "is a recording, not a camera: open it with OpenNISource::openFile");
     impl->name = impl->device.getDeviceInfo().getUri();

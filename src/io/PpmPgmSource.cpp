@@ -73,7 +73,8 @@ PpmPgmSource::PpmPgmSource(std::string rgb_pattern, std::string depth_pattern, c
     };
     if (!complete(first_index_)) {
         const std::string depth_file = fileName(depth_pattern_, first_index_);
-        const std::string missing = frame_reading::fileExists(depth_file) ? fileName(rgb_pattern_, first_index_) : depth_file;
+        const std::string missing =
+            frame_reading::fileExists(depth_file) ? fileName(rgb_pattern_, first_index_) : depth_file;
         throw IoError(missing, "no frames: the first file of the sequence does not exist");
     }
     int last = first_index_;
@@ -85,7 +86,8 @@ PpmPgmSource::PpmPgmSource(std::string rgb_pattern, std::string depth_pattern, c
 }
 
 void PpmPgmSource::loadGroundTruth() {
-    const std::filesystem::path depth_folder = std::filesystem::path(fileName(depth_pattern_, first_index_)).parent_path();
+    const std::filesystem::path depth_folder =
+        std::filesystem::path(fileName(depth_pattern_, first_index_)).parent_path();
     const std::string path = (depth_folder / "groundtruth.txt").string();
     if (!frame_reading::optionalFilePresent(path)) return;
     std::vector<TimedPose> poses = readTumTrajectory(path);
@@ -107,17 +109,21 @@ bool PpmPgmSource::next(RGBDFrame& frame) {
         if (pattern->empty()) continue;
         const std::string path = fileName(*pattern, file_index);
         if (!frame_reading::fileExists(path))
-            throw IoError(path, "missing: a gap in the sequence (index " + std::to_string(file_index) + "); it goes on to index " +
-                                    std::to_string(first_index_ + frame_count_ - 1), position);
+            throw IoError(path,
+                          "missing: a gap in the sequence (index " + std::to_string(file_index) +
+                              "); it goes on to index " + std::to_string(first_index_ + frame_count_ - 1),
+                          position);
     }
-    frame_reading::readDepthAndColour(depth_path, rgb_pattern_.empty() ? std::string() : fileName(rgb_pattern_, file_index), position, calib_.depth,
-                                      calib_.rgb, read_.depth_raw, read_.rgb);
+    frame_reading::readDepthAndColour(depth_path,
+                                      rgb_pattern_.empty() ? std::string() : fileName(rgb_pattern_, file_index),
+                                      position, calib_.depth, calib_.rgb, read_.depth_raw, read_.rgb);
     read_.handOver(frame, !rgb_pattern_.empty());
     frame.index = position;
     frame.timestamp_s = double(file_index) / 30.0;
     frame.depth_path = depth_path;
     frame.has_ground_truth = !ground_truth_.empty();
-    frame.T_world_camera_gt = frame.has_ground_truth ? ground_truth_[std::size_t(position)].T_world_camera : Mat4f::identity();
+    frame.T_world_camera_gt =
+        frame.has_ground_truth ? ground_truth_[std::size_t(position)].T_world_camera : Mat4f::identity();
     return true;
 }
 

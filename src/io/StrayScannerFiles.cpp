@@ -37,17 +37,23 @@ struct OdometryColumns {
     static OdometryColumns fromHeader(const std::vector<std::string_view>& names, const std::string& path, int line) {
         OdometryColumns c;
         c.count = int(names.size());
-        const std::array<std::pair<const char*, int*>, 9> fields = {{{"timestamp", &c.timestamp}, {"frame", &c.frame},
-                                                                     {"x", &c.x}, {"y", &c.y}, {"z", &c.z},
-                                                                     {"qx", &c.qx}, {"qy", &c.qy}, {"qz", &c.qz},
+        const std::array<std::pair<const char*, int*>, 9> fields = {{{"timestamp", &c.timestamp},
+                                                                     {"frame", &c.frame},
+                                                                     {"x", &c.x},
+                                                                     {"y", &c.y},
+                                                                     {"z", &c.z},
+                                                                     {"qx", &c.qx},
+                                                                     {"qy", &c.qy},
+                                                                     {"qz", &c.qz},
                                                                      {"qw", &c.qw}}};
         for (const auto& [name, column] : fields) {
             *column = kUnset;
             for (std::size_t i = 0; i < names.size(); ++i)
                 if (lowercase(names[i]) == name) *column = int(i);
             if (*column == kUnset && column != &c.frame)  // "frame" is optional
-                throw ParseError(path, line, std::string("the header has no '") + name +
-                                                 "' column (expected timestamp, frame, x, y, z, qx, qy, qz, qw)");
+                throw ParseError(path, line,
+                                 std::string("the header has no '") + name +
+                                     "' column (expected timestamp, frame, x, y, z, qx, qy, qz, qw)");
         }
         return c;
     }
@@ -55,8 +61,8 @@ struct OdometryColumns {
 
 bool sameRow(const OdometryRow& a, const OdometryRow& b) {
     const Vec4f &p = a.quaternion_xyzw, &q = b.quaternion_xyzw;
-    return a.timestamp_s == b.timestamp_s && a.frame == b.frame && a.position == b.position && p.x == q.x && p.y == q.y && p.z == q.z &&
-           p.w == q.w;
+    return a.timestamp_s == b.timestamp_s && a.frame == b.frame && a.position == b.position && p.x == q.x &&
+           p.y == q.y && p.z == q.z && p.w == q.w;
 }
 
 }  // namespace
@@ -73,18 +79,23 @@ CameraMatrix readCameraMatrix(const std::string& path) {
         const auto tokens = splitCsv(line);
         if (K.size() == 9) throw ParseError(path, line_number, "unexpected content after the 3x3 matrix");
         if (tokens.size() != 3)
-            throw ParseError(path, line_number,
-                             "expected 3 numbers (one row of the 3x3 camera matrix), got " + std::to_string(tokens.size()));
+            throw ParseError(
+                path, line_number,
+                "expected 3 numbers (one row of the 3x3 camera matrix), got " + std::to_string(tokens.size()));
         std::vector<double> row;
         std::string bad;
-        if (!text::parseDoubles(tokens, row, bad)) throw ParseError(path, line_number, "not a number: " + text::excerpt(bad));
+        if (!text::parseDoubles(tokens, row, bad))
+            throw ParseError(path, line_number, "not a number: " + text::excerpt(bad));
         for (double v : row)
-            if (!text::finiteAsFloat(v)) throw ParseError(path, line_number, "non-finite value in the camera matrix (stored as floats)");
+            if (!text::finiteAsFloat(v))
+                throw ParseError(path, line_number, "non-finite value in the camera matrix (stored as floats)");
         K.insert(K.end(), row.begin(), row.end());
     }
     if (K.size() != 9)
-        throw ParseError(path, last_line, "expected 3 rows of the 3x3 camera matrix, got " + std::to_string(K.size() / 3));
-    if (!(float(K[0]) > 0.f) || !(float(K[4]) > 0.f)) throw IoError(path, "focal lengths K(0,0) and K(1,1) must be positive");
+        throw ParseError(path, last_line,
+                         "expected 3 rows of the 3x3 camera matrix, got " + std::to_string(K.size() / 3));
+    if (!(float(K[0]) > 0.f) || !(float(K[4]) > 0.f))
+        throw IoError(path, "focal lengths K(0,0) and K(1,1) must be positive");
     if (K[1] != 0.0 || K[3] != 0.0 || K[6] != 0.0 || K[7] != 0.0 || K[8] != 1.0)
         throw IoError(path, "expected K = [fx 0 cx; 0 fy cy; 0 0 1] (no skew)");
     return CameraMatrix{K[0], K[4], K[2], K[5]};
@@ -93,7 +104,7 @@ CameraMatrix readCameraMatrix(const std::string& path) {
 std::vector<OdometryRow> readOdometry(const std::string& path) {
     text::LineReader in(path, "odometry (odometry.csv)");
     std::vector<OdometryRow> rows;
-    std::map<int, std::pair<std::size_t, int>> line_of_frame;     // frame -> (its row, its line)
+    std::map<int, std::pair<std::size_t, int>> line_of_frame;    // frame -> (its row, its line)
     std::map<double, std::pair<std::size_t, int>> line_of_time;  // timestamp -> (its row, its line)
     OdometryColumns columns;
     bool first = true;
@@ -111,28 +122,34 @@ std::vector<OdometryRow> readOdometry(const std::string& path) {
         }
         first = false;
         if (int(tokens.size()) != columns.count)
-            throw ParseError(path, line_number, "expected " + std::to_string(columns.count) + " values, got " +
-                                                    std::to_string(tokens.size()));
+            throw ParseError(
+                path, line_number,
+                "expected " + std::to_string(columns.count) + " values, got " + std::to_string(tokens.size()));
         std::vector<double> v;
         std::string bad;
-        if (!text::parseDoubles(tokens, v, bad)) throw ParseError(path, line_number, "not a number: " + text::excerpt(bad));
+        if (!text::parseDoubles(tokens, v, bad))
+            throw ParseError(path, line_number, "not a number: " + text::excerpt(bad));
         for (std::size_t i = 0; i < v.size(); ++i)
             if (!text::finiteAsFloat(v[i]) && int(i) != columns.timestamp)
-                throw ParseError(path, line_number, "non-finite value " + text::excerpt(tokens[i]) + " (stored as a float)");
+                throw ParseError(path, line_number,
+                                 "non-finite value " + text::excerpt(tokens[i]) + " (stored as a float)");
         OdometryRow row;
         row.timestamp_s = v[std::size_t(columns.timestamp)];
-        if (!std::isfinite(row.timestamp_s)) throw ParseError(path, line_number, "non-finite timestamp " + text::excerpt(tokens[std::size_t(columns.timestamp)]));
+        if (!std::isfinite(row.timestamp_s))
+            throw ParseError(path, line_number,
+                             "non-finite timestamp " + text::excerpt(tokens[std::size_t(columns.timestamp)]));
         if (columns.frame == OdometryColumns::kUnset) {
             row.frame = int(rows.size());
         } else {
             const double frame = v[std::size_t(columns.frame)];
             if (frame < 0.0 || frame != std::floor(frame) || frame > 1e9)
-                throw ParseError(path, line_number, "the frame number must be a non-negative integer, got " +
-                                                        text::excerpt(tokens[std::size_t(columns.frame)]));
+                throw ParseError(path, line_number,
+                                 "the frame number must be a non-negative integer, got " +
+                                     text::excerpt(tokens[std::size_t(columns.frame)]));
             row.frame = int(frame);
         }
-        row.position = Vec3f{float(v[std::size_t(columns.x)]), float(v[std::size_t(columns.y)]),
-                             float(v[std::size_t(columns.z)])};
+        row.position =
+            Vec3f{float(v[std::size_t(columns.x)]), float(v[std::size_t(columns.y)]), float(v[std::size_t(columns.z)])};
         const double qx = v[std::size_t(columns.qx)], qy = v[std::size_t(columns.qy)], qz = v[std::size_t(columns.qz)],
                      qw = v[std::size_t(columns.qw)];
         std::string problem = text::positionProblem(row.position.x, row.position.y, row.position.z);
@@ -146,8 +163,11 @@ std::vector<OdometryRow> readOdometry(const std::string& path) {
         if (!new_frame || !new_time) {
             const auto& [earlier, earlier_line] = !new_frame ? same_frame->second : same_time->second;
             if (!sameRow(rows[earlier], row))
-                throw ParseError(path, line_number, (!new_frame ? "frame " + std::to_string(row.frame) : "timestamp " + std::string(tokens[std::size_t(columns.timestamp)])) +
-                                                        " is given twice, differently (line " + std::to_string(earlier_line) + " and this one)");
+                throw ParseError(path, line_number,
+                                 (!new_frame ? "frame " + std::to_string(row.frame)
+                                             : "timestamp " + std::string(tokens[std::size_t(columns.timestamp)])) +
+                                     " is given twice, differently (line " + std::to_string(earlier_line) +
+                                     " and this one)");
             continue;
         }
         rows.push_back(row);

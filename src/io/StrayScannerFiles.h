@@ -23,7 +23,7 @@ CameraMatrix readCameraMatrix(const std::string& path);
 struct OdometryRow {
     double timestamp_s;
     int frame;
-    Vec3f position;        // metres, ARKit world
+    Vec3f position;         // metres, ARKit world
     Vec4f quaternion_xyzw;  // normalised
 };
 std::vector<OdometryRow> readOdometry(const std::string& path);

@@ -31,7 +31,8 @@ std::string sizeText(Vec2i size) { return std::to_string(size.x) + "x" + std::to
 // "000123.png" -> 123.
 bool parseFrameFileName(const std::string& name, int& number) {
     const std::string suffix = ".png";
-    if (name.size() <= suffix.size() || name.compare(name.size() - suffix.size(), suffix.size(), suffix) != 0) return false;
+    if (name.size() <= suffix.size() || name.compare(name.size() - suffix.size(), suffix.size(), suffix) != 0)
+        return false;
     const std::string digits = name.substr(0, name.size() - suffix.size());
     if (digits.size() > 9 || !std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; }))
         return false;
@@ -50,14 +51,17 @@ Image<std::uint8_t> readConfidence(const std::string& path, int frame, Vec2i dep
     // Never more pixels than the depth map it belongs to: a corrupt header must not make imread allocate gigabytes.
     const image_header::Header h = image_header::read(path);
     if (h.format != image_header::Format::Png || h.width != depth_size.x || h.height != depth_size.y)
-        throw IoError(path, "a confidence map must be a PNG of the depth map's size (" + sizeText(depth_size) + ")", frame);
+        throw IoError(path, "a confidence map must be a PNG of the depth map's size (" + sizeText(depth_size) + ")",
+                      frame);
     const cv::Mat m = cv::imread(path, cv::IMREAD_UNCHANGED);
     if (m.empty()) throw IoError(path, "cannot decode the confidence map", frame);
     if (m.channels() != 1 || (m.depth() != CV_8U && m.depth() != CV_16U))
         throw IoError(path, "a confidence map must be a single-channel 8- or 16-bit image", frame);
     if (m.cols != depth_size.x || m.rows != depth_size.y)
-        throw IoError(path, "the confidence map is " + sizeText({m.cols, m.rows}) + " but the depth map is " +
-                                sizeText(depth_size), frame);
+        throw IoError(
+            path,
+            "the confidence map is " + sizeText({m.cols, m.rows}) + " but the depth map is " + sizeText(depth_size),
+            frame);
     Image<std::uint8_t> confidence(depth_size);
     for (int y = 0; y < m.rows; ++y)
         for (int x = 0; x < m.cols; ++x) {
@@ -71,11 +75,14 @@ Image<std::uint8_t> readConfidence(const std::string& path, int frame, Vec2i dep
 
 bool StrayScannerSource::isCapture(const std::string& folder) {
     std::error_code ec;
-    return fs::is_regular_file(fs::path(folder) / "odometry.csv", ec) && fs::is_directory(fs::path(folder) / "depth", ec);
+    return fs::is_regular_file(fs::path(folder) / "odometry.csv", ec) &&
+           fs::is_directory(fs::path(folder) / "depth", ec);
 }
 
 StrayScannerSource::StrayScannerSource(const std::string& folder, const SourceOptions& options)
-    : folder_(folder), video_path_((fs::path(folder) / "rgb.mp4").string()), min_confidence_(options.min_depth_confidence) {
+    : folder_(folder),
+      video_path_((fs::path(folder) / "rgb.mp4").string()),
+      min_confidence_(options.min_depth_confidence) {
     std::error_code ec;
     if (!fs::is_directory(folder, ec)) throw IoError(folder, "not a folder");
     if (options.max_colour_width < 0)
@@ -103,8 +110,10 @@ void StrayScannerSource::findFrames() {
                                      Mat4f::identity()});
     }
     if (ec) throw IoError(depth_folder.string(), "cannot list the depth folder: " + ec.message());
-    if (frames_.empty()) throw IoError(depth_folder.string(), "no depth maps (NNNNNN.png) in the capture's depth folder");
-    std::sort(frames_.begin(), frames_.end(), [](const FrameFiles& a, const FrameFiles& b) { return a.number < b.number; });
+    if (frames_.empty())
+        throw IoError(depth_folder.string(), "no depth maps (NNNNNN.png) in the capture's depth folder");
+    std::sort(frames_.begin(), frames_.end(),
+              [](const FrameFiles& a, const FrameFiles& b) { return a.number < b.number; });
 }
 
 void StrayScannerSource::calibrate(const std::string& calib_path, int max_colour_width) {
@@ -112,8 +121,8 @@ void StrayScannerSource::calibrate(const std::string& calib_path, int max_colour
     if (!calib_path.empty()) {
         calib_ = readCalib(calib_path);
         if (calib_.depth.size() != depth_size)
-            throw IoError(calib_path, "the depth camera is " + sizeText(calib_.depth.size()) + " but the capture's depth maps are " +
-                                          sizeText(depth_size));
+            throw IoError(calib_path, "the depth camera is " + sizeText(calib_.depth.size()) +
+                                          " but the capture's depth maps are " + sizeText(depth_size));
         calib_origin_ = calib_path;
         return;
     }
@@ -132,7 +141,8 @@ void StrayScannerSource::calibrate(const std::string& calib_path, int max_colour
                                    (double(video_size.y) * depth_size.x);
     if (aspect_mismatch > 0.01)
         throw IoError(folder_, "the depth maps are " + sizeText(depth_size) + " but the video frames are " +
-                                   sizeText(video_size) + ": different aspect ratios (was the video rotated or cropped?)");
+                                   sizeText(video_size) +
+                                   ": different aspect ratios (was the video rotated or cropped?)");
     Vec2i colour_size = video_size;
     if (max_colour_width > 0 && video_size.x > max_colour_width)
         colour_size = Vec2i{max_colour_width, int(std::lround(double(video_size.y) * max_colour_width / video_size.x))};
@@ -156,7 +166,8 @@ void StrayScannerSource::loadPoses() {
             f.timestamp_s = f.number / fps;
             if (!by_frame.empty()) {
                 auto nearest = by_frame.lower_bound(f.number);  // the first row after the frame
-                if (nearest == by_frame.end() || (nearest != by_frame.begin() && f.number - std::prev(nearest)->first < nearest->first - f.number))
+                if (nearest == by_frame.end() ||
+                    (nearest != by_frame.begin() && f.number - std::prev(nearest)->first < nearest->first - f.number))
                     nearest = std::prev(nearest);
                 f.timestamp_s = nearest->second.timestamp_s + (f.number - nearest->first) / fps;
             }
@@ -183,8 +194,9 @@ bool StrayScannerSource::next(RGBDFrame& frame) {
     frame_reading::readDepth(f.depth_path, index, calib_.depth, read_.depth_raw);
     dropLowConfidence(read_.depth_raw, f, index);
     if (!video_->read(f.number, read_.rgb, calib_.rgb.size()))
-        throw IoError(video_path_, "the video ends before frame " + std::to_string(f.number) + " (depth map " +
-                                       f.depth_path + ")", index);
+        throw IoError(video_path_,
+                      "the video ends before frame " + std::to_string(f.number) + " (depth map " + f.depth_path + ")",
+                      index);
     read_.handOver(frame, true);
     frame.index = index;
     frame.file_number = f.number;
@@ -199,12 +211,10 @@ std::string StrayScannerSource::description() const {
     return "Stray Scanner capture " + folder_ + " (" + std::to_string(frames_.size()) + " frames, depth " +
            sizeText(calib_.depth.size()) + ", colour " + sizeText(video_->size()) + " video" +
            (video_->frameCount() >= 0 ? " of " + std::to_string(video_->frameCount()) + " frames" : std::string()) +
-           " delivered at " +
-           sizeText(calib_.rgb.size()) + ", " + std::to_string(ground_truth_.size()) + " ARKit poses, calibration from " +
-           calib_origin_ +
-           (frames_.front().confidence_path.empty()
-                ? std::string(", no confidence maps")
-                : ", depth confidence >= " + std::to_string(min_confidence_)) +
+           " delivered at " + sizeText(calib_.rgb.size()) + ", " + std::to_string(ground_truth_.size()) +
+           " ARKit poses, calibration from " + calib_origin_ +
+           (frames_.front().confidence_path.empty() ? std::string(", no confidence maps")
+                                                    : ", depth confidence >= " + std::to_string(min_confidence_)) +
            ")";
 }
 

@@ -18,11 +18,15 @@ namespace {
 bool isSpace(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v'; }
 std::string readFailureReason(int error_number) {
     switch (error_number) {
-        case ENOENT: return "no such file";
+        case ENOENT:
+            return "no such file";
         case EACCES:
-        case EPERM: return "permission denied";
-        case EISDIR: return "is a folder, not a file";
-        default: return error_number != 0 ? std::strerror(error_number) : "cannot open";
+        case EPERM:
+            return "permission denied";
+        case EISDIR:
+            return "is a folder, not a file";
+        default:
+            return error_number != 0 ? std::strerror(error_number) : "cannot open";
     }
 }
 
@@ -36,7 +40,8 @@ std::string formatDouble(double v) {
 
 std::ifstream openTextFile(const std::string& path, const std::string& what) {
     std::error_code ec;
-    if (std::filesystem::is_directory(path, ec)) throw IoError(path, "is a folder, not a file (expected the " + what + ")");
+    if (std::filesystem::is_directory(path, ec))
+        throw IoError(path, "is a folder, not a file (expected the " + what + ")");
     errno = 0;
     std::ifstream in(path);
     if (!in) throw IoError(path, "cannot open the " + what + ": " + readFailureReason(errno));
@@ -55,7 +60,9 @@ bool LineReader::next(std::string& line) {
         any = true;
         if (c == '\n') break;
         if (line.size() == kMaxLineBytes)
-            throw ParseError(path_, line_number_ + 1, "line longer than " + std::to_string(kMaxLineBytes) + " bytes: not a text file of this kind");
+            throw ParseError(
+                path_, line_number_ + 1,
+                "line longer than " + std::to_string(kMaxLineBytes) + " bytes: not a text file of this kind");
         line.push_back(char(c));
     }
     if (!any) return false;
@@ -160,7 +167,8 @@ std::string rotationProblem(const double* R) {
             worst = std::max(worst, std::abs(dot - (i == j ? 1.0 : 0.0)));
         }
     if (!(worst <= 1e-2)) return "not a rotation (R R^T differs from the identity by " + formatDouble(worst) + ")";
-    const double det = R[0] * (R[4] * R[8] - R[5] * R[7]) - R[1] * (R[3] * R[8] - R[5] * R[6]) + R[2] * (R[3] * R[7] - R[4] * R[6]);
+    const double det =
+        R[0] * (R[4] * R[8] - R[5] * R[7]) - R[1] * (R[3] * R[8] - R[5] * R[6]) + R[2] * (R[3] * R[7] - R[4] * R[6]);
     if (det < 0.0) return "not a rotation (a reflection: its determinant is " + formatDouble(det) + ")";
     return {};
 }
@@ -168,7 +176,8 @@ std::string rotationProblem(const double* R) {
 std::string positionProblem(double x, double y, double z) {
     for (double v : {x, y, z})
         if (!(std::abs(v) <= kMaxPositionM))
-            return "position " + formatDouble(v) + " m is further than " + formatDouble(kMaxPositionM) + " m from the origin";
+            return "position " + formatDouble(v) + " m is further than " + formatDouble(kMaxPositionM) +
+                   " m from the origin";
     return {};
 }
 
@@ -199,9 +208,9 @@ std::vector<double> readNumberMatrix(const std::string& path, int rows, int cols
             throw ParseError(path, line_number, "unexpected content after the " + shape + ": " + excerpt(line));
         const auto tokens = splitWhitespace(line);
         if (int(tokens.size()) != cols)
-            throw ParseError(path, line_number, "expected " + std::to_string(cols) + " numbers in row " +
-                                                    std::to_string(rows_read + 1) + " of a " + shape + ", got " +
-                                                    std::to_string(tokens.size()));
+            throw ParseError(path, line_number,
+                             "expected " + std::to_string(cols) + " numbers in row " + std::to_string(rows_read + 1) +
+                                 " of a " + shape + ", got " + std::to_string(tokens.size()));
         std::vector<double> values;
         std::string bad;
         if (!parseDoubles(tokens, values, bad)) throw ParseError(path, line_number, "not a number: " + excerpt(bad));
@@ -209,9 +218,9 @@ std::vector<double> readNumberMatrix(const std::string& path, int rows, int cols
         ++rows_read;
     }
     if (rows_read < rows)
-        throw ParseError(path, std::max(in.lineNumber(), 1),
-                         "unexpected end of file: expected a " + shape + ", got " + std::to_string(rows_read) +
-                             " row(s)");
+        throw ParseError(
+            path, std::max(in.lineNumber(), 1),
+            "unexpected end of file: expected a " + shape + ", got " + std::to_string(rows_read) + " row(s)");
     return matrix;
 }
 

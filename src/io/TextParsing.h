@@ -34,7 +34,8 @@ private:
 };
 
 // A whole text file of at most `max_bytes` (IoError beyond: not the small settings file expected).
-std::string readSmallTextFile(const std::string& path, const std::string& what, std::size_t max_bytes = std::size_t(1) << 20);
+std::string readSmallTextFile(const std::string& path, const std::string& what,
+                              std::size_t max_bytes = std::size_t(1) << 20);
 
 // Splits on spaces, tabs and '\r' (files written on Windows).
 std::vector<std::string_view> splitWhitespace(std::string_view line);

@@ -14,9 +14,12 @@ namespace {
 
 bool dropsWhenFull(const ThreadedSourceOptions& options, const ImageSource& source) {
     switch (options.when_full) {
-        case ThreadedSourceOptions::WhenFull::Wait: return false;
-        case ThreadedSourceOptions::WhenFull::DropOldest: return true;
-        case ThreadedSourceOptions::WhenFull::Automatic: break;
+        case ThreadedSourceOptions::WhenFull::Wait:
+            return false;
+        case ThreadedSourceOptions::WhenFull::DropOldest:
+            return true;
+        case ThreadedSourceOptions::WhenFull::Automatic:
+            break;
     }
     return source.isLive();
 }
@@ -41,7 +44,8 @@ struct ThreadedImageSource::State {
           drop_oldest(dropsWhenFull(options, *source)),
           ground_truth(source->groundTruth()),
           description("threaded (queue of " + std::to_string(options.queue_capacity) +
-                      (drop_oldest ? ", dropping the oldest frame when full" : ", lossless") + ") " + source->description()),
+                      (drop_oldest ? ", dropping the oldest frame when full" : ", lossless") + ") " +
+                      source->description()),
           queue(std::size_t(options.queue_capacity), drop_oldest) {}
 
     void readerLoop();
@@ -106,15 +110,21 @@ bool ThreadedImageSource::next(RGBDFrame& frame) {
     if (state_->ended) return false;
     QueuedFrame entry = state_->queue.pop();
     switch (entry.kind) {
-        case QueuedFrame::Kind::Frame: frame = std::move(entry.frame); return true;
-        case QueuedFrame::Kind::Error: std::rethrow_exception(entry.error);
-        case QueuedFrame::Kind::End: break;
+        case QueuedFrame::Kind::Frame:
+            frame = std::move(entry.frame);
+            return true;
+        case QueuedFrame::Kind::Error:
+            std::rethrow_exception(entry.error);
+        case QueuedFrame::Kind::End:
+            break;
     }
     state_->ended = true;
     return false;
 }
 
-bool ThreadedImageSource::waitForFrame(std::chrono::milliseconds timeout) { return state_->ended || state_->queue.waitForEntry(timeout); }
+bool ThreadedImageSource::waitForFrame(std::chrono::milliseconds timeout) {
+    return state_->ended || state_->queue.waitForEntry(timeout);
+}
 
 int ThreadedImageSource::frameCount() const { return state_->frame_count; }
 std::string ThreadedImageSource::description() const { return state_->description; }

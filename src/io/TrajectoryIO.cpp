@@ -49,15 +49,20 @@ std::vector<TimedPose> readTumTrajectory(const std::string& path) {
         if (text::isBlankOrComment(line)) continue;
         const auto tokens = text::splitWhitespace(line);
         if (tokens.size() != 8)
-            throw ParseError(path, line_number,
-                             "expected 8 numbers (timestamp tx ty tz qx qy qz qw), got " + std::to_string(tokens.size()));
+            throw ParseError(
+                path, line_number,
+                "expected 8 numbers (timestamp tx ty tz qx qy qz qw), got " + std::to_string(tokens.size()));
         std::vector<double> v;
         std::string bad;
-        if (!text::parseDoubles(tokens, v, bad)) throw ParseError(path, line_number, "not a number: " + text::excerpt(bad));
-        if (!std::isfinite(v[0])) throw ParseError(path, line_number, "non-finite timestamp " + text::excerpt(tokens[0]));
+        if (!text::parseDoubles(tokens, v, bad))
+            throw ParseError(path, line_number, "not a number: " + text::excerpt(bad));
+        if (!std::isfinite(v[0]))
+            throw ParseError(path, line_number, "non-finite timestamp " + text::excerpt(tokens[0]));
         for (int i = 1; i < 4; ++i)
             if (!text::finiteAsFloat(v[std::size_t(i)]))
-                throw ParseError(path, line_number, "non-finite position " + text::excerpt(tokens[std::size_t(i)]) + " (stored as a float)");
+                throw ParseError(
+                    path, line_number,
+                    "non-finite position " + text::excerpt(tokens[std::size_t(i)]) + " (stored as a float)");
         std::string problem = text::positionProblem(v[1], v[2], v[3]);
         if (problem.empty()) problem = text::quaternionProblem(v[4], v[5], v[6], v[7]);
         if (!problem.empty()) throw ParseError(path, line_number, problem);
@@ -65,13 +70,15 @@ std::vector<TimedPose> readTumTrajectory(const std::string& path) {
         q.normalize();
         const TimedPose pose{v[0], poseFrom({v[1], v[2], v[3]}, q)};
         if (!poses.empty() && v[0] < poses.back().timestamp_s)
-            throw ParseError(path, line_number, "timestamps must not decrease (" + std::string(tokens[0]) + " comes after a later one)");
+            throw ParseError(path, line_number,
+                             "timestamps must not decrease (" + std::string(tokens[0]) + " comes after a later one)");
         if (!poses.empty() && v[0] == poses.back().timestamp_s) {
             // The same sample written twice is harmless; two poses for one time are a broken file.
             const Mat4f& earlier = poses.back().T_world_camera;
             if (!std::equal(std::begin(earlier.m), std::end(earlier.m), std::begin(pose.T_world_camera.m)))
-                throw ParseError(path, line_number, "timestamp " + std::string(tokens[0]) + " is given twice (line " +
-                                                        std::to_string(previous_line) + ") with different poses");
+                throw ParseError(path, line_number,
+                                 "timestamp " + std::string(tokens[0]) + " is given twice (line " +
+                                     std::to_string(previous_line) + ") with different poses");
             continue;
         }
         poses.push_back(pose);
@@ -111,7 +118,8 @@ bool interpolatePose(const std::vector<TimedPose>& poses, double t, double max_g
 
     if (next_ok && prev_ok && next->timestamp_s > prev->timestamp_s) {
         const double alpha = (t - prev->timestamp_s) / (next->timestamp_s - prev->timestamp_s);
-        const Eigen::Vector3d trans = (1.0 - alpha) * translationOf(prev->T_world_camera) + alpha * translationOf(next->T_world_camera);
+        const Eigen::Vector3d trans =
+            (1.0 - alpha) * translationOf(prev->T_world_camera) + alpha * translationOf(next->T_world_camera);
         const Eigen::Quaterniond rot = rotationOf(prev->T_world_camera).slerp(alpha, rotationOf(next->T_world_camera));
         T_world_camera = poseFrom(trans, rot);
         return true;

@@ -82,7 +82,8 @@ void TumSource::associate(const std::string& rgb_list, const std::string& depth_
     // them they take part as listed, so that a frame that needs one is an unreadable frame at its own
     // place, named when it is read, not left out silently with the frames after it moved up.
     auto listed = [&](const std::string& list) {
-        std::vector<ListedImage> images = frame_reading::readTimestampedImageList((folder / list).string(), missing_listed_files_);
+        std::vector<ListedImage> images =
+            frame_reading::readTimestampedImageList((folder / list).string(), missing_listed_files_);
         const auto on_disk = [](const ListedImage& i) { return i.on_disk; };
         const auto first = std::find_if(images.begin(), images.end(), on_disk);
         if (first == images.end()) return std::vector<ListedImage>();
@@ -92,7 +93,8 @@ void TumSource::associate(const std::string& rgb_list, const std::string& depth_
     };
     std::vector<ListedImage> rgb = listed(rgb_list);
     const std::vector<ListedImage> depth = listed(depth_list);
-    std::stable_sort(rgb.begin(), rgb.end(), [](const ListedImage& a, const ListedImage& b) { return a.time_s < b.time_s; });
+    std::stable_sort(rgb.begin(), rgb.end(),
+                     [](const ListedImage& a, const ListedImage& b) { return a.time_s < b.time_s; });
 
     struct Candidate {
         double difference_s;
@@ -130,14 +132,16 @@ bool TumSource::next(RGBDFrame& frame) {
     if (position_ >= pairs_.size()) return false;
     const int index = int(position_);
     const FramePair& pair = pairs_[position_++];  // moves on even if this frame throws
-    frame_reading::readDepthAndColour(pair.depth_path, pair.rgb_path, index, calib_.depth, calib_.rgb, read_.depth_raw, read_.rgb);
+    frame_reading::readDepthAndColour(pair.depth_path, pair.rgb_path, index, calib_.depth, calib_.rgb, read_.depth_raw,
+                                      read_.rgb);
     read_.handOver(frame, true);
     frame.index = index;
     frame.timestamp_s = pair.depth_time_s;
     frame.rgb_timestamp_s = pair.rgb_time_s;
     frame.depth_path = pair.depth_path;
     frame.T_world_camera_gt = Mat4f::identity();
-    frame.has_ground_truth = interpolatePose(ground_truth_, pair.depth_time_s, kMaxTimeDifference_s, frame.T_world_camera_gt);
+    frame.has_ground_truth =
+        interpolatePose(ground_truth_, pair.depth_time_s, kMaxTimeDifference_s, frame.T_world_camera_gt);
     return true;
 }
 
@@ -146,11 +150,14 @@ std::string TumSource::description() const {
     if (dropped_depth_frames_ > 0)
         d += "; " + std::to_string(dropped_depth_frames_) + " depth frames without an rgb image within 0.02 s dropped";
     if (missing_listed_files_ > missing_between_files_)
-        d += "; " + std::to_string(missing_listed_files_ - missing_between_files_) + " listed images beyond those on disk left out";
+        d += "; " + std::to_string(missing_listed_files_ - missing_between_files_) +
+             " listed images beyond those on disk left out";
     if (missing_between_files_ > 0)
-        d += "; " + std::to_string(missing_between_files_) + " listed images missing between those on disk (their frames are unreadable)";
+        d += "; " + std::to_string(missing_between_files_) +
+             " listed images missing between those on disk (their frames are unreadable)";
     d += "; calibration: " + calib_origin_;
-    d += ground_truth_.empty() ? "; no ground truth)" : "; ground truth: " + std::to_string(ground_truth_.size()) + " poses)";
+    d += ground_truth_.empty() ? "; no ground truth)"
+                               : "; ground truth: " + std::to_string(ground_truth_.size()) + " poses)";
     return d;
 }
 

@@ -41,8 +41,10 @@ VideoFrameReader::~VideoFrameReader() = default;
 
 bool VideoFrameReader::read(int index, Image<Vec4u8>& rgba, Vec2i output_size) {
     if (index < next_index_)
-        throw IoError(path_, "video frames are decoded in order: frame " + std::to_string(index) +
-                                 " was asked for after frame " + std::to_string(next_index_ - 1), index);
+        throw IoError(path_,
+                      "video frames are decoded in order: frame " + std::to_string(index) +
+                          " was asked for after frame " + std::to_string(next_index_ - 1),
+                      index);
     cv::VideoCapture& video = capture_->video;
     for (; !ended_ && next_index_ < index; ++next_index_)
         if (!video.grab()) ended_ = true;
@@ -54,10 +56,11 @@ bool VideoFrameReader::read(int index, Image<Vec4u8>& rgba, Vec2i output_size) {
     }
     ++next_index_;
     if (bgr.type() != CV_8UC3)
-        throw IoError(path_, "the video decodes to an unexpected pixel type (OpenCV type " + std::to_string(bgr.type()) +
-                                 "), expected 8-bit colour", index);
-    if (bgr.cols != size_.x || bgr.rows != size_.y)
-        throw IoError(path_, "frame size changed within the video", index);
+        throw IoError(path_,
+                      "the video decodes to an unexpected pixel type (OpenCV type " + std::to_string(bgr.type()) +
+                          "), expected 8-bit colour",
+                      index);
+    if (bgr.cols != size_.x || bgr.rows != size_.y) throw IoError(path_, "frame size changed within the video", index);
     if (output_size != size_) {
         cv::Mat resized;
         cv::resize(bgr, resized, cv::Size(output_size.x, output_size.y), 0.0, 0.0, cv::INTER_AREA);

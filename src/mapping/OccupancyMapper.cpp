@@ -25,15 +25,18 @@ struct QueuedScan {
 };
 
 const OccupancySettings& validated(const OccupancySettings& s) {
-    if (!(s.resolution_m > 0.f)) throw ConfigError("occupancy: resolution_m must be > 0, got " + std::to_string(s.resolution_m));
+    if (!(s.resolution_m > 0.f))
+        throw ConfigError("occupancy: resolution_m must be > 0, got " + std::to_string(s.resolution_m));
     if (s.frame_step < 1) throw ConfigError("occupancy: frame_step must be >= 1, got " + std::to_string(s.frame_step));
     if (s.pixel_step < 1) throw ConfigError("occupancy: pixel_step must be >= 1, got " + std::to_string(s.pixel_step));
-    if (s.queue_capacity < 1) throw ConfigError("occupancy: queue_capacity must be >= 1, got " + std::to_string(s.queue_capacity));
+    if (s.queue_capacity < 1)
+        throw ConfigError("occupancy: queue_capacity must be >= 1, got " + std::to_string(s.queue_capacity));
     return s;
 }
 
 // Every pixel_step-th pixel in x and y (Algorithm 5's spatial downsampling), unprojected and moved to the world frame.
-QueuedScan subsampledScan(const Image<float>& depth_m, const Intrinsics& intrinsics, const Mat4f& T_world_camera, int pixel_step) {
+QueuedScan subsampledScan(const Image<float>& depth_m, const Intrinsics& intrinsics, const Mat4f& T_world_camera,
+                          int pixel_step) {
     QueuedScan scan;
     const Vec3f origin = T_world_camera.translation();
     scan.sensor_origin = octomap::point3d(origin.x, origin.y, origin.z);
@@ -119,8 +122,9 @@ OccupancyMapper::~OccupancyMapper() {
 
 bool OccupancyMapper::submit(const Image<float>& depth_m, const Intrinsics& intrinsics, const Mat4f& T_world_camera) {
     if (depth_m.size() != intrinsics.size())
-        throw ConfigError("occupancy: depth image " + std::to_string(depth_m.width()) + "x" + std::to_string(depth_m.height()) +
-                          " does not match the intrinsics " + std::to_string(intrinsics.width) + "x" + std::to_string(intrinsics.height));
+        throw ConfigError("occupancy: depth image " + std::to_string(depth_m.width()) + "x" +
+                          std::to_string(depth_m.height()) + " does not match the intrinsics " +
+                          std::to_string(intrinsics.width) + "x" + std::to_string(intrinsics.height));
     if (depth_m.pixelCount() > 0 && !depth_m.host()) throw ConfigError("occupancy: the depth image has no host copy");
     Impl& m = *impl_;
     {
@@ -141,7 +145,7 @@ bool OccupancyMapper::submit(const Image<float>& depth_m, const Intrinsics& intr
     {
         std::lock_guard<std::mutex> lock(m.queue_mutex);
         if (m.finishing) throw Error("OccupancyMapper::submit() after finish()");  // finish() raced this call
-        if (m.queue.size() >= std::size_t(m.settings.queue_capacity)) {  // another producer got there first
+        if (m.queue.size() >= std::size_t(m.settings.queue_capacity)) {            // another producer got there first
             ++m.stats.frames_dropped;
             return false;
         }
@@ -172,7 +176,8 @@ void OccupancyMapper::write(const std::string& path) {
     if (!file) throw IoError(path, "cannot open for writing");
     std::lock_guard<std::mutex> lock(impl_->tree_mutex);
     // writeBinary() converts to maximum likelihood and prunes in place: fine, the map is final.
-    if (!impl_->tree.writeBinary(file) || !file.flush()) throw IoError(path, "cannot write the occupancy map (OctoMap .bt)");
+    if (!impl_->tree.writeBinary(file) || !file.flush())
+        throw IoError(path, "cannot write the occupancy map (OctoMap .bt)");
 }
 
 Occupancy OccupancyMapper::occupancyAt(Vec3f p_world) const {

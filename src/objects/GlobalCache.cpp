@@ -12,14 +12,16 @@
 
 namespace voxfuse {
 
-GlobalCache::GlobalCache(std::size_t block_bytes, const std::string& swap_file) : block_bytes_(block_bytes), path_(swap_file) {
+GlobalCache::GlobalCache(std::size_t block_bytes, const std::string& swap_file)
+    : block_bytes_(block_bytes), path_(swap_file) {
     if (block_bytes_ == 0) throw ConfigError("global cache: blocks of 0 bytes");
     if (path_.empty()) return;
     // A new file only: the swap file is deleted at once, so an existing path (a map, a user's file)
     // would be lost.
     fd_ = ::open(path_.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
     if (fd_ < 0 && errno == EEXIST)
-        throw IoError(path_, "the swap file must be a new path: it is deleted as soon as it is opened, and this one exists");
+        throw IoError(path_,
+                      "the swap file must be a new path: it is deleted as soon as it is opened, and this one exists");
     if (fd_ < 0) throw IoError(path_, std::string("cannot create the swap file: ") + std::strerror(errno));
     // Unlinked at once: the open file keeps its blocks, the space comes back however the run ends, and
     // a later cache on the same path makes a file of its own.
@@ -35,7 +37,8 @@ unsigned char* GlobalCache::memorySlot(int slot) const {
 }
 
 void GlobalCache::checkSlot(int slot) const {
-    if (slot < 0 || slot >= slot_count_) throw Error("global cache: slot " + std::to_string(slot) + " was never stored");
+    if (slot < 0 || slot >= slot_count_)
+        throw Error("global cache: slot " + std::to_string(slot) + " was never stored");
 }
 
 void GlobalCache::store(const void* blocks, int count, int* slots) {
@@ -59,7 +62,9 @@ void GlobalCache::store(const void* blocks, int count, int* slots) {
             while (done < block_bytes_) {
                 const ssize_t n = ::pwrite(fd_, block + done, block_bytes_ - done, offset + off_t(done));
                 if (n < 0 && errno == EINTR) continue;
-                if (n <= 0) throw IoError(path_, std::string("cannot write to the swap file: ") + std::strerror(n < 0 ? errno : ENOSPC));
+                if (n <= 0)
+                    throw IoError(
+                        path_, std::string("cannot write to the swap file: ") + std::strerror(n < 0 ? errno : ENOSPC));
                 done += std::size_t(n);
             }
         }
@@ -79,7 +84,9 @@ void GlobalCache::read(int slot, void* block) const {
     while (done < block_bytes_) {
         const ssize_t n = ::pread(fd_, out + done, block_bytes_ - done, offset + off_t(done));
         if (n < 0 && errno == EINTR) continue;
-        if (n <= 0) throw IoError(path_, n < 0 ? std::string("cannot read the swap file: ") + std::strerror(errno) : "the swap file is shorter than its blocks");
+        if (n <= 0)
+            throw IoError(path_, n < 0 ? std::string("cannot read the swap file: ") + std::strerror(errno)
+                                       : "the swap file is shorter than its blocks");
         done += std::size_t(n);
     }
 }

@@ -20,12 +20,15 @@ void validate(const VoxelBlockHashSettings& s) {
     if (s.bucket_count < 1) fail("bucket count must be positive (got " + std::to_string(s.bucket_count) + ")");
     if (s.entries_per_bucket != 1 && s.entries_per_bucket != 2)
         fail("entries per bucket must be 1 or 2 (got " + std::to_string(s.entries_per_bucket) + ")");
-    if (s.excess_entry_count < 0) fail("excess list size must not be negative (got " + std::to_string(s.excess_entry_count) + ")");
-    if ((long long)s.bucket_count * s.entries_per_bucket + s.excess_entry_count > INT_MAX) fail("too many hash entries");
+    if (s.excess_entry_count < 0)
+        fail("excess list size must not be negative (got " + std::to_string(s.excess_entry_count) + ")");
+    if ((long long)s.bucket_count * s.entries_per_bucket + s.excess_entry_count > INT_MAX)
+        fail("too many hash entries");
     // Voxel offsets ptr * 512 + i are ints: 2^22 blocks (2^31 voxels) at most.
     if (s.max_block_count < 1 || s.max_block_count > (1 << 22))
         fail("maximum block count must be in 1..4194304 (got " + std::to_string(s.max_block_count) + ")");
-    if (s.blocks_per_growth < 1) fail("blocks per growth must be positive (got " + std::to_string(s.blocks_per_growth) + ")");
+    if (s.blocks_per_growth < 1)
+        fail("blocks per growth must be positive (got " + std::to_string(s.blocks_per_growth) + ")");
 }
 
 template <class T>
@@ -38,7 +41,8 @@ void allocateOn(MemoryBlock<T>& block, std::size_t count, Device where) {
 VoxelBlockHash::VoxelBlockHash(const Settings& settings, Device location) : VoxelBlockHash(settings, location, true) {}
 
 std::size_t VoxelBlockHash::tableBytesFor(const Settings& s) {
-    const std::size_t entries = std::size_t(s.bucket_count) * std::size_t(s.entries_per_bucket) + std::size_t(s.excess_entry_count);
+    const std::size_t entries =
+        std::size_t(s.bucket_count) * std::size_t(s.entries_per_bucket) + std::size_t(s.excess_entry_count);
     return entries * (sizeof(HashEntry) + sizeof(std::uint8_t) + sizeof(int)) +
            (std::size_t(s.excess_entry_count) + 2 * std::size_t(s.max_block_count)) * sizeof(int);
 }
@@ -47,7 +51,8 @@ VoxelBlockHash::VoxelBlockHash(const Settings& settings, Device location, bool a
     : settings_(settings), location_(location) {
     validate(settings_);
     if (!allocate_tables) return;
-    const std::size_t entries = std::size_t(settings_.bucket_count) * settings_.entries_per_bucket + settings_.excess_entry_count;
+    const std::size_t entries =
+        std::size_t(settings_.bucket_count) * settings_.entries_per_bucket + settings_.excess_entry_count;
     allocateOn(entries_, entries, location_);
     allocateOn(entry_visibility_, entries, location_);
     allocateOn(stored_slot_, entries, location_);
@@ -118,7 +123,8 @@ void VoxelBlockHash::clearBlocks() {
     stored_slot_.fill(location_, kNoStoredCopy, 0, stored_slot_.size());
     // Popped from the top: excess entry 0 is used first.
     std::vector<int> excess(std::size_t(settings_.excess_entry_count));
-    for (int i = 0; i < settings_.excess_entry_count; ++i) excess[std::size_t(i)] = settings_.excess_entry_count - 1 - i;
+    for (int i = 0; i < settings_.excess_entry_count; ++i)
+        excess[std::size_t(i)] = settings_.excess_entry_count - 1 - i;
     free_excess_.writeRange(location_, 0, excess.data(), excess.size());
     free_excess_count_ = settings_.excess_entry_count;
     block_capacity_ = 0;
@@ -133,7 +139,8 @@ int VoxelBlockHash::grownBlockCapacity(int blocks) const {
     if (blocks <= block_capacity_ || !canGrow()) return block_capacity_;
     const int step = std::max(settings_.blocks_per_growth, block_capacity_ / 4);
     const long long wanted = std::max<long long>(blocks, (long long)block_capacity_ + step);
-    const long long rounded = (wanted + settings_.blocks_per_growth - 1) / settings_.blocks_per_growth * settings_.blocks_per_growth;
+    const long long rounded =
+        (wanted + settings_.blocks_per_growth - 1) / settings_.blocks_per_growth * settings_.blocks_per_growth;
     return int(std::min<long long>(rounded, settings_.max_block_count));
 }
 
@@ -154,13 +161,15 @@ void VoxelBlockHash::popFreeStacks(int blocks, int excess_entries) {
     free_excess_count_ -= excess_entries;
     if (free_block_count_ < 0 || free_block_count_ > block_capacity_ || free_excess_count_ < 0 ||
         free_excess_count_ > settings_.excess_entry_count)
-        throw Error("voxel block hash: free stacks out of range after a device update (" + std::to_string(free_block_count_) +
-                    " blocks, " + std::to_string(free_excess_count_) + " excess entries)");
+        throw Error("voxel block hash: free stacks out of range after a device update (" +
+                    std::to_string(free_block_count_) + " blocks, " + std::to_string(free_excess_count_) +
+                    " excess entries)");
 }
 
 void VoxelBlockHash::requireHost(const char* what) const {
     if (location_ != Device::CPU)
-        throw DeviceError(std::string("voxel block hash: ") + what + " works on a hash in host memory; this one is on the GPU " +
+        throw DeviceError(std::string("voxel block hash: ") + what +
+                          " works on a hash in host memory; this one is on the GPU " +
                           "(take a host copy with copyTo(Device::CPU))");
 }
 
@@ -185,7 +194,8 @@ VoxelBlockHash::InsertResult VoxelBlockHash::insert(Vec3i block, int* entry_out)
         return InsertResult::AlreadyPresent;
     }
     if (free_block_count_ == 0) return InsertResult::NoVoxelBlock;
-    if (!insertEntry(target, block, free_blocks_.host()[free_block_count_ - 1], entry_out)) return InsertResult::NoHashEntry;
+    if (!insertEntry(target, block, free_blocks_.host()[free_block_count_ - 1], entry_out))
+        return InsertResult::NoHashEntry;
     --free_block_count_;
     ++stats_.blocks_allocated;
     return InsertResult::Inserted;
@@ -235,14 +245,17 @@ int VoxelBlockHash::removeBlocks(const std::vector<Vec3i>& blocks) {
     for (const Vec3i& b : blocks) {
         const int e = findEntry(b);
         // Active blocks only: a block with a stored copy is not dropped here.
-        if (e < 0 || entries_.host()[e].ptr < 0 || stored_slot_.host()[e] != kNoStoredCopy || remove[std::size_t(e)]) continue;
+        if (e < 0 || entries_.host()[e].ptr < 0 || stored_slot_.host()[e] != kNoStoredCopy || remove[std::size_t(e)])
+            continue;
         remove[std::size_t(e)] = 1;
         buckets.insert(hashBucket(b, settings_.bucket_count));
         ++removed;
     }
     // The parallel removal's two passes, bucket by bucket: count, then remove at the running offsets.
-    std::vector<int> freed_blocks(std::size_t(settings_.bucket_count), 0), freed_excess(std::size_t(settings_.bucket_count), 0);
-    BucketRemoval r{state(), remove.data(), freed_blocks.data(), freed_excess.data(), free_block_count_, free_excess_count_};
+    std::vector<int> freed_blocks(std::size_t(settings_.bucket_count), 0),
+        freed_excess(std::size_t(settings_.bucket_count), 0);
+    BucketRemoval r{state(),           remove.data(),     freed_blocks.data(), freed_excess.data(),
+                    free_block_count_, free_excess_count_};
     int block_offset = 0, excess_offset = 0;
     for (int bucket : buckets) {
         CountBucketRemovals{r}(bucket);
@@ -266,7 +279,8 @@ int VoxelBlockHash::removeBlocks(const std::vector<Vec3i>& blocks) {
     return removed;
 }
 
-void VoxelBlockHash::setVisibleEntries(const std::vector<int>& entries, const Mat4f& T_world_camera, const Intrinsics& intrinsics) {
+void VoxelBlockHash::setVisibleEntries(const std::vector<int>& entries, const Mat4f& T_world_camera,
+                                       const Intrinsics& intrinsics) {
     requireHost("setVisibleEntries()");
     const int count = int(std::min<std::size_t>(entries.size(), visible_entries_.size()));
     std::fill(entry_visibility_.host(), entry_visibility_.host() + entry_visibility_.size(), kEntryNotVisible);
@@ -289,7 +303,8 @@ void VoxelBlockHash::setVisibleCount(int count) {
 }
 
 bool VoxelBlockHash::visibleListCovers(const Mat4f& T_world_camera, const Intrinsics& intrinsics) const {
-    if (!visible_valid_ || std::memcmp(visible_T_world_camera_.m, T_world_camera.m, sizeof(T_world_camera.m)) != 0) return false;
+    if (!visible_valid_ || std::memcmp(visible_T_world_camera_.m, T_world_camera.m, sizeof(T_world_camera.m)) != 0)
+        return false;
     if (intrinsics.width <= 0 || intrinsics.height <= 0) return false;
     const int factor = visible_intrinsics_.width / intrinsics.width;
     if (factor < 1) return false;

@@ -33,13 +33,16 @@ TEST(CpuDeviceTest, NormalEquationsDoNotDependOnTheThreadCount) {
     std::vector<NormalEquations<double>> sums;
     for (int threads : {1, 2, 3}) {
         setCpuThreadCount(threads);
-        sums.push_back(CpuDevice::sumNormalEquations(int(values.size()), test::PolynomialTerms{values.data()}, RobustKernel::Huber, 0.2f, scratch));
+        sums.push_back(CpuDevice::sumNormalEquations(int(values.size()), test::PolynomialTerms{values.data()},
+                                                     RobustKernel::Huber, 0.2f, scratch));
     }
     setCpuThreadCount(0);
     for (std::size_t t = 1; t < sums.size(); ++t) {
         EXPECT_EQ(sums[t].count, sums[0].count);
-        for (int k = 0; k < 21; ++k) EXPECT_EQ(sums[t].hessian[k], sums[0].hessian[k]) << "entry " << k << ", run " << t;
-        for (int k = 0; k < 6; ++k) EXPECT_EQ(sums[t].gradient[k], sums[0].gradient[k]) << "entry " << k << ", run " << t;
+        for (int k = 0; k < 21; ++k)
+            EXPECT_EQ(sums[t].hessian[k], sums[0].hessian[k]) << "entry " << k << ", run " << t;
+        for (int k = 0; k < 6; ++k)
+            EXPECT_EQ(sums[t].gradient[k], sums[0].gradient[k]) << "entry " << k << ", run " << t;
         EXPECT_EQ(sums[t].weighted_cost, sums[0].weighted_cost);
     }
 }

@@ -68,7 +68,9 @@ TEST(CpuThreads, EveryTaskRunsExactlyOnceInEveryLoop) {
             const int tasks = loop % int(runs.size());
             for (int t = 0; t < tasks; ++t) runs[std::size_t(t)] = 0;
             forEachCpuTask(tasks, [&](int t) { runs[std::size_t(t)].fetch_add(1); });
-            for (int t = 0; t < tasks; ++t) ASSERT_EQ(runs[std::size_t(t)].load(), 1) << "task " << t << " of " << tasks << ", " << threads << " threads";
+            for (int t = 0; t < tasks; ++t)
+                ASSERT_EQ(runs[std::size_t(t)].load(), 1)
+                    << "task " << t << " of " << tasks << ", " << threads << " threads";
         }
     }
 }
@@ -194,7 +196,7 @@ TEST(CpuThreads, ThreadsTheSystemRefusesAreDoneWithout) {
         if (pages <= 0) _exit(3);
         // Room for about eight 8 MiB thread stacks beyond what the process has mapped.
         const rlim_t limit = rlim_t(pages) * rlim_t(sysconf(_SC_PAGESIZE)) + (rlim_t(64) << 20);
-        const struct rlimit as{limit, limit};
+        const struct rlimit as { limit, limit };
         if (setrlimit(RLIMIT_AS, &as) != 0) _exit(4);
         setCpuThreadCount(200);
         std::atomic<int> child_sum{0};

@@ -122,7 +122,8 @@ void checkAtomicsCombineExactly() {
         std::memcpy(&bits, &f, sizeof bits);
         return bits;
     };
-    const std::vector<std::vector<float>> value_sets = {{-0.f}, {0.f}, {-0.f, 0.f}, {0.f, -0.f, 0.f}, {-1.f, -0.f}, {1.f, -0.f}, {-0.f, 2.f, 0.f}};
+    const std::vector<std::vector<float>> value_sets = {{-0.f},       {0.f},       {-0.f, 0.f},     {0.f, -0.f, 0.f},
+                                                        {-1.f, -0.f}, {1.f, -0.f}, {-0.f, 2.f, 0.f}};
     for (float start : {0.f, -0.f, -1.f, 1.f, 1e30f, -1e30f}) {
         for (const std::vector<float>& set : value_sets) {
             float expected_min = start, expected_max = start;
@@ -133,8 +134,10 @@ void checkAtomicsCombineExactly() {
             MemoryBlock<float> in = blockOn(where, set), min_max = blockOn(where, std::vector<float>{start, start});
             TDevice::parallelFor(int(set.size()), FloatMinMax{in.data(where), min_max.data(where)});
             const std::vector<float> r = valuesOf(where, min_max, 2);
-            EXPECT_EQ(bits_of(r[0]), bits_of(expected_min)) << "min from " << start << " over " << set.size() << " values, first " << set[0];
-            EXPECT_EQ(bits_of(r[1]), bits_of(expected_max)) << "max from " << start << " over " << set.size() << " values, first " << set[0];
+            EXPECT_EQ(bits_of(r[0]), bits_of(expected_min))
+                << "min from " << start << " over " << set.size() << " values, first " << set[0];
+            EXPECT_EQ(bits_of(r[1]), bits_of(expected_max))
+                << "max from " << start << " over " << set.size() << " values, first " << set[0];
         }
     }
 }
@@ -221,7 +224,7 @@ void checkSortUnique() {
     for (int n : {1, 2, 1000, 500000}) {
         std::vector<std::uint64_t> keys(static_cast<std::size_t>(n));
         for (auto& k : keys) k = rng() % std::uint64_t(n / 3 + 1) * 0x100000001ull;  // many repeats, high bits used
-        if (n > 2) keys[1] = ~std::uint64_t(0);  // the largest key sorts last
+        if (n > 2) keys[1] = ~std::uint64_t(0);                                      // the largest key sorts last
         MemoryBlock<std::uint64_t> b = blockOn(where, keys);
         const int count = TDevice::sortUnique(b.data(where), n, scratch);
         std::vector<std::uint64_t> expected = keys;
@@ -265,7 +268,8 @@ void checkCountMaxAndNormalEquations() {
         MemoryBlock<float> b = blockOn(where, values);
         const int above = int(std::count_if(values.begin(), values.end(), [](float v) { return v > 0.5f; }));
         EXPECT_EQ(TDevice::countIf(n, AboveHalf{b.data(where)}, scratch), above);
-        EXPECT_EQ(TDevice::maxOf(n, ValueAt{b.data(where)}, -1.f, scratch), *std::max_element(values.begin(), values.end()));
+        EXPECT_EQ(TDevice::maxOf(n, ValueAt{b.data(where)}, -1.f, scratch),
+                  *std::max_element(values.begin(), values.end()));
         EXPECT_EQ(TDevice::maxOf(n, ValueAt{b.data(where)}, 2.f, scratch), 2.f);
 
         // Against a serial sum in double: equal to double rounding; and the same bits run after run.
@@ -276,14 +280,17 @@ void checkCountMaxAndNormalEquations() {
             const float w = robustWeight(RobustKernel::Huber, r, 0.2f);
             if (w > 0.f) serial.addTerm(J, r, w);
         }
-        const NormalEquations<double> a = TDevice::sumNormalEquations(n, PolynomialTerms{b.data(where)}, RobustKernel::Huber, 0.2f, scratch);
-        const NormalEquations<double> again = TDevice::sumNormalEquations(n, PolynomialTerms{b.data(where)}, RobustKernel::Huber, 0.2f, scratch);
+        const NormalEquations<double> a =
+            TDevice::sumNormalEquations(n, PolynomialTerms{b.data(where)}, RobustKernel::Huber, 0.2f, scratch);
+        const NormalEquations<double> again =
+            TDevice::sumNormalEquations(n, PolynomialTerms{b.data(where)}, RobustKernel::Huber, 0.2f, scratch);
         EXPECT_EQ(a.count, serial.count);
         for (int k = 0; k < 21; ++k) {
             EXPECT_NEAR(a.hessian[k], serial.hessian[k], 1e-9 * std::max(1.0, std::fabs(serial.hessian[k])));
             EXPECT_EQ(a.hessian[k], again.hessian[k]) << "deterministic";
         }
-        for (int k = 0; k < 6; ++k) EXPECT_NEAR(a.gradient[k], serial.gradient[k], 1e-9 * std::max(1.0, std::fabs(serial.gradient[k])));
+        for (int k = 0; k < 6; ++k)
+            EXPECT_NEAR(a.gradient[k], serial.gradient[k], 1e-9 * std::max(1.0, std::fabs(serial.gradient[k])));
         EXPECT_NEAR(a.weighted_cost, serial.weighted_cost, 1e-9 * std::max(1.0, serial.weighted_cost));
     }
 }

@@ -23,7 +23,9 @@ protected:
     }
 };
 
-TEST_F(CudaDeviceTest, ParallelForVisitsEveryElementOnce) { test::checkParallelForVisitsEveryElementOnce<CudaDevice>(); }
+TEST_F(CudaDeviceTest, ParallelForVisitsEveryElementOnce) {
+    test::checkParallelForVisitsEveryElementOnce<CudaDevice>();
+}
 TEST_F(CudaDeviceTest, AtomicsCombineExactly) { test::checkAtomicsCombineExactly<CudaDevice>(); }
 TEST_F(CudaDeviceTest, CompareAndSwapClaimsOncePerSlot) { test::checkCompareAndSwapClaimsOncePerSlot<CudaDevice>(); }
 TEST_F(CudaDeviceTest, ExclusiveScan) { test::checkExclusiveScan<CudaDevice>(); }
@@ -79,7 +81,8 @@ TEST_F(CudaDeviceTest, MemoryBlockGrowsOnTheDeviceInPlace) {
     for (int i = 0; i < 1000; ++i) first[std::size_t(i)] = 3 * i + 1;
     m.writeRange(Device::CUDA, 0, first.data(), first.size());
     const std::size_t before = device_memory::bytesInUse();
-    if (!m.growDevice(5000, std::size_t(1) << 30)) GTEST_SKIP() << "this GPU or driver has no virtual memory management";
+    if (!m.growDevice(5000, std::size_t(1) << 30))
+        GTEST_SKIP() << "this GPU or driver has no virtual memory management";
     const int* base = m.device();
     EXPECT_LT(device_memory::bytesInUse() - before, std::size_t(64) << 20) << "a 4 GiB reservation is not backed whole";
     m.fill(Device::CUDA, -7, 1000, 4000);

@@ -31,7 +31,8 @@ TYPED_TEST_SUITE(EngineCudaParityTest, VoxelTypes);
 
 std::vector<Mat4f> cameraPath() {
     std::vector<Mat4f> poses;
-    for (int k = 0; k < 6; ++k) poses.push_back(test::lookAt({1.0f - 0.15f * k, -0.8f + 0.3f * k, 0.8f - 0.04f * k}, {0.2f, 0.f, 0.1f}));
+    for (int k = 0; k < 6; ++k)
+        poses.push_back(test::lookAt({1.0f - 0.15f * k, -0.8f + 0.3f * k, 0.8f - 0.04f * k}, {0.2f, 0.f, 0.1f}));
     return poses;
 }
 
@@ -71,9 +72,11 @@ void expectSameRaycast(const RenderState& cpu, RenderState& gpu_raycast) {
 
 // Every render mode, every channel of every pixel.
 template <class TVoxel, class TIndex>
-void expectSameRenders(RaycastEngine<TVoxel, TIndex>& cpu_engine, const Scene<TVoxel, TIndex>& on_cpu, const RenderState& rc,
-                       RaycastEngine<TVoxel, TIndex>& gpu_engine, const Scene<TVoxel, TIndex>& on_gpu, const RenderState& rg) {
-    for (RenderMode mode : {RenderMode::Shaded, RenderMode::Color, RenderMode::Normals, RenderMode::Depth, RenderMode::Class}) {
+void expectSameRenders(RaycastEngine<TVoxel, TIndex>& cpu_engine, const Scene<TVoxel, TIndex>& on_cpu,
+                       const RenderState& rc, RaycastEngine<TVoxel, TIndex>& gpu_engine,
+                       const Scene<TVoxel, TIndex>& on_gpu, const RenderState& rg) {
+    for (RenderMode mode :
+         {RenderMode::Shaded, RenderMode::Color, RenderMode::Normals, RenderMode::Depth, RenderMode::Class}) {
         Image<Vec4u8> ic, ig;
         cpu_engine.render(on_cpu, rc, mode, ic);
         gpu_engine.render(on_gpu, rg, mode, ig);
@@ -170,7 +173,8 @@ TEST(EngineCudaCapacityTest, FullTablesFailTheSameBlocks) {
     auto gpu_allocation = makeAllocationEngine<VoxelS, VoxelBlockHash>(Device::CUDA);
     for (const Mat4f& pose : cameraPath()) {
         const View view = frameView(pose, 0);
-        const AllocationStats a = cpu_allocation->allocate(on_cpu, view, pose), b = gpu_allocation->allocate(on_gpu, view, pose);
+        const AllocationStats a = cpu_allocation->allocate(on_cpu, view, pose),
+                              b = gpu_allocation->allocate(on_gpu, view, pose);
         EXPECT_GT(a.allocation_failures_this_frame, 0);
         EXPECT_EQ(a.allocation_failures_this_frame, b.allocation_failures_this_frame);
         EXPECT_EQ(a.failures_hash_full_this_frame, b.failures_hash_full_this_frame);

@@ -76,14 +76,16 @@ void expectSameSurfaceOnBothDevices(const Scene<TVoxel, TIndex>& on_cpu) {
 }
 
 TYPED_TEST(MeshingCudaParityTest, HashMapGivesTheSameMeshAndCloud) {
-    Scene<TypeParam, VoxelBlockHash> scene(test::centimetreSceneParams(), VoxelBlockHash(VoxelBlockHashSettings(), Device::CPU), Device::CPU);
+    Scene<TypeParam, VoxelBlockHash> scene(test::centimetreSceneParams(),
+                                           VoxelBlockHash(VoxelBlockHashSettings(), Device::CPU), Device::CPU);
     fuseOnCpu(scene);
     expectSameSurfaceOnBothDevices(scene);
 }
 
 TYPED_TEST(MeshingCudaParityTest, DenseMapGivesTheSameMeshAndCloud) {
     // An array whose sides are not multiples of a block: blocks at its border are partly outside.
-    Scene<TypeParam, PlainVoxelArray> scene(test::centimetreSceneParams(), PlainVoxelArray({-83, -77, -21}, {181, 163, 101}), Device::CPU);
+    Scene<TypeParam, PlainVoxelArray> scene(test::centimetreSceneParams(),
+                                            PlainVoxelArray({-83, -77, -21}, {181, 163, 101}), Device::CPU);
     fuseOnCpu(scene);
     expectSameSurfaceOnBothDevices(scene);
 }

@@ -12,7 +12,6 @@
 #include <tuple>
 #include <vector>
 
-
 #include "DeviceTestSupport.h"
 #include "SyntheticViews.h"
 #include "voxfuse/engines/AllocationEngine.h"
@@ -49,7 +48,8 @@ Mat4f poseB() { return test::lookAt({0.2f, 1.1f, 0.9f}, {0.2f, 0.f, 0.1f}); }
 // every voxel that the frame gives a signed distance below +1, i.e. that projects into a pixel with a
 // valid depth d and lies at a depth z in [d - mu, d + mu), and with `neighbours` also of those voxels'
 // 26 neighbours (which marching cubes and trilinear reads take with them).
-BlockSet blocksTheFrameNeeds(const View& view, const Mat4f& T_world_camera, const SceneParams& params, bool neighbours = true) {
+BlockSet blocksTheFrameNeeds(const View& view, const Mat4f& T_world_camera, const SceneParams& params,
+                             bool neighbours = true) {
     const Mat4f T_camera_world = rigidInverse(T_world_camera);
     const Intrinsics& in = view.calib.depth;
     BlockSet needed;
@@ -57,15 +57,18 @@ BlockSet blocksTheFrameNeeds(const View& view, const Mat4f& T_world_camera, cons
     float d_min = 1e9f, d_max = 0.f;
     for (std::size_t i = 0; i < view.depth.pixelCount(); ++i) {
         const float d = view.depth.host()[i];
-        if (d >= params.view_frustum_min_m && d <= params.view_frustum_max_m) d_min = std::min(d_min, d), d_max = std::max(d_max, d);
+        if (d >= params.view_frustum_min_m && d <= params.view_frustum_max_m)
+            d_min = std::min(d_min, d), d_max = std::max(d_max, d);
     }
     Vec3f lo{1e9f, 1e9f, 1e9f}, hi{-1e9f, -1e9f, -1e9f};
     for (int k = 0; k < 8; ++k) {
         const float z = (k & 4) ? d_max + params.mu_m : d_min - params.mu_m;
-        const Vec3f corner = transformPoint(T_world_camera, in.unproject((k & 1) ? float(in.width) : -1.f, (k & 2) ? float(in.height) : -1.f, z));
+        const Vec3f corner = transformPoint(
+            T_world_camera, in.unproject((k & 1) ? float(in.width) : -1.f, (k & 2) ? float(in.height) : -1.f, z));
         for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], corner[a]), hi[a] = std::max(hi[a], corner[a]);
     }
-    const Vec3i first = floorToInt(lo / params.voxel_size_m) - Vec3i{1, 1, 1}, last = floorToInt(hi / params.voxel_size_m) + Vec3i{2, 2, 2};
+    const Vec3i first = floorToInt(lo / params.voxel_size_m) - Vec3i{1, 1, 1},
+                last = floorToInt(hi / params.voxel_size_m) + Vec3i{2, 2, 2};
     const float reach = d_max + params.mu_m;
     for (int z = first.z; z <= last.z; ++z)
         for (int y = first.y; y <= last.y; ++y)
@@ -83,7 +86,8 @@ BlockSet blocksTheFrameNeeds(const View& view, const Mat4f& T_world_camera, cons
                 const int reach_voxels = neighbours ? 1 : 0;
                 for (int dz = -reach_voxels; dz <= reach_voxels; ++dz)
                     for (int dy = -reach_voxels; dy <= reach_voxels; ++dy)
-                        for (int dx = -reach_voxels; dx <= reach_voxels; ++dx) needed.insert(key(blockOfVoxel({x + dx, y + dy, z + dz})));
+                        for (int dx = -reach_voxels; dx <= reach_voxels; ++dx)
+                            needed.insert(key(blockOfVoxel({x + dx, y + dy, z + dz})));
             }
     return needed;
 }
@@ -212,10 +216,11 @@ TEST_P(AllocationCapacityTest, FullBucketsAndExcessListAreCountedExactly) {
     }
 }
 
-INSTANTIATE_TEST_SUITE_P(DevicesAndBuckets, AllocationCapacityTest, ::testing::Combine(test::kAllDevices, ::testing::Values(1, 2)),
+INSTANTIATE_TEST_SUITE_P(DevicesAndBuckets, AllocationCapacityTest,
+                         ::testing::Combine(test::kAllDevices, ::testing::Values(1, 2)),
                          [](const ::testing::TestParamInfo<std::tuple<Device, int>>& info) {
-                             return std::string(deviceName(std::get<0>(info.param))) + "_" + std::to_string(std::get<1>(info.param)) +
-                                    "_entries_per_bucket";
+                             return std::string(deviceName(std::get<0>(info.param))) + "_" +
+                                    std::to_string(std::get<1>(info.param)) + "_entries_per_bucket";
                          });
 
 TEST_P(AllocationEngineTest, FullVoxelBlockArrayIsCountedExactly) {
@@ -265,8 +270,10 @@ TEST_P(AllocationEngineTest, RemovalFreesExactlyTheEmptyBlocksAndKeepsTheRest) {
     {
         HashScene host = test::onHost(scene);
         ASSERT_EQ(host.index().insert({300, 300, 300}), VoxelBlockHash::InsertResult::Inserted);
-        host.voxels().fill(Device::CPU, VoxelS::initial(), std::size_t(host.index().entry(host.index().findEntry({300, 300, 300})).ptr) * kBlockVoxelCount,
-                           kBlockVoxelCount);
+        host.voxels().fill(
+            Device::CPU, VoxelS::initial(),
+            std::size_t(host.index().entry(host.index().findEntry({300, 300, 300})).ptr) * kBlockVoxelCount,
+            kBlockVoxelCount);
         scene = host.copyTo(device());
     }
 
@@ -336,7 +343,8 @@ TEST_P(AllocationEngineTest, IntegrationRefusesAViewTheAllocationDidNotPrepare) 
 TEST_P(AllocationEngineTest, DenseIndexNeedsNoAllocation) {
     Scene<VoxelS, PlainVoxelArray> scene(testParams(), PlainVoxelArray({-8, -8, -8}, {16, 16, 16}), device());
     auto allocation = makeAllocationEngine<VoxelS, PlainVoxelArray>(device());
-    const AllocationStats stats = allocation->allocate(scene, test::renderView(world(), kIntr, poseA(), false), poseA());
+    const AllocationStats stats =
+        allocation->allocate(scene, test::renderView(world(), kIntr, poseA(), false), poseA());
     EXPECT_EQ(stats.blocks_allocated, 0);
     EXPECT_EQ(allocation->removeEmptyBlocks(scene), 0);
 }
@@ -401,8 +409,13 @@ TEST(AllocationStage1Test, TheCountOfMissingBlocksSaturatesAndTheListIsNeverOver
     constexpr int kCapacity = 16, kCountStop = 100;
     std::vector<std::uint64_t> list(kCapacity + 8, 0xfeedull);  // 8 guard slots past the capacity
     int count = 0;
-    MarkBlocksForPixels<256> mark{makeDepthSegmentFrame(params, view, poseA()), hash.data(), hash.state().entry_visibility,
-                                  list.data(), &count, kCapacity, Vec2i{kIntr.width, 1}};
+    MarkBlocksForPixels<256> mark{makeDepthSegmentFrame(params, view, poseA()),
+                                  hash.data(),
+                                  hash.state().entry_visibility,
+                                  list.data(),
+                                  &count,
+                                  kCapacity,
+                                  Vec2i{kIntr.width, 1}};
     mark.max_counted_appends = kCountStop;
     CpuDevice::parallelFor(mark.elementCount(), mark);
     EXPECT_GE(count, kCountStop);

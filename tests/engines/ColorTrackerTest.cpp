@@ -121,7 +121,8 @@ TEST_P(ColorTrackerTest, AModelCarryingTheMapsColoursNeedsNoEarlierFrame) {
     EXPECT_EQ(test::translationErrorM(state.T_world_camera, startPose()), 0.f);
 
     model.intensity.resize(intr.size());
-    for (std::size_t i = 0; i < model.intensity.pixelCount(); ++i) model.intensity.host()[i] = intensityFromRgb(first.rgb.host()[i]);
+    for (std::size_t i = 0; i < model.intensity.pixelCount(); ++i)
+        model.intensity.host()[i] = intensityFromRgb(first.rgb.host()[i]);
     state.T_world_camera = startPose();
     makeTracker(colorSettings(), GetParam())->track(state, test::renderView(room(), intr, moved), model);
     EXPECT_EQ(state.quality, TrackingQuality::Good);
@@ -132,14 +133,17 @@ TEST_P(ColorTrackerTest, AModelCarryingTheMapsColoursNeedsNoEarlierFrame) {
 INSTANTIATE_TEST_SUITE_P(Devices, ColorTrackerTest, test::kAllDevices, test::DeviceName());
 
 TEST(ColorTrackerTermsTest, JacobianMatchesFiniteDifferences) {
-    // A smooth synthetic image I(x, y) = 0.5 + 0.3 sin(0.05 x) cos(0.07 y) seen by a camera offset from the depth camera.
+    // A smooth synthetic image I(x, y) = 0.5 + 0.3 sin(0.05 x) cos(0.07 y) seen by a camera offset from the depth
+    // camera.
     const Intrinsics rgb{200, 150, 180.f, 180.f, 99.5f, 74.5f};
     std::vector<float> image(200 * 150);
     std::vector<Vec2f> gradient(200 * 150);
     for (int y = 0; y < 150; ++y)
-        for (int x = 0; x < 200; ++x) image[std::size_t(x + y * 200)] = 0.5f + 0.3f * std::sin(0.05f * x) * std::cos(0.07f * y);
+        for (int x = 0; x < 200; ++x)
+            image[std::size_t(x + y * 200)] = 0.5f + 0.3f * std::sin(0.05f * x) * std::cos(0.07f * y);
     for (int y = 0; y < 150; ++y)
-        for (int x = 0; x < 200; ++x) gradient[std::size_t(x + y * 200)] = sobelGradientPixel(image.data(), {200, 150}, x, y);
+        for (int x = 0; x < 200; ++x)
+            gradient[std::size_t(x + y * 200)] = sobelGradientPixel(image.data(), {200, 150}, x, y);
     const Mat4f T_world_camera = test::moveInCamera(Mat4f::identity(), {1.f, 2.f, 3.f}, 5.f, {0.1f, -0.05f, 0.2f});
     const Mat4f T_rgb_depth = test::moveInCamera(Mat4f::identity(), {0.f, 1.f, 0.f}, 2.f, {-0.025f, 0.f, 0.f});
     const ColorPoint point{transformPoint(T_world_camera, Vec3f{0.1f, 0.05f, 1.2f}), 0.4f};
@@ -159,7 +163,8 @@ TEST(ColorTrackerTermsTest, JacobianMatchesFiniteDifferences) {
         // A first-order step is enough for a central difference: T * (I + [x]) up to O(h^2).
         auto stepped = [&](float sign) {
             const Eigen::Vector3f w = sign * x.head<3>(), v = sign * x.tail<3>();
-            return test::moveInCamera(T_world_camera, w.norm() > 0.f ? w : Eigen::Vector3f::UnitX(), w.norm() * 180.f / float(EIGEN_PI), v);
+            return test::moveInCamera(T_world_camera, w.norm() > 0.f ? w : Eigen::Vector3f::UnitX(),
+                                      w.norm() * 180.f / float(EIGEN_PI), v);
         };
         const float numeric = (residualAt(stepped(1.f), unused) - residualAt(stepped(-1.f), unused)) / (2.f * h);
         EXPECT_NEAR(J[k], numeric, 0.02f * std::fabs(numeric) + 2e-3f) << "parameter " << k;

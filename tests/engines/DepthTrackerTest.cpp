@@ -27,7 +27,9 @@ protected:
     }
     static Mat4f startPose() { return test::lookAt({-1.6f, -1.3f, 1.5f}, {0.15f, 0.1f, 0.75f}); }
     // 8 cm and 8 degrees from the start: beyond the finer levels' reach, the coarse ones must find it.
-    static Mat4f largeMotion() { return test::moveInCamera(startPose(), {0.3f, 1.f, -0.2f}, 8.f, {0.06f, 0.03f, -0.045f}); }
+    static Mat4f largeMotion() {
+        return test::moveInCamera(startPose(), {0.3f, 1.f, -0.2f}, 8.f, {0.06f, 0.03f, -0.045f});
+    }
 
     TrackerSettings settings() const {
         TrackerSettings s;
@@ -150,9 +152,11 @@ TEST_P(DepthTrackerTest, ASubsampledFinestLevelFindsTheSameMotion) {
 }
 
 INSTANTIATE_TEST_SUITE_P(KindsAndDevices, DepthTrackerTest,
-                         ::testing::Combine(::testing::Values(TrackerKind::Icp, TrackerKind::Ren, TrackerKind::Rgbd), test::kAllDevices),
+                         ::testing::Combine(::testing::Values(TrackerKind::Icp, TrackerKind::Ren, TrackerKind::Rgbd),
+                                            test::kAllDevices),
                          [](const ::testing::TestParamInfo<std::tuple<TrackerKind, Device>>& info) {
-                             return std::string(toString(std::get<0>(info.param))) + "_" + deviceName(std::get<1>(info.param));
+                             return std::string(toString(std::get<0>(info.param))) + "_" +
+                                    deviceName(std::get<1>(info.param));
                          });
 
 // Two exact views of the default room, 2 degrees and a few centimetres apart, and the model of the
@@ -242,7 +246,8 @@ TEST(DepthTrackerRobustnessTest, DepthsBeyondTheTrackingLimitDoNotPullThePose) {
         EXPECT_EQ(state.quality, TrackingQuality::Good) << (limited ? "limited" : "every depth");
         error_m[limited] = test::translationErrorM(state.T_world_camera, step.moved);
     }
-    EXPECT_GT(error_m[0], 0.002f) << "the far bias pulls a tracker that uses every depth (else this test shows nothing)";
+    EXPECT_GT(error_m[0], 0.002f)
+        << "the far bias pulls a tracker that uses every depth (else this test shows nothing)";
     EXPECT_LT(error_m[1], 0.25f * error_m[0]);
 }
 
@@ -250,9 +255,9 @@ TEST(DepthTrackerRobustnessTest, DepthsBeyondTheTrackingLimitDoNotPullThePose) {
 // between their optima, where the colour weight puts it. The automatic weight (the ratio of the two
 // kinds of residuals' robust variances) follows the images' brightness: both colour frames dimmed to
 // a quarter divide the intensity residuals and their gradients by four, and the weight grows
-// sixteenfold to make up for it, so the pose does not move. A fixed weight lets depth take over. Measured (distance from
-// the true motion): ren 8.33 mm; automatic 7.61 mm bright, 7.65 dimmed to a quarter (integer grey
-// levels: not exactly the same images); fixed 8.10 and 8.31.
+// sixteenfold to make up for it, so the pose does not move. A fixed weight lets depth take over. Measured (distance
+// from the true motion): ren 8.33 mm; automatic 7.61 mm bright, 7.65 dimmed to a quarter (integer grey levels: not
+// exactly the same images); fixed 8.10 and 8.31.
 TEST(DepthTrackerRobustnessTest, RgbdBalancesColourAgainstDepthWhateverTheImagesBrightness) {
     RoomStep step, dim;
     step.biasFarDepths(0.006f);
@@ -277,9 +282,12 @@ TEST(DepthTrackerRobustnessTest, RgbdBalancesColourAgainstDepthWhateverTheImages
             EXPECT_EQ(state.quality, TrackingQuality::Good);
             pose[f][d] = state.T_world_camera;
         }
-    EXPECT_LT(test::translationErrorM(pose[0][0], step.moved), ren_m - 0.0005f) << "colour holds part of the pull (else this test shows nothing)";
-    EXPECT_LT(test::translationErrorM(pose[0][0], pose[0][1]), 0.0001f) << "automatic weight: dimmed images must not move the pose";
-    EXPECT_GT(test::translationErrorM(pose[1][0], pose[1][1]), 0.00015f) << "fixed weight: dimmed images should hand the pose to depth (else this test shows nothing)";
+    EXPECT_LT(test::translationErrorM(pose[0][0], step.moved), ren_m - 0.0005f)
+        << "colour holds part of the pull (else this test shows nothing)";
+    EXPECT_LT(test::translationErrorM(pose[0][0], pose[0][1]), 0.0001f)
+        << "automatic weight: dimmed images must not move the pose";
+    EXPECT_GT(test::translationErrorM(pose[1][0], pose[1][1]), 0.00015f)
+        << "fixed weight: dimmed images should hand the pose to depth (else this test shows nothing)";
 }
 
 // A corridor along world x (floor, ceiling, two walls), with a wall across it at x = 4.5 m or, instead,
@@ -290,8 +298,10 @@ synth::SyntheticScene corridorScene(bool end_wall) {
     scene.addPlane({0.f, 0.f, 1.8f}, {0.f, 0.f, -1.f});
     scene.addPlane({0.f, -0.8f, 0.f}, {0.f, 1.f, 0.f});
     scene.addPlane({0.f, 0.9f, 0.f}, {0.f, -1.f, 0.f});
-    if (end_wall) scene.addPlane({4.5f, 0.f, 0.f}, {-1.f, 0.f, 0.f});
-    else scene.addBox({2.5f, 0.3f, 0.06f}, Eigen::Quaternionf::Identity(), {0.06f, 0.06f, 0.06f});
+    if (end_wall)
+        scene.addPlane({4.5f, 0.f, 0.f}, {-1.f, 0.f, 0.f});
+    else
+        scene.addBox({2.5f, 0.3f, 0.06f}, Eigen::Quaternionf::Identity(), {0.06f, 0.06f, 0.06f});
     scene.addLight({{1.f, 0.f, 2.f}, 2.f});
     return scene;
 }
@@ -332,7 +342,8 @@ TEST(DepthTrackerQualityTest, ACorridorSeenWithoutItsEndIsPoor) {
     tracker->track(state, open0, test::emptyModel(intr));
     tracker->track(state, corridorView(open, intr, p1, 1), test::modelFromView(open0, p0));
     EXPECT_EQ(state.quality, TrackingQuality::Poor);
-    EXPECT_LT(test::translationErrorM(state.T_world_camera, p1), 0.005f) << "2.6 mm measured, against < 0.1 with the wall";
+    EXPECT_LT(test::translationErrorM(state.T_world_camera, p1), 0.005f)
+        << "2.6 mm measured, against < 0.1 with the wall";
     EXPECT_LT(state.translation_constraint, s.poor_translation_constraint) << "0.0039 measured";
     EXPECT_GT(state.condition, s.good_condition);
     EXPECT_GT(state.inlier_ratio, s.good_inlier_ratio) << "what the other measures say is fine";
@@ -365,7 +376,8 @@ TEST(DepthTrackerLevelsTest, LargeMotionNeedsTheCoarseLevels) {
     state.T_world_camera = start;
     tracker->track(state, first, test::emptyModel(intr));
     tracker->track(state, second, model);
-    EXPECT_TRUE(state.quality == TrackingQuality::Failed || test::translationErrorM(state.T_world_camera, moved) > 0.01f)
+    EXPECT_TRUE(state.quality == TrackingQuality::Failed ||
+                test::translationErrorM(state.T_world_camera, moved) > 0.01f)
         << "without the coarse levels an 8 cm / 8 degree motion is out of reach";
 }
 
@@ -380,8 +392,9 @@ TEST(DepthTrackerQualityTest, ASinglePlaneIsNotGood) {
     TrackingState state;
     state.T_world_camera = start;
     tracker->track(state, first, test::emptyModel(intr));
-    tracker->track(state, test::renderView(wall, intr, test::moveInCamera(start, {0.f, 0.f, 1.f}, 1.f, {0.01f, 0.f, 0.f}), false),
-                   test::modelFromView(first, start));
+    tracker->track(
+        state, test::renderView(wall, intr, test::moveInCamera(start, {0.f, 0.f, 1.f}, 1.f, {0.01f, 0.f, 0.f}), false),
+        test::modelFromView(first, start));
     EXPECT_NE(state.quality, TrackingQuality::Good) << "motion along the plane is unconstrained";
     EXPECT_LT(state.condition, s.good_condition);
 }
@@ -416,7 +429,8 @@ TEST(DepthTrackerQualityTest, AnEmptyModelFailsOnlyOnceAMapExists) {
     tracker->track(state, view, test::emptyModel(intr));
     EXPECT_EQ(state.quality, TrackingQuality::Good) << "the first frame defines the map";
     tracker->track(state, view, test::emptyModel(intr));
-    EXPECT_EQ(state.quality, TrackingQuality::Good) << "nothing fused yet (e.g. the scene outside the volume): still no map";
+    EXPECT_EQ(state.quality, TrackingQuality::Good)
+        << "nothing fused yet (e.g. the scene outside the volume): still no map";
     tracker->track(state, view, test::modelFromView(view, start));
     EXPECT_EQ(state.quality, TrackingQuality::Good);
     tracker->track(state, view, test::emptyModel(intr));

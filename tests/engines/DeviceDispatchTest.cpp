@@ -39,10 +39,15 @@ TEST(DeviceDispatchTest, ImageProcessingAndTrackersAreTheRequestedDevicesOrAClea
         if (device_memory::builtWithCuda())
             EXPECT_NE(makeTracker(s, Device::CUDA), nullptr);  // creating the CUDA layers touches no GPU
         else
-            EXPECT_NE(deviceErrorOf([&] { makeTracker(s, Device::CUDA); }).find("is not in this VoxFuse build"), std::string::npos);
+            EXPECT_NE(deviceErrorOf([&] { makeTracker(s, Device::CUDA); }).find("is not in this VoxFuse build"),
+                      std::string::npos);
     }
-    if (device_memory::builtWithCuda()) EXPECT_EQ(makeLowLevelEngine(Device::CUDA)->device(), Device::CUDA);
-    else EXPECT_NE(deviceErrorOf([] { makeLowLevelEngine(Device::CUDA); }).find("the CUDA LowLevelEngine is not in this"), std::string::npos);
+    if (device_memory::builtWithCuda())
+        EXPECT_EQ(makeLowLevelEngine(Device::CUDA)->device(), Device::CUDA);
+    else
+        EXPECT_NE(
+            deviceErrorOf([] { makeLowLevelEngine(Device::CUDA); }).find("the CUDA LowLevelEngine is not in this"),
+            std::string::npos);
 }
 
 TEST(DeviceDispatchTest, SceneEnginesAreTheRequestedDevicesOrAClearError) {
@@ -57,10 +62,11 @@ TEST(DeviceDispatchTest, SceneEnginesAreTheRequestedDevicesOrAClearError) {
         EXPECT_NE((makeRaycastEngine<VoxelFRgb, PlainVoxelArray>(Device::CUDA)), nullptr);
         EXPECT_NE((makeMeshingEngine<VoxelS, VoxelBlockHash>(Device::CUDA)), nullptr);
     } else {
-        for (const std::string& error : {deviceErrorOf([] { makeAllocationEngine<VoxelS, VoxelBlockHash>(Device::CUDA); }),
-                                         deviceErrorOf([] { makeIntegrationEngine<VoxelS, VoxelBlockHash>(Device::CUDA); }),
-                                         deviceErrorOf([] { makeRaycastEngine<VoxelS, VoxelBlockHash>(Device::CUDA); }),
-                                         deviceErrorOf([] { makeMeshingEngine<VoxelS, PlainVoxelArray>(Device::CUDA); })})
+        for (const std::string& error :
+             {deviceErrorOf([] { makeAllocationEngine<VoxelS, VoxelBlockHash>(Device::CUDA); }),
+              deviceErrorOf([] { makeIntegrationEngine<VoxelS, VoxelBlockHash>(Device::CUDA); }),
+              deviceErrorOf([] { makeRaycastEngine<VoxelS, VoxelBlockHash>(Device::CUDA); }),
+              deviceErrorOf([] { makeMeshingEngine<VoxelS, PlainVoxelArray>(Device::CUDA); })})
             EXPECT_NE(error.find("is not in this VoxFuse build"), std::string::npos) << error;
     }
 }
@@ -73,7 +79,10 @@ TEST(DeviceDispatchTest, ACudaPipelineWithoutAGpuIsRefusedUpFront) {
     calib.depth = calib.rgb = Intrinsics{64, 48, 52.5f, 52.5f, 31.5f, 23.5f};
     const std::string error = deviceErrorOf([&] { MainEngine::create(s, calib); });
     EXPECT_NE(error.find("CUDA was requested but is not usable"), std::string::npos) << error;
-    EXPECT_NE(deviceErrorOf([] { Scene<VoxelS, VoxelBlockHash>(SceneParams(), VoxelBlockHash(VoxelBlockHashSettings(), Device::CUDA), Device::CUDA); }),
+    EXPECT_NE(deviceErrorOf([] {
+                  Scene<VoxelS, VoxelBlockHash>(SceneParams(), VoxelBlockHash(VoxelBlockHashSettings(), Device::CUDA),
+                                                Device::CUDA);
+              }),
               "no error");
 }
 

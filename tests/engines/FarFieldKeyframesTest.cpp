@@ -32,24 +32,33 @@ TEST(FarFieldPointTest, PlacesTheKeyframesDepthInTheWorldWithItsColour) {
     const std::vector<float> image = ramp(0.01f);
     std::vector<Vec2f> gradient(image.size());
     for (int y = 0; y < kH; ++y)
-        for (int x = 0; x < kW; ++x) gradient[std::size_t(x + y * kW)] = sobelGradientPixel(image.data(), {kW, kH}, x, y);
+        for (int x = 0; x < kW; ++x)
+            gradient[std::size_t(x + y * kW)] = sobelGradientPixel(image.data(), {kW, kH}, x, y);
     const Mat4f T_world_camera = test::moveInCamera(Mat4f::identity(), {0.f, 1.f, 0.f}, 30.f, {1.f, 2.f, 3.f});
     // The colour camera sits 5 cm to the side: the point is coloured where it sees it.
     const Mat4f T_rgb_depth = test::moveInCamera(Mat4f::identity(), {0.f, 1.f, 0.f}, 0.f, {-0.05f, 0.f, 0.f});
     const Mat4f T_rgb_world = T_rgb_depth * rigidInverse(T_world_camera);
 
     float gradient_sq = 0.f;
-    const ColorPoint c = farFieldPoint(5.f, 20, 30, cam, T_world_camera, image.data(), gradient.data(), {kW, kH}, T_rgb_world, cam, gradient_sq);
-    const Vec3f expected = transformPoint(T_world_camera, Vec3f{(20.f - 31.5f) * 5.f / 50.f, (30.f - 23.5f) * 5.f / 50.f, 5.f});
+    const ColorPoint c = farFieldPoint(5.f, 20, 30, cam, T_world_camera, image.data(), gradient.data(), {kW, kH},
+                                       T_rgb_world, cam, gradient_sq);
+    const Vec3f expected =
+        transformPoint(T_world_camera, Vec3f{(20.f - 31.5f) * 5.f / 50.f, (30.f - 23.5f) * 5.f / 50.f, 5.f});
     EXPECT_NEAR(length(c.p_world - expected), 0.f, 1e-5f);
     // Seen from the colour camera the pixel moves by f * (-0.05 m) / 5 m = -0.5 px in x.
     EXPECT_NEAR(c.intensity, 0.2f + 0.01f * 19.5f, 1e-5f);
     EXPECT_NEAR(gradient_sq, 0.01f * 0.01f, 1e-8f);
 
     // No depth, or a point the colour camera does not see: no colour.
-    EXPECT_LT(farFieldPoint(0.f, 20, 30, cam, T_world_camera, image.data(), gradient.data(), {kW, kH}, T_rgb_world, cam, gradient_sq).intensity, 0.f);
+    EXPECT_LT(farFieldPoint(0.f, 20, 30, cam, T_world_camera, image.data(), gradient.data(), {kW, kH}, T_rgb_world, cam,
+                            gradient_sq)
+                  .intensity,
+              0.f);
     EXPECT_LT(gradient_sq, 0.f);
-    EXPECT_LT(farFieldPoint(5.f, 0, 30, cam, T_world_camera, image.data(), gradient.data(), {kW, kH}, T_rgb_world, cam, gradient_sq).intensity, 0.f);
+    EXPECT_LT(farFieldPoint(5.f, 0, 30, cam, T_world_camera, image.data(), gradient.data(), {kW, kH}, T_rgb_world, cam,
+                            gradient_sq)
+                  .intensity,
+              0.f);
 }
 
 TEST(FarFieldPointTest, AFrameSeesAPointOnlyWhereItMeasuredNothingNearer) {
@@ -74,7 +83,8 @@ TEST(FarFieldPointTest, AFrameSeesAPointOnlyWhereItMeasuredNothingNearer) {
     // (At the identity pose, so that the depth stays exactly 1e-30 m.)
     for (float side : {1.f, -1.f}) {
         const ColorPoint grazing{Vec3f{side, side, 1e-30f}, 0.5f};
-        EXPECT_LT(unhiddenFarFieldPoint(grazing, depth.data(), {kW, kH}, Mat4f::identity(), cam).intensity, 0.f) << side;
+        EXPECT_LT(unhiddenFarFieldPoint(grazing, depth.data(), {kW, kH}, Mat4f::identity(), cam).intensity, 0.f)
+            << side;
     }
 }
 
@@ -94,7 +104,8 @@ protected:
             for (int x = 0; x < kW; ++x) {
                 view_.far_depth.at(x, y) = 5.f;
                 view_.depth.at(x, y) = 0.f;
-                const auto v = std::uint8_t(x < kPlainColumns ? 60 : 60 + 0.1f * float((x - kPlainColumns) * (x - kPlainColumns)));
+                const auto v =
+                    std::uint8_t(x < kPlainColumns ? 60 : 60 + 0.1f * float((x - kPlainColumns) * (x - kPlainColumns)));
                 view_.rgb.at(x, y) = Vec4u8{v, v, v, 255};
             }
         kernels_->intensityFromRgb(view_.rgb, color_.intensity);
@@ -114,7 +125,8 @@ protected:
         const Image<ColorPoint>* points = far.unhiddenPoints(view_, T_world_camera);
         if (!points) return {};
         std::vector<ColorPoint> all(points->pixelCount()), out;
-        points->memory().readRange(points->memory().isCurrent(Device::CPU) ? Device::CPU : Device::CUDA, 0, all.data(), all.size());
+        points->memory().readRange(points->memory().isCurrent(Device::CPU) ? Device::CPU : Device::CUDA, 0, all.data(),
+                                   all.size());
         for (const ColorPoint& c : all)
             if (c.intensity >= 0.f) out.push_back(c);
         return out;
@@ -183,7 +195,8 @@ TEST_P(FarFieldKeyframesTest, AFrameSeesThePointsNothingNearerHides) {
     for (const ColorPoint& c : unhidden) EXPECT_GE(smallCamera().project(c.p_world).y, kH / 2 - 0.5f);
     // A frame turned 20 degrees sees only part of the wall.
     view_.depth.memory().fillBytes(0);
-    const std::size_t turned = seen(*far, test::moveInCamera(Mat4f::identity(), {0.f, 1.f, 0.f}, 20.f, {0.f, 0.f, 0.f})).size();
+    const std::size_t turned =
+        seen(*far, test::moveInCamera(Mat4f::identity(), {0.f, 1.f, 0.f}, 20.f, {0.f, 0.f, 0.f})).size();
     EXPECT_GT(turned, 0u);
     EXPECT_LT(turned, all);
 }

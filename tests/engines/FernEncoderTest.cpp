@@ -45,7 +45,8 @@ TEST(FernEncoderTest, NearbyViewsShareMostCodesAndDistantViewsFew) {
     const float near = fernDissimilarity(here, encode(roomView(181.f)));
     const float apart = fernDissimilarity(here, encode(roomView(200.f)));
     const float opposite = fernDissimilarity(here, encode(roomView(0.f)));
-    std::printf("[ ferns    ] dissimilarity 1 degree on %.3f, 20 degrees %.3f, the other side %.3f\n", near, apart, opposite);
+    std::printf("[ ferns    ] dissimilarity 1 degree on %.3f, 20 degrees %.3f, the other side %.3f\n", near, apart,
+                opposite);
     EXPECT_LT(near, 0.15f);
     EXPECT_GT(apart, 0.3f);
     EXPECT_GT(opposite, 0.5f);
@@ -148,7 +149,8 @@ TEST(FernEncoderTest, RejectsSettingsItCannotUse) {
     s.fern_count = 0;
     EXPECT_THROW(FernEncoder(s, {640, 480}, true), ConfigError);
     EXPECT_THROW(FernEncoder(FernSettings{}, {0, 30}, true), ConfigError);
-    EXPECT_EQ(FernEncoder(FernSettings{}, {40, 30}, true).codeImageSize(), (Vec2i{40, 30})) << "a frame smaller than the code image";
+    EXPECT_EQ(FernEncoder(FernSettings{}, {40, 30}, true).codeImageSize(), (Vec2i{40, 30}))
+        << "a frame smaller than the code image";
     FernEncoder encoder(FernSettings{}, {160, 120}, true);
     EXPECT_THROW(encoder.encode(Image<float>(Vec2i{320, 240}), Image<Vec4u8>()), ConfigError);
     EXPECT_EQ(fernDissimilarity(FernCode(500, 0), FernCode(400, 0)), 1.f);

@@ -1,9 +1,9 @@
 // The CUDA layers' launch shapes run on the CPU: the engine stages (src/engines/*_Impl.h) with one
 // item per element, as on the GPU (a pixel per stage-1 element, a voxel per integration element, a
 // ray per raycast element, the dense frustum box voxel by voxel, meshing teams of several threads
-// meeting at barriers), must give exactly what the CPU layer's wide elements give. Together with the device-parametrised engine tests this runs every
-// loop body a CUDA kernel runs, in the normal test suite; what remains GPU-only is the launch, the
-// atomics' device branch and the CUB primitives (tests/cuda/CudaDeviceTest.cu).
+// meeting at barriers), must give exactly what the CPU layer's wide elements give. Together with the
+// device-parametrised engine tests this runs every loop body a CUDA kernel runs, in the normal test suite; what remains
+// GPU-only is the launch, the atomics' device branch and the CUB primitives (tests/cuda/CudaDeviceTest.cu).
 
 #include <gtest/gtest.h>
 
@@ -53,7 +53,8 @@ TYPED_TEST_SUITE(GpuShapesOnCpuTest, VoxelTypes);
 
 std::vector<Mat4f> poses() {
     std::vector<Mat4f> v;
-    for (int k = 0; k < 3; ++k) v.push_back(test::lookAt({1.0f - 0.25f * k, -0.8f + 0.4f * k, 0.7f}, {0.3f, 0.f, 0.1f}));
+    for (int k = 0; k < 3; ++k)
+        v.push_back(test::lookAt({1.0f - 0.25f * k, -0.8f + 0.4f * k, 0.7f}, {0.3f, 0.f, 0.1f}));
     return v;
 }
 
@@ -115,18 +116,26 @@ TEST(GpuShapesOnCpuAllocationTest, TeamsAppendEachBlockOncePerTileAndBuildTheCpu
     params.voxel_size_m = 0.005f;
     params.mu_m = 0.02f;
     const Intrinsics intr = test::kinectIntrinsics(640, 480);
-    Scene<VoxelS, VoxelBlockHash> wide(params, VoxelBlockHash(), Device::CPU), narrow(params, VoxelBlockHash(), Device::CPU);
+    Scene<VoxelS, VoxelBlockHash> wide(params, VoxelBlockHash(), Device::CPU),
+        narrow(params, VoxelBlockHash(), Device::CPU);
     auto wide_allocation = makeAllocationEngineOn<CpuDevice, VoxelS, VoxelBlockHash>();
     auto narrow_allocation = makeAllocationEngineOn<CpuDeviceWithGpuShapes, VoxelS, VoxelBlockHash>();
-    const Mat4f poses[2] = {test::lookAt({0.3f, -0.4f, 1.4f}, {0.f, 1.5f, 0.8f}), test::lookAt({0.4f, -0.3f, 1.45f}, {0.2f, 1.5f, 0.7f})};
+    const Mat4f poses[2] = {test::lookAt({0.3f, -0.4f, 1.4f}, {0.f, 1.5f, 0.8f}),
+                            test::lookAt({0.4f, -0.3f, 1.45f}, {0.2f, 1.5f, 0.7f})};
     for (const Mat4f& pose : poses) {
         const View view = test::renderView(room, intr, pose, false);
         // The shape the GPU ran before: a pixel per thread with a one-block cache, counted without storing.
         int per_pixel_appends = 0;
-        const MarkBlocksForPixels<1> per_pixel{makeDepthSegmentFrame(params, view, pose), narrow.index().data(), narrow.index().state().entry_visibility,
-                                               nullptr, &per_pixel_appends, 0, Vec2i{1, 1}};
+        const MarkBlocksForPixels<1> per_pixel{makeDepthSegmentFrame(params, view, pose),
+                                               narrow.index().data(),
+                                               narrow.index().state().entry_visibility,
+                                               nullptr,
+                                               &per_pixel_appends,
+                                               0,
+                                               Vec2i{1, 1}};
         CpuDevice::parallelFor(per_pixel.elementCount(), per_pixel);
-        const AllocationStats a = wide_allocation->allocate(wide, view, pose), b = narrow_allocation->allocate(narrow, view, pose);
+        const AllocationStats a = wide_allocation->allocate(wide, view, pose),
+                              b = narrow_allocation->allocate(narrow, view, pose);
         EXPECT_LT(10 * b.missing_block_appends_this_frame, per_pixel_appends) << "the team's set saves most appends";
         EXPECT_GT(a.blocks_allocated, 2000);
         EXPECT_EQ(a.blocks_allocated_this_frame, b.blocks_allocated_this_frame);
@@ -137,8 +146,8 @@ TEST(GpuShapesOnCpuAllocationTest, TeamsAppendEachBlockOncePerTileAndBuildTheCpu
         EXPECT_LE(b.missing_block_appends_this_frame, 4 * a.missing_block_appends_this_frame + 100);
         EXPECT_GE(b.missing_block_appends_this_frame, b.blocks_allocated_this_frame);
         std::printf("stage 1 appends: CPU shape %d, GPU shape %d, a pixel per thread %d; blocks allocated %d (of %d)\n",
-                    a.missing_block_appends_this_frame, b.missing_block_appends_this_frame, per_pixel_appends, b.blocks_allocated_this_frame,
-                    b.blocks_allocated);
+                    a.missing_block_appends_this_frame, b.missing_block_appends_this_frame, per_pixel_appends,
+                    b.blocks_allocated_this_frame, b.blocks_allocated);
     }
     ASSERT_EQ(test::firstDifferentEntry(wide.index(), narrow.index()), -1) << "tables differ";
 }
@@ -146,7 +155,8 @@ TEST(GpuShapesOnCpuAllocationTest, TeamsAppendEachBlockOncePerTileAndBuildTheCpu
 TYPED_TEST(GpuShapesOnCpuTest, HashPipelineGivesTheSameTableVoxelsRaysAndRenders) {
     using TVoxel = TypeParam;
     const SceneParams params = test::centimetreSceneParams();
-    Scene<TVoxel, VoxelBlockHash> wide(params, VoxelBlockHash(), Device::CPU), narrow(params, VoxelBlockHash(), Device::CPU);
+    Scene<TVoxel, VoxelBlockHash> wide(params, VoxelBlockHash(), Device::CPU),
+        narrow(params, VoxelBlockHash(), Device::CPU);
     auto wide_allocation = makeAllocationEngineOn<CpuDevice, TVoxel, VoxelBlockHash>();
     auto narrow_allocation = makeAllocationEngineOn<CpuDeviceWithGpuShapes, TVoxel, VoxelBlockHash>();
     auto wide_integration = makeIntegrationEngineOn<CpuDevice, TVoxel, VoxelBlockHash>();
@@ -156,7 +166,8 @@ TYPED_TEST(GpuShapesOnCpuTest, HashPipelineGivesTheSameTableVoxelsRaysAndRenders
     int k = 0;
     for (const Mat4f& pose : poses()) {
         const View view = labelledView(pose, k++);
-        const AllocationStats a = wide_allocation->allocate(wide, view, pose), b = narrow_allocation->allocate(narrow, view, pose);
+        const AllocationStats a = wide_allocation->allocate(wide, view, pose),
+                              b = narrow_allocation->allocate(narrow, view, pose);
         EXPECT_EQ(a.blocks_allocated_this_frame, b.blocks_allocated_this_frame);
         EXPECT_EQ(a.visible_blocks, b.visible_blocks);
         wide_integration->integrate(wide, view, pose);
@@ -248,10 +259,12 @@ TEST(GpuShapesOnCpuLowLevelTest, CellAveragesByRowsEqualCellByCell) {
         cells.averageDepthCells(view.depth, grid, b);
         ASSERT_EQ(a.size(), grid);
         ASSERT_EQ(b.size(), grid);
-        EXPECT_EQ(0, std::memcmp(a.host(), b.host(), a.pixelCount() * sizeof(Vec2f))) << "depth, " << grid.x << "x" << grid.y << " cells";
+        EXPECT_EQ(0, std::memcmp(a.host(), b.host(), a.pixelCount() * sizeof(Vec2f)))
+            << "depth, " << grid.x << "x" << grid.y << " cells";
         rows.averageIntensityCells(view.rgb, grid, a);
         cells.averageIntensityCells(view.rgb, grid, b);
-        EXPECT_EQ(0, std::memcmp(a.host(), b.host(), a.pixelCount() * sizeof(Vec2f))) << "intensity, " << grid.x << "x" << grid.y << " cells";
+        EXPECT_EQ(0, std::memcmp(a.host(), b.host(), a.pixelCount() * sizeof(Vec2f)))
+            << "intensity, " << grid.x << "x" << grid.y << " cells";
     }
     // A grid finer than the image: the cells without a pixel say so.
     Image<Vec2f> out;

@@ -59,8 +59,9 @@ protected:
             const HashEntry& e = h.entry(h.visibleEntries()[k]);
             visible.insert({e.pos.x, e.pos.y, e.pos.z});
         }
-        const IntegrationFrame frame = makeIntegrationFrame(params(), view, pose, view.depth.host(), view.rgb.host(), view.labels.host(),
-                                                          dense_visible_only_.takeIntegrationNumber());
+        const IntegrationFrame frame =
+            makeIntegrationFrame(params(), view, pose, view.depth.host(), view.rgb.host(), view.labels.host(),
+                                 dense_visible_only_.takeIntegrationNumber());
         int uncovered = 0;
         TVoxel* ref = dense_visible_only_.voxels().host();
         forEachDenseVoxel([&](Vec3i p, std::size_t i) {
@@ -91,9 +92,12 @@ protected:
     const Intrinsics intr_ = test::kinectIntrinsics(160, 120);
     Scene<TVoxel, PlainVoxelArray> dense_, dense_visible_only_;
     Scene<TVoxel, VoxelBlockHash> hash_;
-    std::unique_ptr<AllocationEngine<TVoxel, VoxelBlockHash>> allocation_ = makeAllocationEngine<TVoxel, VoxelBlockHash>(Device::CPU);
-    std::unique_ptr<IntegrationEngine<TVoxel, VoxelBlockHash>> hash_integration_ = cpu::makeIntegrationEngine<TVoxel, VoxelBlockHash>();
-    std::unique_ptr<IntegrationEngine<TVoxel, PlainVoxelArray>> dense_integration_ = cpu::makeIntegrationEngine<TVoxel, PlainVoxelArray>();
+    std::unique_ptr<AllocationEngine<TVoxel, VoxelBlockHash>> allocation_ =
+        makeAllocationEngine<TVoxel, VoxelBlockHash>(Device::CPU);
+    std::unique_ptr<IntegrationEngine<TVoxel, VoxelBlockHash>> hash_integration_ =
+        cpu::makeIntegrationEngine<TVoxel, VoxelBlockHash>();
+    std::unique_ptr<IntegrationEngine<TVoxel, PlainVoxelArray>> dense_integration_ =
+        cpu::makeIntegrationEngine<TVoxel, PlainVoxelArray>();
 };
 
 using VoxelTypes = ::testing::Types<VoxelS, VoxelF, VoxelSRgb, VoxelFRgb, VoxelSLabel, VoxelSRgbLabel>;
@@ -101,13 +105,15 @@ TYPED_TEST_SUITE(HashDenseParityTest, VoxelTypes);
 
 std::vector<Mat4f> cameraPath() {
     std::vector<Mat4f> poses;
-    for (int k = 0; k < 5; ++k) poses.push_back(test::lookAt({1.0f + 0.05f * k, -0.8f + 0.12f * k, 0.7f - 0.03f * k}, {0.3f, 0.f, 0.1f}));
+    for (int k = 0; k < 5; ++k)
+        poses.push_back(test::lookAt({1.0f + 0.05f * k, -0.8f + 0.12f * k, 0.7f - 0.03f * k}, {0.3f, 0.f, 0.1f}));
     return poses;
 }
 
 TYPED_TEST(HashDenseParityTest, SameSdfAtEveryVoxelOfTheDenseExtent) {
     using TVoxel = TypeParam;
-    for (const Mat4f& pose : cameraPath()) EXPECT_EQ(this->fuse(pose), 0) << "an informative update fell outside the visible blocks";
+    for (const Mat4f& pose : cameraPath())
+        EXPECT_EQ(this->fuse(pose), 0) << "an informative update fell outside the visible blocks";
 
     const VoxelBlockHash::Data h = this->hash_.index().data();
     const TVoxel* hash_voxels = this->hash_.voxels().host();
@@ -140,18 +146,21 @@ struct RaycastComparison {
     float max_normal_distance_m = 0.f, max_distance_m = 0.f;
 };
 
-RaycastComparison compareRaycasts(const RenderState& dense, const RenderState& hash, const View& truth, const Mat4f& pose,
-                                  const SceneParams& p, Vec3i offset, Vec3i size) {
+RaycastComparison compareRaycasts(const RenderState& dense, const RenderState& hash, const View& truth,
+                                  const Mat4f& pose, const SceneParams& p, Vec3i offset, Vec3i size) {
     RaycastComparison c;
     const float margin = p.mu_m + 2.f * p.voxel_size_m;
     const Vec3f lo = toFloat(offset) * p.voxel_size_m + Vec3f{margin, margin, margin};
     const Vec3f hi = toFloat(offset + size) * p.voxel_size_m - Vec3f{margin, margin, margin};
-    auto inside = [&](Vec3f s) { return s.x >= lo.x && s.y >= lo.y && s.z >= lo.z && s.x <= hi.x && s.y <= hi.y && s.z <= hi.z; };
+    auto inside = [&](Vec3f s) {
+        return s.x >= lo.x && s.y >= lo.y && s.z >= lo.z && s.x <= hi.x && s.y <= hi.y && s.z <= hi.z;
+    };
     for (int y = 0; y < truth.depth.height(); ++y)
         for (int x = 0; x < truth.depth.width(); ++x) {
             const float d = truth.depth.at(x, y);
             const Vec4f a = dense.points_world.at(x, y), b = hash.points_world.at(x, y);
-            if (!(d > 0.f) || !inside(transformPoint(pose, truth.calib.depth.unproject(float(x), float(y), d)))) continue;
+            if (!(d > 0.f) || !inside(transformPoint(pose, truth.calib.depth.unproject(float(x), float(y), d))))
+                continue;
             if ((a.w > 0.f && !inside(a.xyz())) || (b.w > 0.f && !inside(b.xyz()))) continue;
             ++c.compared;
             if ((a.w > 0.f) != (b.w > 0.f)) {
@@ -160,7 +169,8 @@ RaycastComparison compareRaycasts(const RenderState& dense, const RenderState& h
             }
             if (a.w <= 0.f) continue;
             c.max_distance_m = std::max(c.max_distance_m, length(a.xyz() - b.xyz()));
-            c.max_normal_distance_m = std::max(c.max_normal_distance_m, std::fabs(dot(dense.normals_world.at(x, y).xyz(), a.xyz() - b.xyz())));
+            c.max_normal_distance_m = std::max(c.max_normal_distance_m,
+                                               std::fabs(dot(dense.normals_world.at(x, y).xyz(), a.xyz() - b.xyz())));
         }
     return c;
 }
@@ -179,14 +189,16 @@ TYPED_TEST(HashDenseParityTest, SameRaycastFromTheLastPoseAndFromANewOne) {
         dense_raycast->raycast(this->dense_, this->intr_, pose, dense_rs);
         hash_raycast->raycast(this->hash_, this->intr_, pose, hash_rs);
         const View truth = test::renderView(this->world_, this->intr_, pose, false);
-        const RaycastComparison c = compareRaycasts(dense_rs, hash_rs, truth, pose, this->params(), this->kOffset, this->kSize);
+        const RaycastComparison c =
+            compareRaycasts(dense_rs, hash_rs, truth, pose, this->params(), this->kOffset, this->kSize);
         EXPECT_GT(c.compared, 10000);
         // The hash sees no free space outside its blocks: a ray that enters a block straight into negative
         // values is on the wrong side for it, while the dense grid may have seen free space before.
         EXPECT_LE(c.mask_differs, 5) << "pixels hit by one raycast only";
         const float voxel = this->params().voxel_size_m;
         EXPECT_LT(c.max_normal_distance_m, 0.01f * voxel) << "hits of one pixel off the same surface";
-        EXPECT_LT(c.max_distance_m, 0.1f * voxel) << "hits of one pixel apart (grazing rays amplify rounding along the surface)";
+        EXPECT_LT(c.max_distance_m, 0.1f * voxel)
+            << "hits of one pixel apart (grazing rays amplify rounding along the surface)";
 
         Image<Vec4u8> image;
         hash_raycast->render(this->hash_, hash_rs, RenderMode::Color, image);

@@ -39,8 +39,8 @@ TYPED_TEST(IntegrationEngineTest, FrontoParallelPlaneMatchesAnalyticSdf) {
     constexpr Device device = TypeParam::device;
     const SceneParams params = smallSceneParams();
     Scene<TVoxel, PlainVoxelArray> scene(params, PlainVoxelArray({-40, -30, 0}, {80, 60, 140}), device);
-    // World z up in the synthetic scene; look along world +x at a wall x = 1, then express the volume in camera coordinates
-    // by making the camera the world origin: a plane at camera z = 1.
+    // World z up in the synthetic scene; look along world +x at a wall x = 1, then express the volume in camera
+    // coordinates by making the camera the world origin: a plane at camera z = 1.
     View view;
     view.calib.depth = view.calib.rgb = test::kinectIntrinsics(160, 120);
     view.depth.resize(view.calib.depth.size());
@@ -81,8 +81,10 @@ TYPED_TEST(IntegrationEngineTest, TiltedPlaneZeroCrossingWithinOneVoxel) {
     Scene<TVoxel, PlainVoxelArray> scene(params, PlainVoxelArray({-60, -60, -40}, {120, 120, 80}), device);
     auto engine = makeIntegrationEngine<TVoxel, PlainVoxelArray>(device);
     const Intrinsics intr = test::kinectIntrinsics(160, 120);
-    for (const Eigen::Vector3f& eye : {Eigen::Vector3f(0.2f, 0.1f, 1.0f), Eigen::Vector3f(-0.2f, 0.1f, 0.9f), Eigen::Vector3f(0.0f, -0.3f, 1.1f)})
-        engine->integrate(scene, test::renderView(plane, intr, test::lookAt(eye, Eigen::Vector3f::Zero())), test::lookAt(eye, Eigen::Vector3f::Zero()));
+    for (const Eigen::Vector3f& eye :
+         {Eigen::Vector3f(0.2f, 0.1f, 1.0f), Eigen::Vector3f(-0.2f, 0.1f, 0.9f), Eigen::Vector3f(0.0f, -0.3f, 1.1f)})
+        engine->integrate(scene, test::renderView(plane, intr, test::lookAt(eye, Eigen::Vector3f::Zero())),
+                          test::lookAt(eye, Eigen::Vector3f::Zero()));
 
     // Along vertical lines near the origin, find the sign change and compare with the plane's height.
     const auto host = test::onHost(scene);
@@ -97,7 +99,8 @@ TYPED_TEST(IntegrationEngineTest, TiltedPlaneZeroCrossingWithinOneVoxel) {
                 if (v.w_depth == 0) continue;
                 const float sdf = TVoxel::sdfToFloat(v.sdf);
                 if (prev > 0.f && sdf <= 0.f) {
-                    const float z_cross = (z + sdf / (sdf - prev)) * params.voxel_size_m;  // linear interpolation between z and z+1
+                    const float z_cross =
+                        (z + sdf / (sdf - prev)) * params.voxel_size_m;  // linear interpolation between z and z+1
                     const float z_plane = -(normal.x() * x * params.voxel_size_m) / normal.z();
                     EXPECT_NEAR(z_cross, z_plane, params.voxel_size_m) << "x=" << x << " y=" << y;
                     ++lines;
@@ -174,9 +177,9 @@ TEST(IntegrationPixelTest, DepthPixelOfAVoxelIsTheNearestPixel) {
     int inside = 0;
     for (int k = 0; k < 200000; ++k) {
         Vec3f p{lateral(rng), lateral(rng), depth(rng)};
-        if (k % 1000 == 0) p.z = f.near_m;                         // exactly at the near plane: taken
+        if (k % 1000 == 0) p.z = f.near_m;  // exactly at the near plane: taken
         if (k % 1000 == 1) p.x = std::numeric_limits<float>::quiet_NaN();
-        if (k % 1000 == 2) {                                      // on a pixel border half a pixel outside
+        if (k % 1000 == 2) {  // on a pixel border half a pixel outside
             p.z = 1.f;
             p.x = (-0.5f - in.cx) / in.fx;
         }
@@ -202,13 +205,14 @@ TEST(IntegrationBoxTest, RowClippingLosesNoUpdate) {
 
     // Brute force: every voxel, no clipping.
     Scene<VoxelF, PlainVoxelArray> brute(params, PlainVoxelArray({-60, -60, -20}, {140, 120, 80}), Device::CPU);
-    const IntegrationFrame frame = makeIntegrationFrame(params, view, pose, view.depth.host(), view.rgb.host(), view.labels.host(),
-                                                          brute.takeIntegrationNumber());
+    const IntegrationFrame frame = makeIntegrationFrame(params, view, pose, view.depth.host(), view.rgb.host(),
+                                                        view.labels.host(), brute.takeIntegrationNumber());
     const PlainVoxelArray::Data idx = brute.index().data();
     for (int z = 0; z < idx.size.z; ++z)
         for (int y = 0; y < idx.size.y; ++y)
             for (int x = 0; x < idx.size.x; ++x)
-                integrateVoxel(brute.voxels().host()[x + idx.size.x * (y + idx.size.y * z)], Vec3i{x, y, z} + idx.offset, frame);
+                integrateVoxel(brute.voxels().host()[x + idx.size.x * (y + idx.size.y * z)],
+                               Vec3i{x, y, z} + idx.offset, frame);
     int updated = 0;
     for (std::size_t i = 0; i < brute.voxels().size(); ++i) {
         ASSERT_EQ(brute.voxels().host()[i].w_depth, clipped.voxels().host()[i].w_depth) << "voxel " << i;
@@ -231,8 +235,8 @@ TEST(IntegrationBlockSkipTest, SkippedBlocksAreOnesNoVoxelOfWhichChanges) {
     auto allocation = makeAllocationEngine<VoxelSRgb, VoxelBlockHash>(Device::CPU);
     auto integration = makeIntegrationEngine<VoxelSRgb, VoxelBlockHash>(Device::CPU);
     int skipped_total = 0, visible_total = 0;
-    for (const Eigen::Vector3f& eye : {Eigen::Vector3f(0.9f, -0.7f, 0.8f), Eigen::Vector3f(-0.6f, -0.9f, 0.6f), Eigen::Vector3f(0.1f, 1.0f, 0.9f),
-                                       Eigen::Vector3f(1.1f, 0.3f, 0.5f)}) {
+    for (const Eigen::Vector3f& eye : {Eigen::Vector3f(0.9f, -0.7f, 0.8f), Eigen::Vector3f(-0.6f, -0.9f, 0.6f),
+                                       Eigen::Vector3f(0.1f, 1.0f, 0.9f), Eigen::Vector3f(1.1f, 0.3f, 0.5f)}) {
         const Mat4f pose = test::lookAt(eye, {0.2f, 0.f, 0.1f});
         const View view = test::renderView(world, intr, pose);
         allocation->allocate(scene, view, pose);
@@ -242,32 +246,40 @@ TEST(IntegrationBlockSkipTest, SkippedBlocksAreOnesNoVoxelOfWhichChanges) {
 
         // Reference: every voxel of every visible block, on a copy.
         HashScene all = scene.copyTo(Device::CPU);
-        const IntegrationFrame frame =
-            makeIntegrationFrame(params, view, pose, view.depth.host(), view.rgb.host(), nullptr, all.takeIntegrationNumber());
-        CpuDevice::parallelFor(visible, IntegrateHashVoxels<VoxelSRgb, kBlockVoxelCount>{all.voxelData(), all.index().data().entries,
-                                                                                          visible_entries.data(), visible, frame});
+        const IntegrationFrame frame = makeIntegrationFrame(params, view, pose, view.depth.host(), view.rgb.host(),
+                                                            nullptr, all.takeIntegrationNumber());
+        CpuDevice::parallelFor(
+            visible, IntegrateHashVoxels<VoxelSRgb, kBlockVoxelCount>{all.voxelData(), all.index().data().entries,
+                                                                      visible_entries.data(), visible, frame});
         // Which blocks the engine skips.
-        const int tiles_x = (intr.width + kDepthTile - 1) / kDepthTile, tiles_y = (intr.height + kDepthTile - 1) / kDepthTile;
+        const int tiles_x = (intr.width + kDepthTile - 1) / kDepthTile,
+                  tiles_y = (intr.height + kDepthTile - 1) / kDepthTile;
         std::vector<float> tile_max(std::size_t(tiles_x * tiles_y));
         std::vector<unsigned char> keep(static_cast<std::size_t>(visible));
-        CpuDevice::parallelFor(tiles_x * tiles_y, DepthMaxTiles{view.depth.host(), intr.size(), frame.min_depth_m, frame.max_depth_m,
-                                                                tiles_x, tile_max.data()});
-        const BlockProjection projection{frame.T_depth_world, intr, params.voxel_size_m, frame.near_m, frame.max_depth_m + params.mu_m};
-        CpuDevice::parallelFor(visible, BlockNeedsIntegration{hash.data().entries, visible_entries.data(), projection, params.mu_m,
-                                                              tile_max.data(), tiles_x, tiles_y, keep.data()});
+        CpuDevice::parallelFor(tiles_x * tiles_y, DepthMaxTiles{view.depth.host(), intr.size(), frame.min_depth_m,
+                                                                frame.max_depth_m, tiles_x, tile_max.data()});
+        const BlockProjection projection{frame.T_depth_world, intr, params.voxel_size_m, frame.near_m,
+                                         frame.max_depth_m + params.mu_m};
+        CpuDevice::parallelFor(
+            visible, BlockNeedsIntegration{hash.data().entries, visible_entries.data(), projection, params.mu_m,
+                                           tile_max.data(), tiles_x, tiles_y, keep.data()});
         const HashScene before = scene.copyTo(Device::CPU);
         for (int k = 0; k < visible; ++k) {
             if (keep[std::size_t(k)]) continue;
             ++skipped_total;
             const int ptr = hash.entry(visible_entries[std::size_t(k)]).ptr;
-            ASSERT_EQ(std::memcmp(before.voxels().host() + std::size_t(ptr) * kBlockVoxelCount, all.voxels().host() + std::size_t(ptr) * kBlockVoxelCount,
-                                  sizeof(VoxelSRgb) * kBlockVoxelCount), 0)
+            ASSERT_EQ(std::memcmp(before.voxels().host() + std::size_t(ptr) * kBlockVoxelCount,
+                                  all.voxels().host() + std::size_t(ptr) * kBlockVoxelCount,
+                                  sizeof(VoxelSRgb) * kBlockVoxelCount),
+                      0)
                 << "a skipped block has voxels the frame updates";
         }
         visible_total += visible;
 
         integration->integrate(scene, view, pose);
-        ASSERT_EQ(std::memcmp(scene.voxels().host(), all.voxels().host(), sizeof(VoxelSRgb) * std::size_t(hash.blocksInUse()) * kBlockVoxelCount), 0)
+        ASSERT_EQ(std::memcmp(scene.voxels().host(), all.voxels().host(),
+                              sizeof(VoxelSRgb) * std::size_t(hash.blocksInUse()) * kBlockVoxelCount),
+                  0)
             << "skipping blocks changed the map";
     }
     EXPECT_GT(skipped_total, visible_total / 30) << "the frames should leave blocks to skip";

@@ -106,7 +106,8 @@ TEST(KeyframeDatabaseTest, ARevisitedViewFindsTheKeyframeTakenNearestToIt) {
         const RoomView q = roomView(degrees);
         const KeyframeMatch best = db.nearest(encoder.encode(q.view.depth, q.view.rgb), 1).front();
         float nearest_m = 1e9f;
-        for (int i = 0; i < db.size(); ++i) nearest_m = std::min(nearest_m, test::translationErrorM(db.keyframe(i).T_world_camera, q.T_world_camera));
+        for (int i = 0; i < db.size(); ++i)
+            nearest_m = std::min(nearest_m, test::translationErrorM(db.keyframe(i).T_world_camera, q.T_world_camera));
         const float found_m = test::translationErrorM(db.keyframe(best.keyframe).T_world_camera, q.T_world_camera);
         nearest_found += found_m <= nearest_m + 1e-4f;
         EXPECT_LT(found_m, 0.25f) << "at " << degrees << " degrees: the match lies " << found_m << " m away";
@@ -122,7 +123,8 @@ TEST(KeyframeDatabaseTest, BuildingTheSameDatabaseTwiceGivesTheSameKeyframes) {
         FernEncoder encoder(FernSettings{}, {160, 120}, true);
         KeyframeDatabase db(8);
         for (std::size_t i = 0; i < views.size(); ++i)
-            db.addIfNovel(encoder.encode(views[i].view.depth, views[i].view.rgb), views[i].T_world_camera, int(i), 0.2f);
+            db.addIfNovel(encoder.encode(views[i].view.depth, views[i].view.rgb), views[i].T_world_camera, int(i),
+                          0.2f);
         return db;
     };
     const KeyframeDatabase a = build(), b = build();

@@ -93,7 +93,8 @@ Image<ClassId> trueLabels(const synth::SyntheticScene& scene, const Intrinsics& 
     Image<ClassId> labels(intr.size());
     for (int v = 0; v < intr.height; ++v)
         for (int u = 0; u < intr.width; ++u) {
-            const Eigen::Vector3f dir = T.block<3, 3>(0, 0) * Eigen::Vector3f((u - intr.cx) / intr.fx, (v - intr.cy) / intr.fy, 1.f);
+            const Eigen::Vector3f dir =
+                T.block<3, 3>(0, 0) * Eigen::Vector3f((u - intr.cx) / intr.fx, (v - intr.cy) / intr.fy, 1.f);
             synth::Hit hit;
             labels.at(u, v) = scene.intersect(origin, dir, hit) ? kPrimitiveClass[hit.primitive] : kNoLabel;
         }
@@ -105,7 +106,8 @@ Image<ClassId> trueLabels(const synth::SyntheticScene& scene, const Intrinsics& 
 ClassId trueClassAt(const Eigen::Vector3f& p, float ambiguous_within_m) {
     const Eigen::Vector3f box_q = (p - Eigen::Vector3f(0.f, 0.f, 0.2f)).cwiseAbs() - Eigen::Vector3f::Constant(0.2f);
     const float box = box_q.cwiseMax(0.f).norm() + std::min(box_q.maxCoeff(), 0.f);
-    const float d[3] = {std::fabs(p.z()), std::fabs(box), std::fabs((p - Eigen::Vector3f(0.6f, 0.f, 0.15f)).norm() - 0.15f)};
+    const float d[3] = {std::fabs(p.z()), std::fabs(box),
+                        std::fabs((p - Eigen::Vector3f(0.6f, 0.f, 0.15f)).norm() - 0.15f)};
     const int best = int(std::min_element(d, d + 3) - d);
     for (int k = 0; k < 3; ++k)
         if (k != best && d[k] < d[best] + ambiguous_within_m) return kNoLabel;
@@ -146,7 +148,8 @@ RGBDFrame toFrame(const View& view, const Image<ClassId>& labels, int index) {
     RGBDFrame f;
     f.index = index;
     f.depth_raw.resize(view.depth.size());
-    for (std::size_t i = 0; i < view.depth.pixelCount(); ++i) f.depth_raw.host()[i] = std::uint16_t(std::lround(view.depth.host()[i] * 1000.f));
+    for (std::size_t i = 0; i < view.depth.pixelCount(); ++i)
+        f.depth_raw.host()[i] = std::uint16_t(std::lround(view.depth.host()[i] * 1000.f));
     f.labels = copyOf(labels);
     f.labels_path = "frame " + std::to_string(index);
     return f;
@@ -210,7 +213,8 @@ Score fuseAndScore(LabelUpdate rule, int frames, const Corruption& corrupt, Clas
         Image<ClassId> labels = copyOf(seq.labels[std::size_t(k)]);
         corrupt(k, labels);
         // Every frame has index 0: the random numbers must not depend on how the caller numbers frames.
-        EXPECT_TRUE(engine->processFrame(toFrame(seq.views[std::size_t(k)], labels, 0), &seq.poses[std::size_t(k)]).fused);
+        EXPECT_TRUE(
+            engine->processFrame(toFrame(seq.views[std::size_t(k)], labels, 0), &seq.poses[std::size_t(k)]).fused);
     }
     Mesh mesh;
     engine->extractMesh(mesh);
@@ -252,8 +256,10 @@ TEST(LabelFusionPipeline, ConvergesToTheTrueClassUnderThirtyPercentLabelNoise) {
     // Vote: the true class is seen in 70% of the frames, a clear majority.
     const Score vote = fuseAndScore(LabelUpdate::Vote, 60, pixelNoise(0.3, 11));
     EXPECT_GT(vote.correct, 0.99);
-    std::printf("[ info ] right classes under 30%% pixel noise: probabilistic %.3f after 8 frames, %.3f after 60; vote %.4f after 60\n",
-                early.correct, late.correct, vote.correct);
+    std::printf(
+        "[ info ] right classes under 30%% pixel noise: probabilistic %.3f after 8 frames, %.3f after 60; vote %.4f "
+        "after 60\n",
+        early.correct, late.correct, vote.correct);
 }
 
 // The segmentation calls the whole floor class 7 in 30% of the frames.
@@ -276,9 +282,10 @@ TEST(LabelFusionPipeline, AClassSeenInFewerFramesDoesNotWin) {
     const Score v_mixed = fuseAndScore(LabelUpdate::Vote, 60, rival_in(shuffled), kRival);
     const Score p_last = fuseAndScore(LabelUpdate::Probabilistic, 60, rival_in(last), kRival);
     const Score v_last = fuseAndScore(LabelUpdate::Vote, 60, rival_in(last), kRival);
-    std::printf("[ info ] floor vertices ending with the rival class (seen in 18 of 60 frames): probabilistic %.3f shuffled, "
-                "%.3f when last; vote %.3f shuffled, %.3f when last\n",
-                p_mixed.floor_with_class, p_last.floor_with_class, v_mixed.floor_with_class, v_last.floor_with_class);
+    std::printf(
+        "[ info ] floor vertices ending with the rival class (seen in 18 of 60 frames): probabilistic %.3f shuffled, "
+        "%.3f when last; vote %.3f shuffled, %.3f when last\n",
+        p_mixed.floor_with_class, p_last.floor_with_class, v_mixed.floor_with_class, v_last.floor_with_class);
     EXPECT_LT(p_mixed.floor_with_class, 0.2);
     EXPECT_LT(v_mixed.floor_with_class, 0.01);
     // When the rival comes last, the probabilistic rule keeps the floor with probability about
@@ -294,7 +301,9 @@ TEST(LabelFusionPipeline, ClassRenderShowsTheFusedClasses) {
     s.scene.voxel_size_m = 0.01f;
     s.scene.mu_m = 0.04f;
     auto engine = MainEngine::create(s, seq.views[0].calib);
-    for (int k = 0; k < 10; ++k) engine->processFrame(toFrame(seq.views[std::size_t(k)], seq.labels[std::size_t(k)], k), &seq.poses[std::size_t(k)]);
+    for (int k = 0; k < 10; ++k)
+        engine->processFrame(toFrame(seq.views[std::size_t(k)], seq.labels[std::size_t(k)], k),
+                             &seq.poses[std::size_t(k)]);
     Image<Vec4u8> image;
     engine->renderLast(RenderMode::Class, image);
     // Unshaded, a pixel's colour is classColor() times one intensity: its hue identifies the class.

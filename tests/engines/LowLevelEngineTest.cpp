@@ -76,7 +76,8 @@ TEST_P(LowLevelDeviceTest, FillsOnePixelGapsBetweenAgreeingNeighbours) {
     const Image<float>& kept = depth;
     for (int y = 0; y < 5; ++y)
         for (int x = 0; x < 5; ++x)
-            EXPECT_EQ(kept.at(x, y), metres[y][x] > 0.f && metres[y][x] <= 5.f ? metresOf(metres[y][x]) : 0.f) << x << "," << y << ": tolerance 0 fills nothing";
+            EXPECT_EQ(kept.at(x, y), metres[y][x] > 0.f && metres[y][x] <= 5.f ? metresOf(metres[y][x]) : 0.f)
+                << x << "," << y << ": tolerance 0 fills nothing";
 }
 
 INSTANTIATE_TEST_SUITE_P(Devices, LowLevelDeviceTest, test::kAllDevices, test::DeviceName());
@@ -86,7 +87,7 @@ TEST(LowLevelEngineTest, BilateralFilterKeepsPlanesAndEdges) {
     Image<float> depth({20, 10}), filtered;
     for (int y = 0; y < 10; ++y)
         for (int x = 0; x < 20; ++x) depth.at(x, y) = x < 10 ? 1.0f : 2.0f;  // a step edge
-    depth.at(3, 3) = 0.f;  // a hole
+    depth.at(3, 3) = 0.f;                                                    // a hole
     engine->bilateralFilterDepth(depth, filtered, BilateralFilterParams{});
     EXPECT_EQ(filtered.at(3, 3), 0.f) << "holes stay holes";
     EXPECT_NEAR(filtered.at(9, 5), 1.0f, 1e-4f) << "the edge is not smeared";
@@ -119,12 +120,16 @@ TEST(LowLevelEngineTest, BilateralFilterMatchesTheFilterWrittenPlainly) {
     // A slanted surface with ripples of a few centimetres (within the range sigma), a step, and holes.
     for (int y = 0; y < depth.height(); ++y)
         for (int x = 0; x < depth.width(); ++x)
-            depth.at(x, y) = (x % 7 == 3 && y % 5 == 1) ? 0.f : 1.f + 0.01f * x + 0.03f * std::sin(0.9f * x + 1.7f * y) + (y > 30 ? 0.4f : 0.f);
-    for (const BilateralFilterParams p : {BilateralFilterParams{}, BilateralFilterParams{5, 3.f, 0.02f}, BilateralFilterParams{0, 1.f, 0.01f}}) {
+            depth.at(x, y) = (x % 7 == 3 && y % 5 == 1)
+                                 ? 0.f
+                                 : 1.f + 0.01f * x + 0.03f * std::sin(0.9f * x + 1.7f * y) + (y > 30 ? 0.4f : 0.f);
+    for (const BilateralFilterParams p :
+         {BilateralFilterParams{}, BilateralFilterParams{5, 3.f, 0.02f}, BilateralFilterParams{0, 1.f, 0.01f}}) {
         engine->bilateralFilterDepth(depth, filtered, p);
         double worst = 0.0;
         for (int y = 0; y < depth.height(); ++y)
-            for (int x = 0; x < depth.width(); ++x) worst = std::max(worst, double(std::fabs(filtered.at(x, y) - referenceBilateral(depth, x, y, p))));
+            for (int x = 0; x < depth.width(); ++x)
+                worst = std::max(worst, double(std::fabs(filtered.at(x, y) - referenceBilateral(depth, x, y, p))));
         EXPECT_LT(worst, 2e-6) << "radius " << p.radius_px;
     }
     BilateralFilterParams too_wide;
@@ -136,7 +141,8 @@ TEST(LowLevelEngineTest, ValidDepthIsCountedOnEveryPixelOrOnAGrid) {
     auto engine = makeLowLevelEngine(Device::CPU);
     Image<float> depth({5, 3});
     for (int y = 0; y < 3; ++y)
-        for (int x = 0; x < 5; ++x) depth.at(x, y) = (x + y) % 3 == 0 ? 0.f : 1.f;  // zeros at (0,0) (3,0) (2,1) (1,2) (4,2)
+        for (int x = 0; x < 5; ++x)
+            depth.at(x, y) = (x + y) % 3 == 0 ? 0.f : 1.f;  // zeros at (0,0) (3,0) (2,1) (1,2) (4,2)
     EXPECT_EQ(engine->countValidDepth(depth), 10);
     // Columns 0, 2, 4 of rows 0 and 2: (0,0) and (4,2) are empty.
     EXPECT_EQ(engine->countValidDepth(depth, 2), 4);
@@ -198,7 +204,8 @@ TEST(LowLevelEngineTest, NormalsOnAPixelGridAreTheFullMapsThere) {
     const Intrinsics intr = test::kinectIntrinsics(161, 121);
     Image<float> depth(intr.size());
     for (int y = 0; y < intr.height; ++y)
-        for (int x = 0; x < intr.width; ++x) depth.at(x, y) = (x + y) % 7 == 0 ? 0.f : 1.f + 0.002f * float((x * 7 + y * 13) % 11);
+        for (int x = 0; x < intr.width; ++x)
+            depth.at(x, y) = (x + y) % 7 == 0 ? 0.f : 1.f + 0.002f * float((x * 7 + y * 13) % 11);
     Image<Vec4f> vertices, full;
     engine->computeVertexMap(depth, intr, vertices);
     engine->computeNormalMap(vertices, full, 0.1f);
@@ -213,9 +220,11 @@ TEST(LowLevelEngineTest, NormalsOnAPixelGridAreTheFullMapsThere) {
                 const Vec4f g = grid.at(x, y), f = full.at(x, y);
                 if (x % step == 0 && y % step == 0) {
                     ++on_grid;
-                    EXPECT_TRUE(g.x == f.x && g.y == f.y && g.z == f.z && g.w == f.w) << "pixel " << x << "," << y << ", step " << step;
+                    EXPECT_TRUE(g.x == f.x && g.y == f.y && g.z == f.z && g.w == f.w)
+                        << "pixel " << x << "," << y << ", step " << step;
                 } else {
-                    EXPECT_TRUE(g.x == 7.f && g.w == 7.f) << "pixel " << x << "," << y << " off the grid was written, step " << step;
+                    EXPECT_TRUE(g.x == 7.f && g.w == 7.f)
+                        << "pixel " << x << "," << y << " off the grid was written, step " << step;
                 }
             }
         EXPECT_EQ(on_grid, ((intr.width + step - 1) / step) * ((intr.height + step - 1) / step));

@@ -46,7 +46,8 @@ protected:
         int differ = 0;
         for (std::size_t i = 0; i < a.pixelCount(); ++i) {
             const Vec4u8 p = a.host()[i], q = b.host()[i];
-            differ += std::abs(int(p.x) - int(q.x)) > 2 || std::abs(int(p.y) - int(q.y)) > 2 || std::abs(int(p.z) - int(q.z)) > 2;
+            differ += std::abs(int(p.x) - int(q.x)) > 2 || std::abs(int(p.y) - int(q.y)) > 2 ||
+                      std::abs(int(p.z) - int(q.z)) > 2;
         }
         return differ;
     }
@@ -70,7 +71,8 @@ TEST_P(MainEngineVoxelTest, RaycastReproducesTheLastFrameDepth) {
     raycastDepth(engine->renderState(), depth);
     std::vector<float> errors;
     for (std::size_t i = 0; i < depth.pixelCount(); ++i)
-        if (depth.host()[i] > 0.f && last.depth.host()[i] > 0.f) errors.push_back(std::fabs(depth.host()[i] - last.depth.host()[i]));
+        if (depth.host()[i] > 0.f && last.depth.host()[i] > 0.f)
+            errors.push_back(std::fabs(depth.host()[i] - last.depth.host()[i]));
     ASSERT_GT(errors.size(), 0.5 * depth.pixelCount()) << "the floor beyond the small volume is not in the model";
     std::nth_element(errors.begin(), errors.begin() + errors.size() / 2, errors.end());
     EXPECT_LT(errors[errors.size() / 2], 0.003f) << "median raycast depth error (mm depth quantisation, 1 cm voxels)";
@@ -81,7 +83,8 @@ TEST_P(MainEngineVoxelTest, RaycastReproducesTheLastFrameDepth) {
     engine->renderLast(RenderMode::Color, image);
     EXPECT_EQ(image.size(), intr.size());
     engine->renderFromPose(pose, intr, RenderMode::Color, whole);
-    EXPECT_LE(pixelsDiffering(image, whole), int(image.pixelCount() / 200)) << "pixels where the last frame's render and a whole search disagree";
+    EXPECT_LE(pixelsDiffering(image, whole), int(image.pixelCount() / 200))
+        << "pixels where the last frame's render and a whole search disagree";
     engine->renderFromPose(test::lookAt({-0.5f, -1.0f, 1.0f}, {0.3f, 0.f, 0.1f}), intr, RenderMode::Shaded, image);
     int lit = 0;
     for (std::size_t i = 0; i < image.pixelCount(); ++i) lit += image.host()[i].x > 0;
@@ -102,7 +105,8 @@ TEST_P(MainEngineVoxelTest, TheLastRenderIgnoresTheDepthOfAFrameNotFused) {
     // The same view with every depth 30 cm too far: not trackable, and rays started there would miss
     // every surface.
     View far = test::renderView(world(), kCamera, pose);
-    for (std::size_t i = 0; i < far.depth.pixelCount(); ++i) far.depth.host()[i] = far.depth.host()[i] > 0.f ? far.depth.host()[i] + 0.3f : 0.f;
+    for (std::size_t i = 0; i < far.depth.pixelCount(); ++i)
+        far.depth.host()[i] = far.depth.host()[i] > 0.f ? far.depth.host()[i] + 0.3f : 0.f;
     const FrameResult r = engine->processFrame(test::toRgbdFrame(far, 3), nullptr);
     ASSERT_FALSE(r.fused) << "the test needs a frame that is not fused";
 
@@ -115,12 +119,13 @@ TEST_P(MainEngineVoxelTest, TheLastRenderIgnoresTheDepthOfAFrameNotFused) {
     EXPECT_LE(pixelsDiffering(last, whole), int(last.pixelCount() / 200));
 }
 
-INSTANTIATE_TEST_SUITE_P(AllVoxelTypes, MainEngineVoxelTest,
-                         ::testing::Combine(test::kAllDevices, ::testing::Values(VoxelType::S, VoxelType::F, VoxelType::SRgb, VoxelType::FRgb,
-                                                                                 VoxelType::SLabel, VoxelType::SRgbLabel)),
-                         [](const auto& info) {
-                             return std::string(deviceName(std::get<0>(info.param))) + "_" + toString(std::get<1>(info.param));
-                         });
+INSTANTIATE_TEST_SUITE_P(
+    AllVoxelTypes, MainEngineVoxelTest,
+    ::testing::Combine(test::kAllDevices, ::testing::Values(VoxelType::S, VoxelType::F, VoxelType::SRgb,
+                                                            VoxelType::FRgb, VoxelType::SLabel, VoxelType::SRgbLabel)),
+    [](const auto& info) {
+        return std::string(deviceName(std::get<0>(info.param))) + "_" + toString(std::get<1>(info.param));
+    });
 
 TEST(MainEngineTest, RejectsBadSettingsWithClearErrors) {
     RGBDCalib calib;

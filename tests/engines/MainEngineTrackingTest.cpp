@@ -33,7 +33,8 @@ TrackedRun runBundledSequence(int frames, int noise_frame) {
     std::uniform_int_distribution<int> noise(2000, 20000);  // 0.4 m .. 4 m at the TUM scale
     while (int(run.results.size()) < frames && source->next(frame)) {
         if (frame.index == noise_frame)
-            for (std::size_t i = 0; i < frame.depth_raw.pixelCount(); ++i) frame.depth_raw.host()[i] = std::uint16_t(noise(rng));
+            for (std::size_t i = 0; i < frame.depth_raw.pixelCount(); ++i)
+                frame.depth_raw.host()[i] = std::uint16_t(noise(rng));
         run.results.push_back(engine->processFrame(frame, nullptr));
         run.trajectory.push_back({frame.timestamp_s, run.results.back().T_world_camera});
     }
@@ -44,8 +45,9 @@ TrackedRun runBundledSequence(int frames, int noise_frame) {
 
 TEST(MainEngineTrackingTest, BundledSequenceIsTrackedWithinFiveMillimetres) {
     const TrackedRun run = runBundledSequence(100, -1);
-    std::printf("[ tracking ] bundled sequence: ATE RMSE %.2f mm, max %.2f mm over %d poses; RPE %.2f mm/s\n", 1000 * run.error.ate_rmse_m,
-                1000 * run.error.ate_max_m, run.error.pairs, 1000 * run.error.rpe_trans_m_per_s);
+    std::printf("[ tracking ] bundled sequence: ATE RMSE %.2f mm, max %.2f mm over %d poses; RPE %.2f mm/s\n",
+                1000 * run.error.ate_rmse_m, 1000 * run.error.ate_max_m, run.error.pairs,
+                1000 * run.error.rpe_trans_m_per_s);
     EXPECT_EQ(run.error.pairs, 100);
     EXPECT_LT(run.error.ate_rmse_m, 0.005);
     for (const FrameResult& r : run.results) EXPECT_NE(r.quality, TrackingQuality::Failed);
@@ -61,9 +63,11 @@ TEST(MainEngineTrackingTest, NoiseFrameFailsAndDoesNotCorruptTheMap) {
     EXPECT_FALSE(bad.fused);
     // The pose is held at the last good one, and tracking resumes on the next frame.
     for (int i = 0; i < 16; ++i) EXPECT_EQ(bad.T_world_camera.m[i], noisy.results[kNoiseFrame - 1].T_world_camera.m[i]);
-    for (int k = kNoiseFrame + 1; k < 30; ++k) EXPECT_NE(noisy.results[k].quality, TrackingQuality::Failed) << "frame " << k;
+    for (int k = kNoiseFrame + 1; k < 30; ++k)
+        EXPECT_NE(noisy.results[k].quality, TrackingQuality::Failed) << "frame " << k;
     // Fusing noise would allocate blocks all over the frustum; skipping it leaves the map as without it.
-    EXPECT_NEAR(noisy.allocation.blocks_allocated, clean.allocation.blocks_allocated, 0.01 * clean.allocation.blocks_allocated);
+    EXPECT_NEAR(noisy.allocation.blocks_allocated, clean.allocation.blocks_allocated,
+                0.01 * clean.allocation.blocks_allocated);
     EXPECT_LT(noisy.error.ate_rmse_m, 0.005);
 }
 

@@ -38,7 +38,8 @@ void expectRefused(const MainEngineSettings& s, const std::string& part) {
 
 TEST(MainEngineCreate, TheDepthRangeMustBeARange) {
     const float nan = std::numeric_limits<float>::quiet_NaN();
-    for (auto [min_m, max_m] : {std::pair{nan, 3.f}, {0.2f, nan}, {3.f, 2.f}, {2.f, 2.f}, {-1.f, 2.f}, {0.2f, INFINITY}}) {
+    for (auto [min_m, max_m] :
+         {std::pair{nan, 3.f}, {0.2f, nan}, {3.f, 2.f}, {2.f, 2.f}, {-1.f, 2.f}, {0.2f, INFINITY}}) {
         SCOPED_TRACE(std::to_string(min_m) + " .. " + std::to_string(max_m));
         MainEngineSettings s;
         s.scene.view_frustum_min_m = min_m;
@@ -114,7 +115,7 @@ TEST(AutomaticBlockCeiling, FollowsTheTableAndTheFreeMemoryOfItsDevice) {
     const std::size_t srgb = sizeof(VoxelSRgb);
     EXPECT_EQ(automaticMaxBlockCount(Device::CPU, srgb, design, 64 * kGiB), entries);  // every entry can have its block
     EXPECT_EQ(automaticMaxBlockCount(Device::CUDA, srgb, design, 64 * kGiB), entries);
-    EXPECT_EQ(automaticMaxBlockCount(Device::CPU, srgb, design, 0.0), 1 << 18);  // free memory unknown
+    EXPECT_EQ(automaticMaxBlockCount(Device::CPU, srgb, design, 0.0), 1 << 18);   // free memory unknown
     EXPECT_EQ(automaticMaxBlockCount(Device::CUDA, srgb, design, 0.0), 1 << 18);  // no GPU to ask
 
     VoxelBlockHashSettings small = design;
@@ -124,7 +125,8 @@ TEST(AutomaticBlockCeiling, FollowsTheTableAndTheFreeMemoryOfItsDevice) {
 
     VoxelBlockHashSettings huge = design;
     huge.bucket_count = 1 << 24;
-    EXPECT_EQ(automaticMaxBlockCount(Device::CPU, sizeof(VoxelS), huge, 1024 * kGiB), 1 << 22);  // voxel offsets stay ints
+    EXPECT_EQ(automaticMaxBlockCount(Device::CPU, sizeof(VoxelS), huge, 1024 * kGiB),
+              1 << 22);  // voxel offsets stay ints
 
     // 2 GiB free: the blocks and the tables fill three quarters of it, not more.
     const double free_bytes = 2 * kGiB;
@@ -140,7 +142,8 @@ TEST(AutomaticBlockCeiling, FollowsTheTableAndTheFreeMemoryOfItsDevice) {
     // memory beside the tables, and each block counts twice.
     const int on_gpu = automaticMaxBlockCount(Device::CUDA, srgb, design, free_bytes);
     with_n.max_block_count = on_gpu;
-    const double gpu_used = double(VoxelBlockHash::tableBytesFor(with_n)) + 2.0 * double(on_gpu) * double(srgb * kBlockVoxelCount);
+    const double gpu_used =
+        double(VoxelBlockHash::tableBytesFor(with_n)) + 2.0 * double(on_gpu) * double(srgb * kBlockVoxelCount);
     EXPECT_LE(gpu_used, 0.75 * free_bytes);
     EXPECT_EQ(on_gpu % (1 << 16), 0);
     EXPECT_GE(on_gpu, n / 2 - (1 << 16));

@@ -76,7 +76,8 @@ void expectEqualMeshes(const Mesh& a, const Mesh& b) {
 
 TEST(MeshLabels, TriangleClassIsTheMajorityElseTheFirstVertexs) {
     const Mesh m = handMadeMesh();
-    for (std::size_t t = 0; t < m.triangles.size(); ++t) EXPECT_EQ(triangleClass(m, t), kHandMadeTriangleClasses[t]) << "triangle " << t;
+    for (std::size_t t = 0; t < m.triangles.size(); ++t)
+        EXPECT_EQ(triangleClass(m, t), kHandMadeTriangleClasses[t]) << "triangle " << t;
     EXPECT_EQ(classesOf(m), (std::vector<ClassId>{1, 2, 3, kNone}));
     EXPECT_THROW(triangleClass(m, m.triangles.size()), Error);
 }

@@ -94,7 +94,8 @@ TEST(MarchingCubesTable, EveryCaseClosesAroundItsCutEdges) {
         for (const DirectedEdge& s : all) {
             EXPECT_EQ(all.count(s), 1u) << "case " << cube << ": a side used twice in one direction";
             bool on_common_face = false;
-            for (int f = 0; f < 6; ++f) on_common_face = on_common_face || (edgeOnFace(s.first, f) && edgeOnFace(s.second, f));
+            for (int f = 0; f < 6; ++f)
+                on_common_face = on_common_face || (edgeOnFace(s.first, f) && edgeOnFace(s.second, f));
             // An inner side in a face could meet the neighbouring cell's surface there.
             if (all.count({s.second, s.first})) {
                 EXPECT_FALSE(on_common_face) << "case " << cube << ": an inner side lies in a face";
@@ -103,7 +104,8 @@ TEST(MarchingCubesTable, EveryCaseClosesAroundItsCutEdges) {
         std::map<int, int> out_degree, in_degree;
         for (const DirectedEdge& s : boundarySides(cube)) {
             bool on_common_face = false;
-            for (int f = 0; f < 6; ++f) on_common_face = on_common_face || (edgeOnFace(s.first, f) && edgeOnFace(s.second, f));
+            for (int f = 0; f < 6; ++f)
+                on_common_face = on_common_face || (edgeOnFace(s.first, f) && edgeOnFace(s.second, f));
             EXPECT_TRUE(on_common_face) << "case " << cube << ": an open side crosses the cell";
             ++out_degree[s.first];
             ++in_degree[s.second];
@@ -122,7 +124,9 @@ TEST(MarchingCubesTable, NeighbouringCellsCutTheirSharedFaceAlike) {
     for (int axis = 0; axis < 3; ++axis) {
         const int bit = 1 << axis;
         // Cell A's face at +axis is cell B's face at -axis; corner k of A (bit set) is corner k ^ bit of B.
-        auto toB = [bit](int edge_of_a) { return cubeEdgeBetween(cubeEdgeStartCorner(edge_of_a) ^ bit, cubeEdgeEndCorner(edge_of_a) ^ bit); };
+        auto toB = [bit](int edge_of_a) {
+            return cubeEdgeBetween(cubeEdgeStartCorner(edge_of_a) ^ bit, cubeEdgeEndCorner(edge_of_a) ^ bit);
+        };
         for (int a = 0; a < 256; ++a)
             for (int b = 0; b < 256; ++b) {
                 bool same_face = true;
@@ -131,7 +135,8 @@ TEST(MarchingCubesTable, NeighbouringCellsCutTheirSharedFaceAlike) {
                 if (!same_face) continue;
                 std::multiset<DirectedEdge> from_a, from_b;
                 for (const DirectedEdge& s : boundarySides(a))
-                    if (edgeOnFace(s.first, 2 * axis + 1) && edgeOnFace(s.second, 2 * axis + 1)) from_a.insert({toB(s.second), toB(s.first)});
+                    if (edgeOnFace(s.first, 2 * axis + 1) && edgeOnFace(s.second, 2 * axis + 1))
+                        from_a.insert({toB(s.second), toB(s.first)});
                 for (const DirectedEdge& s : boundarySides(b))
                     if (edgeOnFace(s.first, 2 * axis) && edgeOnFace(s.second, 2 * axis)) from_b.insert(s);
                 ASSERT_EQ(from_a, from_b) << "cells " << a << " and " << b << " along axis " << axis;
@@ -142,7 +147,8 @@ TEST(MarchingCubesTable, NeighbouringCellsCutTheirSharedFaceAlike) {
 // With vertices at the edge midpoints, every triangle faces from its inside corners to its outside ones.
 TEST(MarchingCubesTable, TrianglesFaceTheOutsideCorners) {
     auto midpoint = [](int e) {
-        return (toFloat(cubeCornerOffset(cubeEdgeStartCorner(e))) + toFloat(cubeCornerOffset(cubeEdgeEndCorner(e)))) * 0.5f;
+        return (toFloat(cubeCornerOffset(cubeEdgeStartCorner(e))) + toFloat(cubeCornerOffset(cubeEdgeEndCorner(e)))) *
+               0.5f;
     };
     for (int cube = 0; cube < 256; ++cube)
         for (int k = 0; k < kMarchingCubesTable.triangle_count[cube]; ++k) {
@@ -178,11 +184,13 @@ TEST(MarchingCubesCell, CrossingsStayInsideTheEdge) {
 
 struct Topology {
     std::size_t edges = 0;
-    int open_edges = 0;        // used by one triangle
-    int overused_edges = 0;    // used by more than two
-    int misoriented_edges = 0; // used twice in the same direction
+    int open_edges = 0;         // used by one triangle
+    int overused_edges = 0;     // used by more than two
+    int misoriented_edges = 0;  // used twice in the same direction
     int degenerate_triangles = 0;
-    long long eulerCharacteristic(const Mesh& m) const { return (long long)m.vertices.size() - (long long)edges + (long long)m.triangles.size(); }
+    long long eulerCharacteristic(const Mesh& m) const {
+        return (long long)m.vertices.size() - (long long)edges + (long long)m.triangles.size();
+    }
     bool closedAndOriented() const { return open_edges == 0 && overused_edges == 0 && misoriented_edges == 0; }
 };
 
@@ -233,7 +241,8 @@ void expectWellFormed(const Mesh& mesh, bool has_colors, bool has_labels = false
 }
 
 Vec3f faceNormal(const Mesh& m, const Vec3i& t) {
-    return normalize(cross(m.vertices[std::size_t(t.y)] - m.vertices[std::size_t(t.x)], m.vertices[std::size_t(t.z)] - m.vertices[std::size_t(t.x)]));
+    return normalize(cross(m.vertices[std::size_t(t.y)] - m.vertices[std::size_t(t.x)],
+                           m.vertices[std::size_t(t.z)] - m.vertices[std::size_t(t.x)]));
 }
 
 // ================================ Scenes ================================
@@ -324,13 +333,16 @@ Mesh meshOf(const Scene<TVoxel, TIndex>& scene) {
 constexpr float kRadius = 0.25f;
 const Vec3f kSphereCentre{0.013f, -0.021f, 0.007f};  // off the grid: no voxel exactly on the surface
 
-VoxelValue sphereSdf(Vec3i p) { return {(length(toFloat(p) * kVoxel - kSphereCentre) - kRadius) / testParams().mu_m, true}; }
+VoxelValue sphereSdf(Vec3i p) {
+    return {(length(toFloat(p) * kVoxel - kSphereCentre) - kRadius) / testParams().mu_m, true};
+}
 
 const Vec3f kBoxCentre{0.0034f, 0.0121f, -0.0057f};
 const Vec3f kBoxHalf{0.2f, 0.13f, 0.09f};
 
 float boxDistance(Vec3f p) {
-    const Vec3f d{std::fabs(p.x - kBoxCentre.x) - kBoxHalf.x, std::fabs(p.y - kBoxCentre.y) - kBoxHalf.y, std::fabs(p.z - kBoxCentre.z) - kBoxHalf.z};
+    const Vec3f d{std::fabs(p.x - kBoxCentre.x) - kBoxHalf.x, std::fabs(p.y - kBoxCentre.y) - kBoxHalf.y,
+                  std::fabs(p.z - kBoxCentre.z) - kBoxHalf.z};
     const Vec3f outside{std::max(d.x, 0.f), std::max(d.y, 0.f), std::max(d.z, 0.f)};
     return length(outside) + std::min(std::max(d.x, std::max(d.y, d.z)), 0.f);
 }
@@ -345,12 +357,13 @@ using VoxelTypes = ::testing::Types<VoxelS, VoxelF, VoxelSRgb, VoxelFRgb, VoxelS
 TYPED_TEST_SUITE(MeshingEngineTest, VoxelTypes);
 
 // Vertices within max_error_voxels of the sphere; 99% of the normals within normal_error_deg of radial.
-void expectClosedSphere(const Mesh& mesh, bool has_colors, float max_error_voxels, float normal_error_deg, bool has_labels = false) {
+void expectClosedSphere(const Mesh& mesh, bool has_colors, float max_error_voxels, float normal_error_deg,
+                        bool has_labels = false) {
     expectWellFormed(mesh, has_colors, has_labels);
     ASSERT_GT(mesh.triangles.size(), 5000u);
     const Topology t = topologyOf(mesh);
-    EXPECT_TRUE(t.closedAndOriented()) << t.open_edges << " open, " << t.overused_edges << " overused, " << t.misoriented_edges
-                                       << " misoriented edges";
+    EXPECT_TRUE(t.closedAndOriented()) << t.open_edges << " open, " << t.overused_edges << " overused, "
+                                       << t.misoriented_edges << " misoriented edges";
     EXPECT_EQ(t.degenerate_triangles, 0);
     EXPECT_EQ(t.eulerCharacteristic(mesh), 2) << "one closed surface of genus 0";
     float max_error = 0.f;
@@ -363,7 +376,8 @@ void expectClosedSphere(const Mesh& mesh, bool has_colors, float max_error_voxel
     EXPECT_LT(max_error, max_error_voxels * kVoxel) << "vertices off the analytic sphere";
     EXPECT_LE(normals_off, int(mesh.vertices.size() / 100)) << "vertex normals (SDF gradient) should be radial";
     for (const Vec3i& tri : mesh.triangles)
-        ASSERT_GT(dot(faceNormal(mesh, tri), normalize(mesh.vertices[std::size_t(tri.x)] - kSphereCentre)), 0.5f) << "triangles must face outwards";
+        ASSERT_GT(dot(faceNormal(mesh, tri), normalize(mesh.vertices[std::size_t(tri.x)] - kSphereCentre)), 0.5f)
+            << "triangles must face outwards";
 }
 
 TYPED_TEST(MeshingEngineTest, AnalyticSphereIsClosedAndWithinHalfAVoxel) {
@@ -390,14 +404,16 @@ TYPED_TEST(MeshingEngineTest, AnalyticSphereIsClosedAndWithinHalfAVoxel) {
             if (g.y < 0.5f && g.y > -1.5f) continue;
             if (g.z < 0.5f && g.z > -1.5f) continue;
             ++checked;
-            for (int a = 0; a < 3; ++a) wrong += hash_mesh.colors[i][a] != std::uint8_t(int(std::floor(g[a] + 0.5f)) & 255);
+            for (int a = 0; a < 3; ++a)
+                wrong += hash_mesh.colors[i][a] != std::uint8_t(int(std::floor(g[a] + 0.5f)) & 255);
         }
         EXPECT_GT(checked, 1000);
         EXPECT_EQ(wrong, 0) << "vertex colours interpolate the voxel colours along the edge";
     }
     // No voxel has a class (w_label = 0): no vertex has one.
     if constexpr (TVoxel::hasLabel) {
-        EXPECT_EQ(std::count(hash_mesh.labels.begin(), hash_mesh.labels.end(), kNoLabel), std::ptrdiff_t(hash_mesh.labels.size()));
+        EXPECT_EQ(std::count(hash_mesh.labels.begin(), hash_mesh.labels.end(), kNoLabel),
+                  std::ptrdiff_t(hash_mesh.labels.size()));
     }
 }
 
@@ -409,14 +425,16 @@ TEST(MeshingEngine, AnalyticBoxIsClosedAndWithinHalfAVoxel) {
             fillHash(scene, {-28, -22, -17}, {28, 22, 17}, boxSdf);
             mesh = meshOf(scene);
         } else {
-            Scene<VoxelF, PlainVoxelArray> scene(testParams(), PlainVoxelArray({-28, -22, -17}, {56, 44, 34}), Device::CPU);
+            Scene<VoxelF, PlainVoxelArray> scene(testParams(), PlainVoxelArray({-28, -22, -17}, {56, 44, 34}),
+                                                 Device::CPU);
             fillDense(scene, boxSdf);
             mesh = meshOf(scene);
         }
         SCOPED_TRACE(use_hash ? "hash" : "dense");
         expectWellFormed(mesh, false);
         const Topology t = topologyOf(mesh);
-        EXPECT_TRUE(t.closedAndOriented()) << t.open_edges << " open, " << t.overused_edges << " overused, " << t.misoriented_edges;
+        EXPECT_TRUE(t.closedAndOriented())
+            << t.open_edges << " open, " << t.overused_edges << " overused, " << t.misoriented_edges;
         EXPECT_EQ(t.eulerCharacteristic(mesh), 2);
         float max_error = 0.f;
         for (const Vec3f& v : mesh.vertices) max_error = std::max(max_error, std::fabs(boxDistance(v)));
@@ -427,7 +445,8 @@ TEST(MeshingEngine, AnalyticBoxIsClosedAndWithinHalfAVoxel) {
             const Vec3f d = mesh.vertices[i] - kBoxCentre;
             for (int a = 0; a < 3; ++a) {
                 const int b = (a + 1) % 3, c = (a + 2) % 3;
-                if (std::fabs(std::fabs(d[a]) - kBoxHalf[a]) > 0.01f || std::fabs(d[b]) > kBoxHalf[b] - 0.03f || std::fabs(d[c]) > kBoxHalf[c] - 0.03f)
+                if (std::fabs(std::fabs(d[a]) - kBoxHalf[a]) > 0.01f || std::fabs(d[b]) > kBoxHalf[b] - 0.03f ||
+                    std::fabs(d[c]) > kBoxHalf[c] - 0.03f)
                     continue;
                 ++flat;
                 aligned += mesh.normals[i][a] * (d[a] > 0.f ? 1.f : -1.f) > 0.999f;
@@ -462,14 +481,16 @@ VoxelValue sphereWithClassGaps(Vec3i p) {
 }
 
 // Position -> class, to compare outputs whose vertices come in different orders.
-std::map<std::tuple<float, float, float>, ClassId> classByPosition(const std::vector<Vec3f>& points, const std::vector<ClassId>& labels) {
+std::map<std::tuple<float, float, float>, ClassId> classByPosition(const std::vector<Vec3f>& points,
+                                                                   const std::vector<ClassId>& labels) {
     std::map<std::tuple<float, float, float>, ClassId> classes;
     for (std::size_t i = 0; i < points.size(); ++i) classes[{points[i].x, points[i].y, points[i].z}] = labels[i];
     return classes;
 }
 
 TEST(MeshingEngine, SphereHalvesKeepTheirVoxelsClasses) {
-    Scene<VoxelSLabel, PlainVoxelArray> dense(testParams(), PlainVoxelArray({-30, -30, -30}, {60, 60, 60}), Device::CPU);
+    Scene<VoxelSLabel, PlainVoxelArray> dense(testParams(), PlainVoxelArray({-30, -30, -30}, {60, 60, 60}),
+                                              Device::CPU);
     fillDense(dense, sphereWithClassedHalves);
     Scene<VoxelSLabel, VoxelBlockHash> hash(testParams(), VoxelBlockHash(smallHash()), Device::CPU);
     fillHash(hash, {-30, -30, -30}, {30, 30, 30}, sphereWithClassedHalves);
@@ -487,7 +508,8 @@ TEST(MeshingEngine, SphereHalvesKeepTheirVoxelsClasses) {
     EXPECT_GT(checked, 3000);
     EXPECT_EQ(wrong, 0) << "vertices away from x = 0 have the class of their side";
     EXPECT_EQ(std::count(hash_mesh.labels.begin(), hash_mesh.labels.end(), kNoLabel), 0);
-    EXPECT_TRUE(classByPosition(dense_mesh.vertices, dense_mesh.labels) == classByPosition(hash_mesh.vertices, hash_mesh.labels))
+    EXPECT_TRUE(classByPosition(dense_mesh.vertices, dense_mesh.labels) ==
+                classByPosition(hash_mesh.vertices, hash_mesh.labels))
         << "the dense and the hash mesh give every vertex the same class";
 
     // The point cloud is the mesh's vertices, classes included, in the same order.
@@ -540,7 +562,8 @@ std::vector<Mat4f> camerasAllAround(const Eigen::Vector3f& target, float distanc
     for (int i = 0; i < count; ++i) {
         const float z = 1.f - 2.f * (float(i) + 0.5f) / float(count);
         const float r = std::sqrt(1.f - z * z), phi = 2.39996323f * float(i);
-        poses.push_back(test::lookAt(target + distance * Eigen::Vector3f(r * std::cos(phi), r * std::sin(phi), z), target));
+        poses.push_back(
+            test::lookAt(target + distance * Eigen::Vector3f(r * std::cos(phi), r * std::sin(phi), z), target));
     }
     return poses;
 }
@@ -578,7 +601,8 @@ TEST(MeshingEngine, FusedSphereSeenFromAllAroundIsClosed) {
 // A box and a sphere without a floor, inside the dense extent; the cameras see nothing behind them.
 synth::SyntheticScene boxAndSphereInTheAir() {
     synth::SyntheticScene world;
-    world.addBox({-0.15f, 0.05f, 0.f}, Eigen::Quaternionf(Eigen::AngleAxisf(0.4f, Eigen::Vector3f(0.2f, 0.3f, 1.f).normalized())),
+    world.addBox({-0.15f, 0.05f, 0.f},
+                 Eigen::Quaternionf(Eigen::AngleAxisf(0.4f, Eigen::Vector3f(0.2f, 0.3f, 1.f).normalized())),
                  {0.12f, 0.09f, 0.07f});
     world.addSphere({0.2f, -0.05f, 0.05f}, 0.11f);
     return world;
@@ -593,7 +617,9 @@ struct CanonicalMesh {
 CanonicalMesh canonical(const Mesh& mesh) {
     std::vector<int> order(mesh.vertices.size());
     for (std::size_t i = 0; i < order.size(); ++i) order[i] = int(i);
-    std::sort(order.begin(), order.end(), [&](int a, int b) { return lexicographicLess(mesh.vertices[std::size_t(a)], mesh.vertices[std::size_t(b)]); });
+    std::sort(order.begin(), order.end(), [&](int a, int b) {
+        return lexicographicLess(mesh.vertices[std::size_t(a)], mesh.vertices[std::size_t(b)]);
+    });
     std::vector<int> rank(order.size());
     CanonicalMesh c;
     for (std::size_t r = 0; r < order.size(); ++r) {
@@ -613,7 +639,8 @@ void expectSameMesh(const Mesh& a, const Mesh& b, float tolerance_m) {
     const CanonicalMesh ca = canonical(a), cb = canonical(b);
     ASSERT_EQ(ca.vertices.size(), cb.vertices.size());
     float max_distance = 0.f;
-    for (std::size_t i = 0; i < ca.vertices.size(); ++i) max_distance = std::max(max_distance, length(ca.vertices[i] - cb.vertices[i]));
+    for (std::size_t i = 0; i < ca.vertices.size(); ++i)
+        max_distance = std::max(max_distance, length(ca.vertices[i] - cb.vertices[i]));
     EXPECT_LE(max_distance, tolerance_m);
     ASSERT_EQ(ca.triangles.size(), cb.triangles.size());
     EXPECT_TRUE(ca.triangles == cb.triangles) << "same triangles over the same vertices";
@@ -626,9 +653,11 @@ TEST(MeshingEngine, DenseAndHashMeshesOfTheSameFramesMatch) {
     std::vector<Mat4f> poses;
     for (int k = 0; k < 6; ++k) {
         const float a = 0.5f * float(k);
-        poses.push_back(test::lookAt({0.9f * std::cos(a), 0.9f * std::sin(a), 0.35f - 0.1f * float(k)}, {0.f, 0.f, 0.02f}));
+        poses.push_back(
+            test::lookAt({0.9f * std::cos(a), 0.9f * std::sin(a), 0.35f - 0.1f * float(k)}, {0.f, 0.f, 0.02f}));
     }
-    Scene<VoxelSRgb, PlainVoxelArray> dense(testParams(), PlainVoxelArray({-64, -64, -64}, {128, 128, 128}), Device::CPU);
+    Scene<VoxelSRgb, PlainVoxelArray> dense(testParams(), PlainVoxelArray({-64, -64, -64}, {128, 128, 128}),
+                                            Device::CPU);
     Scene<VoxelSRgb, VoxelBlockHash> hash(testParams(), VoxelBlockHash(smallHash()), Device::CPU);
     fuse(dense, world, poses);
     fuse(hash, world, poses);
@@ -661,7 +690,8 @@ TEST(MeshingEngine, RandomFieldGivesAClosedOrientedSurfaceAcrossBlockBorders) {
     ASSERT_GT(dense_mesh.triangles.size(), 20000u);
     expectWellFormed(dense_mesh, false);
     const Topology t = topologyOf(dense_mesh);
-    EXPECT_TRUE(t.closedAndOriented()) << t.open_edges << " open, " << t.overused_edges << " overused, " << t.misoriented_edges;
+    EXPECT_TRUE(t.closedAndOriented()) << t.open_edges << " open, " << t.overused_edges << " overused, "
+                                       << t.misoriented_edges;
     EXPECT_EQ(t.degenerate_triangles, 0);
     expectSameMesh(dense_mesh, hash_mesh, 0.f);
 }

@@ -36,10 +36,12 @@ void fillSphere(Scene<TVoxel, VoxelBlockHash>& scene) {
                 for (int i = 0; i < kBlockVoxelCount; ++i) {
                     const Vec3i p = Vec3i{bx, by, bz} * kBlockSide + Vec3i{i & 7, (i >> 3) & 7, i >> 6};
                     const Vec3f x = toFloat(p) * kVoxel + Vec3f{0.0031f, 0.0017f, -0.0023f};
-                    block[i].sdf = TVoxel::sdfFromFloat(clampValue((length(x) - kRadius) / scene.params().mu_m, -1.f, 1.f));
+                    block[i].sdf =
+                        TVoxel::sdfFromFloat(clampValue((length(x) - kRadius) / scene.params().mu_m, -1.f, 1.f));
                     block[i].w_depth = 1;
                     if constexpr (TVoxel::hasColor) {
-                        block[i].clr = Vec3u8{std::uint8_t(100 + p.x), std::uint8_t(100 + p.y), std::uint8_t(100 + p.z)};
+                        block[i].clr =
+                            Vec3u8{std::uint8_t(100 + p.x), std::uint8_t(100 + p.y), std::uint8_t(100 + p.z)};
                         block[i].w_color = 1;
                     }
                 }
@@ -102,9 +104,9 @@ void expectNear(Vec3f a, Vec3f b, float tolerance) {
 // cell (0,0,1) one.
 PointCloud handMadeCloud() {
     PointCloud c;
-    c.points = {{0.01f, 0.02f, 0.03f}, {0.09f, 0.05f, 0.01f}, {0.05f, 0.08f, 0.05f},  // cell (0, 0, 0)
-                {-0.02f, 0.01f, 0.01f}, {-0.08f, 0.03f, 0.05f},                      // cell (-1, 0, 0)
-                {0.05f, 0.05f, 0.15f}};                                              // cell (0, 0, 1)
+    c.points = {{0.01f, 0.02f, 0.03f},  {0.09f, 0.05f, 0.01f},  {0.05f, 0.08f, 0.05f},  // cell (0, 0, 0)
+                {-0.02f, 0.01f, 0.01f}, {-0.08f, 0.03f, 0.05f},                         // cell (-1, 0, 0)
+                {0.05f, 0.05f, 0.15f}};                                                 // cell (0, 0, 1)
     c.normals = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {0, 0, 1}, {0, 0, 1}, {0, -1, 0}};
     c.colors = {{10, 20, 30}, {20, 40, 60}, {31, 61, 91}, {0, 0, 0}, {255, 255, 255}, {7, 8, 9}};
     return c;
@@ -141,8 +143,11 @@ TEST(PointCloudDownsampling, CellsSmallerThanThePointSpacingKeepEveryPoint) {
 
 TEST(PointCloudDownsampling, CloudsWithoutNormalsOrColoursAndBadPoints) {
     PointCloud in;
-    in.points = {{0.f, 0.f, 0.f}, {std::numeric_limits<float>::quiet_NaN(), 0.f, 0.f}, {0.5f, 0.5f, 0.5f},
-                 {std::numeric_limits<float>::infinity(), 1.f, 1.f}, {0.2f, 0.2f, 0.2f}};
+    in.points = {{0.f, 0.f, 0.f},
+                 {std::numeric_limits<float>::quiet_NaN(), 0.f, 0.f},
+                 {0.5f, 0.5f, 0.5f},
+                 {std::numeric_limits<float>::infinity(), 1.f, 1.f},
+                 {0.2f, 0.2f, 0.2f}};
     const PointCloud out = downsampleVoxelGrid(in, 1.f);
     ASSERT_EQ(out.size(), 1u) << "non-finite points are dropped";
     expectNear(out.points[0], {0.7f / 3.f, 0.7f / 3.f, 0.7f / 3.f}, 1e-7f);

@@ -41,7 +41,12 @@ TEST(PoseUpdateTest, TheTranslationConstraintIsTheShareOfTheNormalsAlongEachDire
     std::mt19937 rng(3);
     // Normals along the three axes, in proportions 1 : 2 : 7 of the weight.
     Terms t;
-    for (int i = 0; i < 10; ++i) t.add({0.1f * i, 0.2f, 2.f}, i < 1 ? Eigen::Vector3f::UnitX() : i < 3 ? Eigen::Vector3f::UnitY() : Eigen::Vector3f::UnitZ(), 0.f);
+    for (int i = 0; i < 10; ++i)
+        t.add({0.1f * i, 0.2f, 2.f},
+              i < 1   ? Eigen::Vector3f::UnitX()
+              : i < 3 ? Eigen::Vector3f::UnitY()
+                      : Eigen::Vector3f::UnitZ(),
+              0.f);
     const pose::TranslationConstraint c = pose::translationConstraint(t.eq);
     EXPECT_NEAR(c.share(0), 0.1, 1e-9);
     EXPECT_NEAR(c.share(1), 0.2, 1e-9);
@@ -52,7 +57,8 @@ TEST(PoseUpdateTest, TheTranslationConstraintIsTheShareOfTheNormalsAlongEachDire
     EXPECT_LT(corridor.share(0), 1e-12) << "nothing faces along the corridor";
     EXPECT_NEAR(std::abs(corridor.directions.col(0).z()), 1.0, 1e-9);
     EXPECT_NEAR(corridor.share(1), 0.5, 1e-9);
-    EXPECT_EQ(pose::translationConstraint(NormalEquations<double>::zero()).share(0), 0.0) << "no terms: nothing constrained";
+    EXPECT_EQ(pose::translationConstraint(NormalEquations<double>::zero()).share(0), 0.0)
+        << "no terms: nothing constrained";
 }
 
 // A fixed-point iteration that converges linearly, as reweighted Gauss-Newton does: each step covers
@@ -105,16 +111,21 @@ TEST(PoseUpdateTest, InverseVarianceWeightIsTheRatioOfTheResidualsRobustVariance
     const auto depth = system(2e-3, RobustKernel::Tukey, 1.0, 100), color = system(0.05, RobustKernel::Huber, 0.1, 300);
     const double floor_d = 1e-8, floor_i = 1e-5;
     EXPECT_NEAR(pose::robustVariance(color), 0.05 * 0.05, 1e-9);
-    EXPECT_NEAR(pose::robustVariance(depth), 4e-6 * (1 - 4e-6) * (1 - 4e-6), 1e-12) << "Tukey at a 1 m scale weighs 2 mm by (1 - 4e-6)^2";
+    EXPECT_NEAR(pose::robustVariance(depth), 4e-6 * (1 - 4e-6) * (1 - 4e-6), 1e-12)
+        << "Tukey at a 1 m scale weighs 2 mm by (1 - 4e-6)^2";
     EXPECT_NEAR(pose::inverseVarianceWeight(depth, floor_d, color, floor_i), 4e-6 / 2.5e-3, 1e-7);
     const auto dim = system(0.025, RobustKernel::Huber, 0.1, 300);
-    EXPECT_NEAR(pose::inverseVarianceWeight(depth, floor_d, dim, floor_i), 4 * pose::inverseVarianceWeight(depth, floor_d, color, floor_i), 1e-7);
+    EXPECT_NEAR(pose::inverseVarianceWeight(depth, floor_d, dim, floor_i),
+                4 * pose::inverseVarianceWeight(depth, floor_d, color, floor_i), 1e-7);
     const auto huge = system(1.0, RobustKernel::Huber, 0.1, 300);
-    EXPECT_NEAR(pose::robustVariance(huge), 0.1, 1e-7) << "an outlier counts by the kernel's weight (Huber: scale / |r|)";
-    EXPECT_NEAR(pose::inverseVarianceWeight(system(0.0, RobustKernel::Tukey, 1.0, 10), floor_d, system(0.0, RobustKernel::Huber, 0.1, 10), floor_i),
+    EXPECT_NEAR(pose::robustVariance(huge), 0.1, 1e-7)
+        << "an outlier counts by the kernel's weight (Huber: scale / |r|)";
+    EXPECT_NEAR(pose::inverseVarianceWeight(system(0.0, RobustKernel::Tukey, 1.0, 10), floor_d,
+                                            system(0.0, RobustKernel::Huber, 0.1, 10), floor_i),
                 floor_d / floor_i, 1e-12)
         << "residuals that vanish count as the floors";
-    EXPECT_EQ(pose::inverseVarianceWeight(depth, floor_d, NormalEquations<double>::zero(), floor_i), 0.0) << "no colour terms";
+    EXPECT_EQ(pose::inverseVarianceWeight(depth, floor_d, NormalEquations<double>::zero(), floor_i), 0.0)
+        << "no colour terms";
 }
 
 }  // namespace

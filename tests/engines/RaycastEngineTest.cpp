@@ -45,7 +45,8 @@ protected:
         VF_SKIP_IF_UNAVAILABLE(device());
         params_.voxel_size_m = 0.01f;
         params_.mu_m = 0.04f;
-        scene_ = std::make_unique<Scene<VoxelFRgb, PlainVoxelArray>>(params_, PlainVoxelArray({-40, -40, -40}, {80, 80, 80}), device());
+        scene_ = std::make_unique<Scene<VoxelFRgb, PlainVoxelArray>>(
+            params_, PlainVoxelArray({-40, -40, -40}, {80, 80, 80}), device());
         raycast_ = makeRaycastEngine<VoxelFRgb, PlainVoxelArray>(device());
     }
     Device device() const { return GetParam(); }
@@ -68,7 +69,8 @@ protected:
     void fuseViewsAround(const Eigen::Vector3f& eye) {
         const synth::SyntheticScene sphere = synth::SyntheticScene::singleSphere(Eigen::Vector3f::Zero(), kRadius);
         auto integration = makeIntegrationEngine<VoxelFRgb, PlainVoxelArray>(device());
-        const Eigen::Vector3f offsets[5] = {{0, 0, 0}, {0.15f, 0, 0}, {-0.15f, 0, 0}, {0, 0.15f, 0.1f}, {0, -0.15f, -0.1f}};
+        const Eigen::Vector3f offsets[5] = {
+            {0, 0, 0}, {0.15f, 0, 0}, {-0.15f, 0, 0}, {0, 0.15f, 0.1f}, {0, -0.15f, -0.1f}};
         for (const Eigen::Vector3f& o : offsets) {
             const Mat4f pose = test::lookAt(eye + o, Eigen::Vector3f::Zero());
             integration->integrate(*scene_, test::renderView(sphere, intr_, pose), pose);
@@ -210,7 +212,8 @@ protected:
         const synth::SyntheticScene world = synth::SyntheticScene::boxAndSphere();
         auto allocation = makeAllocationEngine<VoxelS, VoxelBlockHash>(device());
         auto integration = makeIntegrationEngine<VoxelS, VoxelBlockHash>(device());
-        for (const Eigen::Vector3f& eye : {Eigen::Vector3f(1.0f, -0.8f, 0.7f), Eigen::Vector3f(0.8f, -0.9f, 0.8f), Eigen::Vector3f(1.1f, -0.6f, 0.6f)}) {
+        for (const Eigen::Vector3f& eye : {Eigen::Vector3f(1.0f, -0.8f, 0.7f), Eigen::Vector3f(0.8f, -0.9f, 0.8f),
+                                           Eigen::Vector3f(1.1f, -0.6f, 0.6f)}) {
             pose_ = test::lookAt(eye, {0.3f, 0.f, 0.1f});
             last_ = test::renderView(world, intr_, pose_, false);
             allocation->allocate(*scene_, last_, pose_);

@@ -34,15 +34,19 @@ KinfuRun runKinfuSample(const MainEngineSettings& settings) {
         trajectory.push_back({frame.timestamp_s, r.T_world_camera});
     }
     run.error = evaluateTrajectory(trajectory, source->groundTruth());
-    std::printf("[ kinfu    ] gap tolerance %.2f: ATE RMSE %.2f mm (max %.2f, %d pairs), %d failed\n", settings.depth_gap_tolerance,
-                1000 * run.error.ate_rmse_m, 1000 * run.error.ate_max_m, run.error.pairs, run.failed);
+    std::printf("[ kinfu    ] gap tolerance %.2f: ATE RMSE %.2f mm (max %.2f, %d pairs), %d failed\n",
+                settings.depth_gap_tolerance, 1000 * run.error.ate_rmse_m, 1000 * run.error.ate_max_m, run.error.pairs,
+                run.failed);
     return run;
 }
 
-bool haveKinfuSample() { return std::filesystem::exists(std::string(VOXFUSE_SHARED_DATA_DIR) + "/kinfu_sample_50/intrinsics.K.txt"); }
+bool haveKinfuSample() {
+    return std::filesystem::exists(std::string(VOXFUSE_SHARED_DATA_DIR) + "/kinfu_sample_50/intrinsics.K.txt");
+}
 
 TEST(RealSensorTrackingTest, DepthWithHoleLinesIsTrackedOnEveryFrame) {
-    if (!haveKinfuSample()) GTEST_SKIP() << "../shared/data/kinfu_sample_50 not found under " << VOXFUSE_SHARED_DATA_DIR;
+    if (!haveKinfuSample())
+        GTEST_SKIP() << "../shared/data/kinfu_sample_50 not found under " << VOXFUSE_SHARED_DATA_DIR;
     const KinfuRun run = runKinfuSample(MainEngineSettings());
     EXPECT_EQ(run.failed, 0);
     EXPECT_EQ(run.error.pairs, 50);
@@ -52,7 +56,8 @@ TEST(RealSensorTrackingTest, DepthWithHoleLinesIsTrackedOnEveryFrame) {
 // Without bridging, the hole lines leave unobserved voxel lines in the map and the error rises
 // (3.01 mm); the bridged run must keep its lead.
 TEST(RealSensorTrackingTest, BridgingOnePixelDepthGapsLowersTheError) {
-    if (!haveKinfuSample()) GTEST_SKIP() << "../shared/data/kinfu_sample_50 not found under " << VOXFUSE_SHARED_DATA_DIR;
+    if (!haveKinfuSample())
+        GTEST_SKIP() << "../shared/data/kinfu_sample_50 not found under " << VOXFUSE_SHARED_DATA_DIR;
     MainEngineSettings kept;
     kept.depth_gap_tolerance = 0.f;
     const KinfuRun with_gaps = runKinfuSample(kept);

@@ -53,7 +53,8 @@ protected:
             have_origin_ = true;
         }
         truth_.push_back(T_origin_world_ * T_world_camera);
-        results_.push_back(engine_->processFrame(test::toRgbdFrame(test::renderView(room, kCamera, T_world_camera), int(results_.size())), nullptr));
+        results_.push_back(engine_->processFrame(
+            test::toRgbdFrame(test::renderView(room, kCamera, T_world_camera), int(results_.size())), nullptr));
         return results_.back();
     }
 
@@ -76,7 +77,8 @@ protected:
                 EXPECT_FALSE(r.fused) << "frame " << i;
                 continue;
             }
-            EXPECT_LT(test::translationErrorM(r.T_world_camera, truth_[i]), max_m) << "frame " << i << " (" << toString(r.status) << ")";
+            EXPECT_LT(test::translationErrorM(r.T_world_camera, truth_[i]), max_m)
+                << "frame " << i << " (" << toString(r.status) << ")";
             EXPECT_LT(test::rotationErrorDeg(r.T_world_camera, truth_[i]), max_deg) << "frame " << i;
         }
     }
@@ -117,12 +119,13 @@ TEST_P(RelocalisationTest, LostAtAPlaceNeverSeenAndFoundAgainAtASeenOne) {
     ASSERT_GE(found, 0) << "never relocalised";
     EXPECT_LE(found - int(back), 2) << "frames back at a seen place before the camera was found";
     const FrameResult& r = results_[std::size_t(found)];
-    std::printf("[ reloc    ] found %d frames after coming back: error %.2f mm %.3f deg, inliers %.3f\n", found - int(back),
-                1000 * test::translationErrorM(r.T_world_camera, truth_[std::size_t(found)]),
+    std::printf("[ reloc    ] found %d frames after coming back: error %.2f mm %.3f deg, inliers %.3f\n",
+                found - int(back), 1000 * test::translationErrorM(r.T_world_camera, truth_[std::size_t(found)]),
                 test::rotationErrorDeg(r.T_world_camera, truth_[std::size_t(found)]), r.tracking.inlier_ratio);
     EXPECT_TRUE(r.fused);
     for (std::size_t i = std::size_t(found) + 1; i < results_.size(); ++i)
-        EXPECT_EQ(results_[i].status, TrackingStatus::Tracking) << "frame " << i << ": tracking goes on from the found pose";
+        EXPECT_EQ(results_[i].status, TrackingStatus::Tracking)
+            << "frame " << i << ": tracking goes on from the found pose";
     expectNothingFusedWrongly(0.005f, 0.5f);
 }
 
@@ -155,17 +158,23 @@ synth::SyntheticScene halfTurnRoom() {
     using V = Eigen::Vector3f;
     const auto texture = synth::makeTexture;
     synth::SyntheticScene room;
-    room.addRectangle(V(0, 0, 0), V(0, 0, 1), 2.f, 1.5f, texture(synth::TextureKind::Noise, V(0.8f, 0.7f, 0.6f), V(0.3f, 0.25f, 0.2f), 0.15f, 1));
-    room.addRectangle(V(0, 0, 2.5f), V(0, 0, -1), 2.f, 1.5f, texture(synth::TextureKind::Noise, V(0.9f, 0.9f, 0.9f), V(0.6f, 0.6f, 0.6f), 0.3f, 2));
+    room.addRectangle(V(0, 0, 0), V(0, 0, 1), 2.f, 1.5f,
+                      texture(synth::TextureKind::Noise, V(0.8f, 0.7f, 0.6f), V(0.3f, 0.25f, 0.2f), 0.15f, 1));
+    room.addRectangle(V(0, 0, 2.5f), V(0, 0, -1), 2.f, 1.5f,
+                      texture(synth::TextureKind::Noise, V(0.9f, 0.9f, 0.9f), V(0.6f, 0.6f, 0.6f), 0.3f, 2));
     for (const float side : {1.f, -1.f}) {
         const std::uint32_t seed = side > 0 ? 10 : 20;
         const V tint = side > 0 ? V(0.9f, 0.4f, 0.3f) : V(0.3f, 0.5f, 0.9f);
-        room.addRectangle(V(2.f * side, 0, 1.25f), V(-side, 0, 0), 1.5f, 1.25f, texture(synth::TextureKind::Noise, tint, V(0.2f, 0.2f, 0.2f), 0.12f, seed));
-        room.addRectangle(V(0, 1.5f * side, 1.25f), V(0, -side, 0), 2.f, 1.25f,
-                          texture(synth::TextureKind::Stripes, tint, V(0.9f, 0.9f, 0.8f), 0.1f + 0.05f * side, seed + 1));
-        room.addBox(V(1.3f * side, 0.4f * side, 0.3f), Eigen::Quaternionf::Identity(), V(0.3f, 0.25f, 0.3f),
-                    texture(synth::TextureKind::Checker, tint, V(0.95f, 0.95f, 0.9f), side > 0 ? 0.08f : 0.13f, seed + 2));
-        room.addSphere(V(1.5f * side, -0.8f * side, 0.9f), 0.25f, texture(synth::TextureKind::Noise, V(0.2f, 0.8f, 0.3f), tint, 0.05f, seed + 3));
+        room.addRectangle(V(2.f * side, 0, 1.25f), V(-side, 0, 0), 1.5f, 1.25f,
+                          texture(synth::TextureKind::Noise, tint, V(0.2f, 0.2f, 0.2f), 0.12f, seed));
+        room.addRectangle(
+            V(0, 1.5f * side, 1.25f), V(0, -side, 0), 2.f, 1.25f,
+            texture(synth::TextureKind::Stripes, tint, V(0.9f, 0.9f, 0.8f), 0.1f + 0.05f * side, seed + 1));
+        room.addBox(
+            V(1.3f * side, 0.4f * side, 0.3f), Eigen::Quaternionf::Identity(), V(0.3f, 0.25f, 0.3f),
+            texture(synth::TextureKind::Checker, tint, V(0.95f, 0.95f, 0.9f), side > 0 ? 0.08f : 0.13f, seed + 2));
+        room.addSphere(V(1.5f * side, -0.8f * side, 0.9f), 0.25f,
+                       texture(synth::TextureKind::Noise, V(0.2f, 0.8f, 0.3f), tint, 0.05f, seed + 3));
     }
     room.setAmbient(1.f);
     return room;
@@ -199,13 +208,15 @@ protected:
             return r;
         };
         for (int i = 0; i < 8; ++i) {
-            const FrameResult r = process(test::moveInCamera(start, {0.f, 1.f, 0.f}, 0.5f * float(i), {0.01f * float(i), 0.f, 0.f}));
+            const FrameResult r =
+                process(test::moveInCamera(start, {0.f, 1.f, 0.f}, 0.5f * float(i), {0.01f * float(i), 0.f, 0.f}));
             EXPECT_EQ(r.status, TrackingStatus::Tracking) << "frame " << i;
         }
         for (int i = 0; i < 3; ++i) EXPECT_EQ(process(start, true).status, TrackingStatus::Lost) << "a covered lens";
         std::vector<TrackingStatus> statuses;
         for (int i = 0; i < 4; ++i) {
-            const Mat4f T_world_camera = halfTurn(test::moveInCamera(start, {0.f, 1.f, 0.f}, 0.5f * float(i), {0.01f * float(i), 0.f, 0.f}));
+            const Mat4f T_world_camera =
+                halfTurn(test::moveInCamera(start, {0.f, 1.f, 0.f}, 0.5f * float(i), {0.01f * float(i), 0.f, 0.f}));
             const FrameResult r = process(T_world_camera);
             statuses.push_back(r.status);
             if (r.status != TrackingStatus::Lost) {
@@ -213,7 +224,8 @@ protected:
             }
         }
         for (int i = 0; i < 4; ++i) {
-            const Mat4f T_world_camera = test::moveInCamera(start, {0.f, 1.f, 0.f}, 2.f + 0.5f * float(i), {0.04f + 0.01f * float(i), 0.f, 0.01f});
+            const Mat4f T_world_camera = test::moveInCamera(start, {0.f, 1.f, 0.f}, 2.f + 0.5f * float(i),
+                                                            {0.04f + 0.01f * float(i), 0.f, 0.01f});
             const FrameResult r = process(T_world_camera);
             statuses.push_back(r.status);
             if (r.status != TrackingStatus::Lost) {
@@ -237,7 +249,8 @@ TEST_P(ColourRelocalisationTest, APlaceShapedLikeASeenOneButColouredOtherwiseIsN
         << "the scene no longer fools depth alone: the test shows nothing";
 
     const std::vector<TrackingStatus> statuses = run(RelocalisationSettings());
-    for (int i = 0; i < 4; ++i) EXPECT_EQ(statuses[std::size_t(i)], TrackingStatus::Lost) << "frame " << i << " at the other end";
+    for (int i = 0; i < 4; ++i)
+        EXPECT_EQ(statuses[std::size_t(i)], TrackingStatus::Lost) << "frame " << i << " at the other end";
     EXPECT_EQ(statuses[4], TrackingStatus::Relocalised) << "back at the seen end";
     for (int i = 5; i < 8; ++i) EXPECT_EQ(statuses[std::size_t(i)], TrackingStatus::Tracking);
 }
@@ -251,7 +264,8 @@ TEST(RelocalisationSettingsTest, OffKeepsNoKeyframesAndNeverRelocalises) {
     const synth::SyntheticScene room = synth::SyntheticScene::defaultRoom();
     for (int f : {0, 3, 6, 480}) {
         const FrameResult r = engine->processFrame(
-            test::toRgbdFrame(test::renderView(room, kCamera, toMat4f(synth::CameraPath().pose(f).matrix())), f), nullptr);
+            test::toRgbdFrame(test::renderView(room, kCamera, toMat4f(synth::CameraPath().pose(f).matrix())), f),
+            nullptr);
         EXPECT_EQ(r.keyframes, 0);
         EXPECT_FALSE(r.relocalisation_tried);
         EXPECT_NE(r.status, TrackingStatus::Relocalised);

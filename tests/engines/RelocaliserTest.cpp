@@ -16,7 +16,7 @@ namespace {
 
 TEST(RelocaliserTest, DepthAgreementCountsOverlapAndPixelsWithinTheTolerance) {
     Image<float> frame(Vec2i{10, 1}), model(Vec2i{10, 1});
-    const float f[10] = {1.f, 1.f, 1.f, 1.f, 1.f, 1.f, 1.f, 1.f, 0.f, 0.f};  // 8 valid
+    const float f[10] = {1.f, 1.f, 1.f, 1.f, 1.f, 1.f, 1.f, 1.f, 0.f, 0.f};          // 8 valid
     const float m[10] = {1.f, 1.01f, 1.019f, 1.03f, 0.9f, 1.f, 0.f, 0.f, 1.f, 0.f};  // 6 of them overlap
     for (int i = 0; i < 10; ++i) {
         frame.host()[i] = f[i];
@@ -78,7 +78,8 @@ TEST(RelocaliserTest, ColourAgreementIsTheCorrelationOfIntensitiesWhereDepthsAgr
     const View view = colourView();
     Image<float> model_depth = constantDepth(1.005f);
     // Another exposure of the same surface: gain and offset do not count.
-    ColourAgreement a = compareColour(view, model_depth, intensities(modelColour(view, [](int g) { return g / 2 + 30; })), 0.02f, 0.f);
+    ColourAgreement a =
+        compareColour(view, model_depth, intensities(modelColour(view, [](int g) { return g / 2 + 30; })), 0.02f, 0.f);
     ASSERT_TRUE(a.compared);
     EXPECT_EQ(a.cells, 16 * 12);
     EXPECT_EQ(a.pixels, 160 * 120);
@@ -118,16 +119,20 @@ TEST(RelocaliserTest, ColourFinerThanTheMapIsAveragedOverTheMapsFootprint) {
                     // (dx, dy) and (3 - dx, 3 - dy) are a pair; the sign of each pair from a hash.
                     const bool first = dy < 2;
                     const int pair = first ? dx + 4 * dy : (3 - dx) + 4 * (3 - dy);
-                    const unsigned hash = (unsigned(x) * 73856093u) ^ (unsigned(y) * 19349663u) ^ (unsigned(pair) * 83492791u);
+                    const unsigned hash =
+                        (unsigned(x) * 73856093u) ^ (unsigned(y) * 19349663u) ^ (unsigned(pair) * 83492791u);
                     const int sign = (hash >> 4) & 1u ? 1 : -1;
                     const int fine = g + (first ? sign : -sign) * 60;
-                    view.rgb.at(4 * x + dx, 4 * y + dy) = Vec4u8{(unsigned char)fine, (unsigned char)fine, (unsigned char)fine, 255};
+                    view.rgb.at(4 * x + dx, 4 * y + dy) =
+                        Vec4u8{(unsigned char)fine, (unsigned char)fine, (unsigned char)fine, 255};
                 }
         }
     const ColourAgreement points = compareColour(view, constantDepth(1.f), intensities(map_colour), 0.02f, 0.f);
     ASSERT_TRUE(points.compared);
-    EXPECT_LT(points.correlation, 0.7f) << "a colour pixel on its own carries the finer texture: the test shows something";
-    const ColourAgreement footprint = compareColour(view, constantDepth(1.f), intensities(map_colour), 0.02f, 1.f / (1.5f * 160.f));
+    EXPECT_LT(points.correlation, 0.7f)
+        << "a colour pixel on its own carries the finer texture: the test shows something";
+    const ColourAgreement footprint =
+        compareColour(view, constantDepth(1.f), intensities(map_colour), 0.02f, 1.f / (1.5f * 160.f));
     ASSERT_TRUE(footprint.compared);
     EXPECT_GT(footprint.correlation, 0.99f);
     EXPECT_EQ(footprint.pixels, 160 * 120);
@@ -141,7 +146,8 @@ TEST(RelocaliserTest, ColourIsSampledThroughTheDepthToColourExtrinsics) {
     view.calib.T_depth_rgb = Mat4f::identity();
     view.calib.T_depth_rgb.m[3] = 0.025f;  // rgb -> depth: x + 2.5 cm
     for (int v = 0; v < 120; ++v)
-        for (int u = 0; u < 160; ++u) view.rgb.at(u, v) = u + 4 < 160 ? at_depth_pixels.at(u + 4, v) : Vec4u8{0, 0, 0, 255};
+        for (int u = 0; u < 160; ++u)
+            view.rgb.at(u, v) = u + 4 < 160 ? at_depth_pixels.at(u + 4, v) : Vec4u8{0, 0, 0, 255};
     ColourAgreement a = compareColour(view, constantDepth(1.f), intensities(at_depth_pixels), 0.02f, 0.f);
     ASSERT_TRUE(a.compared);
     EXPECT_GT(a.correlation, 0.99f);
@@ -187,10 +193,13 @@ TEST(RelocaliserTest, ColourGivesNoVerdictWithoutColourOrTexture) {
     const Image<float> model_depth = constantDepth(1.f);
     const Image<float> same = intensities(modelColour(view, [](int g) { return g; }));
     EXPECT_TRUE(compareColour(view, model_depth, same, 0.02f, 0.f).compared);
-    EXPECT_FALSE(compareColour(view, model_depth, same, 0.02f, 0.f, 16 * 12 + 1).compared) << "fewer cells than asked for";
+    EXPECT_FALSE(compareColour(view, model_depth, same, 0.02f, 0.f, 16 * 12 + 1).compared)
+        << "fewer cells than asked for";
     const Image<float> plain = intensities(modelColour(view, [](int) { return 128; }));
-    EXPECT_FALSE(compareColour(view, model_depth, plain, 0.02f, 0.f, 0).compared) << "no textured cell: no verdict, whatever the least asked for";
-    EXPECT_FALSE(compareColour(view, model_depth, intensities(modelColour(view, [](int) { return 128; })), 0.02f, 0.f).compared)
+    EXPECT_FALSE(compareColour(view, model_depth, plain, 0.02f, 0.f, 0).compared)
+        << "no textured cell: no verdict, whatever the least asked for";
+    EXPECT_FALSE(
+        compareColour(view, model_depth, intensities(modelColour(view, [](int) { return 128; })), 0.02f, 0.f).compared)
         << "a plain surface correlates with nothing";
     View grey = colourView();
     grey.rgb = Image<Vec4u8>();
@@ -222,9 +231,16 @@ TEST(RelocaliserTest, ACandidateIsTakenOnlyWhenEveryMeasurePasses) {
         {"disagreement", [](RelocalisationCheck& c) { c.depth.agreement = 0.64f; }},
         {"not converged", [](RelocalisationCheck& c) { c.step_m = 0.02f; }},
         {"still turning", [](RelocalisationCheck& c) { c.step_deg = 2.f; }},
-        {"NaN residual", [](RelocalisationCheck& c) { c.refined.residual_m = std::numeric_limits<float>::quiet_NaN(); }},
-        {"other colours", [](RelocalisationCheck& c) { c.colour = ColourAgreement{true, 0.3f, 40, 5000}; }},
-        {"NaN colour", [](RelocalisationCheck& c) { c.colour = ColourAgreement{true, std::numeric_limits<float>::quiet_NaN(), 40, 5000}; }},
+        {"NaN residual",
+         [](RelocalisationCheck& c) { c.refined.residual_m = std::numeric_limits<float>::quiet_NaN(); }},
+        {"other colours",
+         [](RelocalisationCheck& c) {
+             c.colour = ColourAgreement{true, 0.3f, 40, 5000};
+         }},
+        {"NaN colour",
+         [](RelocalisationCheck& c) {
+             c.colour = ColourAgreement{true, std::numeric_limits<float>::quiet_NaN(), 40, 5000};
+         }},
     };
     for (const auto& [what, spoil] : spoilers) {
         RelocalisationCheck c = passingCheck();
@@ -266,8 +282,8 @@ TEST(RelocaliserTest, TimeBetweenFramesComesFromTimestampsElseFromIndicesAt30Hz)
     EXPECT_DOUBLE_EQ(secondsBetween({100.0, 7}, {101.5, 8}), 1.5);  // a cut: the timestamps know, the indices do not
     EXPECT_DOUBLE_EQ(secondsBetween({0.0, 10}, {0.0, 40}), 1.0);
     EXPECT_DOUBLE_EQ(secondsBetween({100.0, 10}, {0.0, 40}), 1.0);  // only one timestamp: the indices
-    EXPECT_EQ(secondsBetween({}, {101.0, 3}), -1.0);                 // no earlier frame
-    EXPECT_EQ(secondsBetween({101.0, 5}, {100.0, 6}), -1.0);         // not later: unknown
+    EXPECT_EQ(secondsBetween({}, {101.0, 3}), -1.0);                // no earlier frame
+    EXPECT_EQ(secondsBetween({101.0, 5}, {100.0, 6}), -1.0);        // not later: unknown
     EXPECT_EQ(secondsBetween({0.0, 6}, {0.0, 6}), -1.0);
 }
 
@@ -276,7 +292,7 @@ TEST(RelocaliserTest, AKeyframeTheCameraCouldNotHaveReachedIsNoCandidate) {
     const Mat4f last = Mat4f::identity();
     Mat4f candidate = Mat4f::identity();
     candidate.m[3] = 3.f;
-    candidate.m[11] = 4.f;  // 5 m away
+    candidate.m[11] = 4.f;                               // 5 m away
     EXPECT_FALSE(withinReach(s, last, candidate, 0.5));  // 4.5 m in half a second
     EXPECT_TRUE(withinReach(s, last, candidate, 0.6));   // 5.4 m
     EXPECT_TRUE(withinReach(s, last, last, 0.0001));

@@ -75,7 +75,8 @@ bool sameBlock(const std::vector<VoxelSRgb>& a, const VoxelSRgb* b) {
 }
 
 TEST_P(SwappingEngineTest, BlocksSwappedOutAndBackInAreBitIdentical) {
-    Scene<VoxelSRgb, VoxelBlockHash> scene(test::centimetreSceneParams(), VoxelBlockHash(VoxelBlockHashSettings(), device()), device());
+    Scene<VoxelSRgb, VoxelBlockHash> scene(test::centimetreSceneParams(),
+                                           VoxelBlockHash(VoxelBlockHashSettings(), device()), device());
     auto allocation = makeAllocationEngine<VoxelSRgb, VoxelBlockHash>(device());
     auto integration = makeIntegrationEngine<VoxelSRgb, VoxelBlockHash>(device());
     auto swapping = makeSwappingEngine<VoxelSRgb>(device());
@@ -106,7 +107,8 @@ TEST_P(SwappingEngineTest, BlocksSwappedOutAndBackInAreBitIdentical) {
             const HashEntry& e = host.index().entry(i);
             if (e.ptr != kEntrySwappedOut) continue;
             cache.read(host.index().storedSlots()[i], stored.data());
-            ASSERT_TRUE(sameBlock(original.at({e.pos.x, e.pos.y, e.pos.z}), stored.data())) << "stored copy of entry " << i;
+            ASSERT_TRUE(sameBlock(original.at({e.pos.x, e.pos.y, e.pos.z}), stored.data()))
+                << "stored copy of entry " << i;
             ++checked;
         }
         EXPECT_EQ(checked, out);
@@ -123,7 +125,8 @@ TEST_P(SwappingEngineTest, BlocksSwappedOutAndBackInAreBitIdentical) {
         const HashEntry& e = back.index().entry(i);
         if (e.ptr < 0 || !original.count({e.pos.x, e.pos.y, e.pos.z})) continue;
         ASSERT_EQ(back.index().storedSlots()[i], kNoStoredCopy);
-        ASSERT_TRUE(sameBlock(original.at({e.pos.x, e.pos.y, e.pos.z}), back.voxels().host() + std::size_t(e.ptr) * kBlockVoxelCount));
+        ASSERT_TRUE(sameBlock(original.at({e.pos.x, e.pos.y, e.pos.z}),
+                              back.voxels().host() + std::size_t(e.ptr) * kBlockVoxelCount));
         ++compared;
     }
     EXPECT_GE(compared, in);
@@ -168,8 +171,8 @@ RunResult runOrbit(Device device, bool tracked, const SwapSettings& swap, int ac
     RunResult r;
     for (int k = 0; k < frames; ++k) {
         const Mat4f truth = rigidInverse(orbitPose(0, frames)) * orbitPose(k, frames);
-        const FrameResult f = engine->processFrame(test::toRgbdFrame(test::renderView(world(), kIntr, orbitPose(k, frames)), k),
-                                                   tracked ? nullptr : &truth);
+        const FrameResult f = engine->processFrame(
+            test::toRgbdFrame(test::renderView(world(), kIntr, orbitPose(k, frames)), k), tracked ? nullptr : &truth);
         r.poses.push_back(f.T_world_camera);
         r.stats.push_back(f.allocation);
     }
@@ -246,7 +249,8 @@ TEST_P(SwappingEngineTest, TrackedRunsFollowTheRunWithoutSwapping) {
         waited = waited || st.blocks_activated_this_frame > st.blocks_swapped_in_this_frame;
     }
     EXPECT_TRUE(waited) << "some stored copies waited for a later frame";
-    EXPECT_NEAR(ateRmse(tight.poses, frames), ateRmse(plain.poses, frames), 0.0005f) << "ATE within 0.5 mm of the run without swapping";
+    EXPECT_NEAR(ateRmse(tight.poses, frames), ateRmse(plain.poses, frames), 0.0005f)
+        << "ATE within 0.5 mm of the run without swapping";
 }
 
 TEST_P(SwappingEngineTest, AMapLargerThanTheActiveArrayLoadsAndMeshes) {

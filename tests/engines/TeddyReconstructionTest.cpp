@@ -15,7 +15,8 @@ namespace {
 
 TEST(TeddyReconstructionTest, RaycastAtFrame100MatchesMeasuredDepth) {
     const std::string dir = std::string(VOXFUSE_SHARED_DATA_DIR) + "/tum_fr3_teddy_200";
-    if (!std::filesystem::exists(dir + "/rgb.txt")) GTEST_SKIP() << "../shared/data not found at " << dir << ": skipping the teddy test";
+    if (!std::filesystem::exists(dir + "/rgb.txt"))
+        GTEST_SKIP() << "../shared/data not found at " << dir << ": skipping the teddy test";
 
     auto source = openImageSource(dir);
     MainEngineSettings s;  // 5 mm voxels, mu 2 cm, the voxel block hash: the defaults
@@ -45,15 +46,18 @@ TEST(TeddyReconstructionTest, RaycastAtFrame100MatchesMeasuredDepth) {
     ASSERT_EQ(engine->view().frame_index, 100);
     std::vector<float> errors;
     for (std::size_t i = 0; i < raycast.pixelCount(); ++i)
-        if (raycast.host()[i] > 0.f && measured.host()[i] > 0.f) errors.push_back(std::fabs(raycast.host()[i] - measured.host()[i]));
+        if (raycast.host()[i] > 0.f && measured.host()[i] > 0.f)
+            errors.push_back(std::fabs(raycast.host()[i] - measured.host()[i]));
     // Parts of the frame beyond the 3 m depth limit, or never seen before, are not in the model.
     std::size_t measured_valid = 0;
     for (std::size_t i = 0; i < measured.pixelCount(); ++i) measured_valid += measured.host()[i] > 0.f;
     ASSERT_GT(errors.size(), measured.pixelCount() / 4) << "the model should explain a good part of the frame";
     std::nth_element(errors.begin(), errors.begin() + errors.size() / 2, errors.end());
     const float median_m = errors[errors.size() / 2];
-    std::printf("[ teddy    ] frames fused %d, raycast-vs-measured median |error| at frame 100: %.2f mm over %zu pixels "
-                "(%zu measured)\n", fused, 1000.f * median_m, errors.size(), measured_valid);
+    std::printf(
+        "[ teddy    ] frames fused %d, raycast-vs-measured median |error| at frame 100: %.2f mm over %zu pixels "
+        "(%zu measured)\n",
+        fused, 1000.f * median_m, errors.size(), measured_valid);
     EXPECT_LT(median_m, 0.01f);
 }
 

@@ -37,13 +37,14 @@ const Teddy& teddy() {
     return t;
 }
 
-#define SKIP_WITHOUT_TEDDY() \
-    if (!std::filesystem::exists(teddyDir() + "/rgb.txt")) GTEST_SKIP() << "../shared/data not found at " << teddyDir() << ": skipping"
+#define SKIP_WITHOUT_TEDDY()                               \
+    if (!std::filesystem::exists(teddyDir() + "/rgb.txt")) \
+    GTEST_SKIP() << "../shared/data not found at " << teddyDir() << ": skipping"
 
 struct TeddyRun {
     std::vector<test::PlayedResult> frames;
-    TrajectoryError error;         // over the frames with a pose
-    std::vector<float> errors_m;   // per frame, after the ATE alignment; -1 without pose or ground truth
+    TrajectoryError error;        // over the frames with a pose
+    std::vector<float> errors_m;  // per frame, after the ATE alignment; -1 without pose or ground truth
     int lost = 0, attempts = 0, relocalised = 0;
 };
 
@@ -65,9 +66,11 @@ TeddyRun play(const std::vector<test::PlayedFrame>& script, const char* name) {
         run.attempts += f.result.relocalisation_tried;
         run.relocalised += f.result.status == TrackingStatus::Relocalised;
     }
-    std::printf("[ teddy    ] %s: %zu frames, %d lost, %d relocalisation attempts, %d relocalised; ATE RMSE %.2f mm (max %.2f, %d poses)\n",
-                name, run.frames.size(), run.lost, run.attempts, run.relocalised, 1000 * run.error.ate_rmse_m, 1000 * run.error.ate_max_m,
-                run.error.pairs);
+    std::printf(
+        "[ teddy    ] %s: %zu frames, %d lost, %d relocalisation attempts, %d relocalised; ATE RMSE %.2f mm (max %.2f, "
+        "%d poses)\n",
+        name, run.frames.size(), run.lost, run.attempts, run.relocalised, 1000 * run.error.ate_rmse_m,
+        1000 * run.error.ate_max_m, run.error.pairs);
     return run;
 }
 
@@ -79,9 +82,12 @@ int expectRecovered(const TeddyRun& run, std::size_t from, int within) {
         if (run.frames[i].result.status != TrackingStatus::Lost) found_after = int(i - from);
     const test::PlayedResult* found = found_after >= 0 ? &run.frames[from + std::size_t(found_after)] : nullptr;
     if (found)
-        std::printf("[ teddy    ]   found %d frames after the camera came back (recorded frame %d, %s): inliers %.3f, residual %.2f mm, "
-                    "error %.1f mm\n", found_after, found->played.frame, toString(found->result.status), found->result.tracking.inlier_ratio,
-                    1000 * found->result.tracking.residual_m, 1000 * run.errors_m[from + std::size_t(found_after)]);
+        std::printf(
+            "[ teddy    ]   found %d frames after the camera came back (recorded frame %d, %s): inliers %.3f, residual "
+            "%.2f mm, "
+            "error %.1f mm\n",
+            found_after, found->played.frame, toString(found->result.status), found->result.tracking.inlier_ratio,
+            1000 * found->result.tracking.residual_m, 1000 * run.errors_m[from + std::size_t(found_after)]);
     EXPECT_GE(found_after, 0) << "never found again";
     EXPECT_LE(found_after, within);
     return found_after;
@@ -103,14 +109,16 @@ TEST(TeddyRelocalisationTest, FortyFramesCutOnTheWayBackAreFoundAgain) {
     std::vector<test::PlayedFrame> script;
     for (int f = 0; f <= 120; f += 2) script.push_back({f, false});
     for (int f = 119; f >= 1; f -= 2) script.push_back({f, false});
-    // 40 frames cut from the way back: after recorded frame 101 comes 19, 1 m and 60 degrees back, near the way out's 18 and 20.
+    // 40 frames cut from the way back: after recorded frame 101 comes 19, 1 m and 60 degrees back, near the way out's
+    // 18 and 20.
     const std::size_t cut = 61 + 10;
     script.erase(script.begin() + std::ptrdiff_t(cut), script.begin() + std::ptrdiff_t(cut + 40));
     const TeddyRun run = play(script, "40 frames cut on the way back");
     expectRecovered(run, cut, 10);
     expectNothingFusedWrongly(run);
     EXPECT_LT(run.error.ate_rmse_m, 0.010);
-    EXPECT_GE(run.error.pairs, int(script.size()) - 10 - 4) << "frames without a pose: at most the 10 allowed (and 4 without ground truth)";
+    EXPECT_GE(run.error.pairs, int(script.size()) - 10 - 4)
+        << "frames without a pose: at most the 10 allowed (and 4 without ground truth)";
 }
 
 TEST(TeddyRelocalisationTest, TwentyFramesOfACoveredLensAreBridged) {
@@ -118,7 +126,8 @@ TEST(TeddyRelocalisationTest, TwentyFramesOfACoveredLensAreBridged) {
     std::vector<test::PlayedFrame> script;
     for (int f = 40; f < 120; ++f) script.push_back({f, f >= 80 && f < 100});
     const TeddyRun run = play(script, "20 frames of a covered lens");
-    for (std::size_t i = 40; i < 60; ++i) EXPECT_EQ(run.frames[i].result.status, TrackingStatus::Lost) << "covered frame " << i;
+    for (std::size_t i = 40; i < 60; ++i)
+        EXPECT_EQ(run.frames[i].result.status, TrackingStatus::Lost) << "covered frame " << i;
     expectRecovered(run, 60, 10);
     expectNothingFusedWrongly(run);
     EXPECT_LT(run.error.ate_rmse_m, 0.010);

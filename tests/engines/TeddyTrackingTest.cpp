@@ -56,7 +56,8 @@ TeddyRun trackTeddy(const TrackerSettings& settings, int max_frames = 0) {
     RGBDFrame frame;
     while ((max_frames == 0 || int(run.trajectory.size()) < max_frames) && source->next(frame)) {
         low_level->convertDepthToMetres(frame.depth_raw, calib.disparity, calib.depth.fx, params.view_frustum_min_m,
-                                        params.view_frustum_max_m, MainEngineSettings{}.depth_gap_tolerance, view.depth);
+                                        params.view_frustum_max_m, MainEngineSettings{}.depth_gap_tolerance,
+                                        view.depth);
         view.rgb.resize(frame.rgb.size());
         std::memcpy(static_cast<void*>(view.rgb.host()), frame.rgb.host(), frame.rgb.pixelCount() * sizeof(Vec4u8));
         const Timer t;
@@ -74,14 +75,18 @@ TeddyRun trackTeddy(const TrackerSettings& settings, int max_frames = 0) {
 }
 
 TEST(TeddyTrackingTest, DefaultTrackerStaysWithinTenMillimetresAte) {
-    if (!std::filesystem::exists(teddyDir() + "/rgb.txt")) GTEST_SKIP() << "../shared/data not found at " << teddyDir() << ": skipping the teddy test";
+    if (!std::filesystem::exists(teddyDir() + "/rgb.txt"))
+        GTEST_SKIP() << "../shared/data not found at " << teddyDir() << ": skipping the teddy test";
     const TeddyRun run = trackTeddy(TrackerSettings());
     ASSERT_EQ(run.trajectory.size(), 193u);
     const TrajectoryError& e = run.error;
-    std::printf("[ teddy    ] %s tracker: ATE RMSE %.2f mm (mean %.2f, median %.2f, max %.2f, %d pairs), RPE %.2f mm/s %.3f deg/s, "
-                "track %.1f ms/frame, %d poor, %d failed\n",
-                toString(TrackerSettings().kind), 1000 * e.ate_rmse_m, 1000 * e.ate_mean_m, 1000 * e.ate_median_m, 1000 * e.ate_max_m,
-                e.pairs, 1000 * e.rpe_trans_m_per_s, e.rpe_rot_deg_per_s, run.track_ms / double(run.trajectory.size()), run.poor, run.failed);
+    std::printf(
+        "[ teddy    ] %s tracker: ATE RMSE %.2f mm (mean %.2f, median %.2f, max %.2f, %d pairs), RPE %.2f mm/s %.3f "
+        "deg/s, "
+        "track %.1f ms/frame, %d poor, %d failed\n",
+        toString(TrackerSettings().kind), 1000 * e.ate_rmse_m, 1000 * e.ate_mean_m, 1000 * e.ate_median_m,
+        1000 * e.ate_max_m, e.pairs, 1000 * e.rpe_trans_m_per_s, e.rpe_rot_deg_per_s,
+        run.track_ms / double(run.trajectory.size()), run.poor, run.failed);
     EXPECT_EQ(run.failed, 0);
     EXPECT_GE(e.pairs, 185) << "ground truth starts at the 5th frame";
     EXPECT_LT(e.ate_rmse_m, 0.010);
@@ -96,7 +101,8 @@ TEST(TeddyTrackingTest, DefaultTrackerStaysWithinTenMillimetresAte) {
 // (ren, 1 cm voxels): 520 iterations against 604 (the coarsest level gains least), the trajectories
 // 0.23 mm apart at most.
 TEST(TeddyTrackingTest, StretchedStepsReachTheSamePosesInFewerIterations) {
-    if (!std::filesystem::exists(teddyDir() + "/rgb.txt")) GTEST_SKIP() << "../shared/data not found at " << teddyDir() << ": skipping the teddy test";
+    if (!std::filesystem::exists(teddyDir() + "/rgb.txt"))
+        GTEST_SKIP() << "../shared/data not found at " << teddyDir() << ": skipping the teddy test";
     TrackerSettings plain;
     plain.kind = TrackerKind::Ren;
     plain.extrapolate_steps = false;
@@ -107,9 +113,10 @@ TEST(TeddyTrackingTest, StretchedStepsReachTheSamePosesInFewerIterations) {
     ASSERT_EQ(b.trajectory.size(), 60u);
     float apart_m = 0.f;
     for (std::size_t i = 0; i < a.trajectory.size(); ++i)
-        apart_m = std::max(apart_m, test::translationErrorM(a.trajectory[i].T_world_camera, b.trajectory[i].T_world_camera));
-    std::printf("[ teddy    ] 60 frames, ren: %d iterations stretched against %d; trajectories %.3f mm apart at most\n", b.iterations,
-                a.iterations, 1000.f * apart_m);
+        apart_m =
+            std::max(apart_m, test::translationErrorM(a.trajectory[i].T_world_camera, b.trajectory[i].T_world_camera));
+    std::printf("[ teddy    ] 60 frames, ren: %d iterations stretched against %d; trajectories %.3f mm apart at most\n",
+                b.iterations, a.iterations, 1000.f * apart_m);
     EXPECT_EQ(a.failed + b.failed, 0);
     EXPECT_LT(double(b.iterations), 0.92 * a.iterations);
     EXPECT_LT(apart_m, 0.0005f);
@@ -123,7 +130,8 @@ TEST(TeddyTrackingTest, StretchedStepsReachTheSamePosesInFewerIterations) {
 // `color_from_map = false`) and 7.17 mm for ren (depth alone); InfiniTAM v3's CPU build 6.61 mm on the
 // same frames (DESIGN_NOTES).
 TEST(TeddyTrackingTest, DefaultPipelineAlignedToTheMapsColoursBeatsDepthAlone) {
-    if (!std::filesystem::exists(teddyDir() + "/rgb.txt")) GTEST_SKIP() << "../shared/data not found at " << teddyDir() << ": skipping the teddy test";
+    if (!std::filesystem::exists(teddyDir() + "/rgb.txt"))
+        GTEST_SKIP() << "../shared/data not found at " << teddyDir() << ": skipping the teddy test";
     auto source = openImageSource(teddyDir());
     MainEngineSettings s;
     ASSERT_EQ(s.voxel_type, VoxelType::SRgb) << "the default map has colours";
@@ -137,8 +145,10 @@ TEST(TeddyTrackingTest, DefaultPipelineAlignedToTheMapsColoursBeatsDepthAlone) {
         trajectory.push_back({frame.timestamp_s, r.T_world_camera});
     }
     const TrajectoryError e = evaluateTrajectory(trajectory, source->groundTruth());
-    std::printf("[ teddy    ] rgbd, map colours and far field, 5 mm: ATE RMSE %.2f mm (max %.2f), RPE %.2f mm/s; %.2f mm at the best clock offset\n",
-                1000 * e.ate_rmse_m, 1000 * e.ate_max_m, 1000 * e.rpe_trans_m_per_s, 1000 * e.ate_rmse_at_best_offset_m);
+    std::printf(
+        "[ teddy    ] rgbd, map colours and far field, 5 mm: ATE RMSE %.2f mm (max %.2f), RPE %.2f mm/s; %.2f mm at "
+        "the best clock offset\n",
+        1000 * e.ate_rmse_m, 1000 * e.ate_max_m, 1000 * e.rpe_trans_m_per_s, 1000 * e.ate_rmse_at_best_offset_m);
     EXPECT_EQ(trajectory.size(), 193u);
     EXPECT_LT(e.ate_rmse_m, 0.0058);
     EXPECT_LT(e.rpe_trans_m_per_s, 0.0075);

@@ -138,7 +138,9 @@ TEST(TrackerSettingsTest, SingleValuesOverrideTheFileAndConflictsSayWithWhat) {
         trackerSettingsWith(o);
         FAIL() << "three iteration counts for two levels were accepted";
     } catch (const ParseError& e) {
-        EXPECT_NE(std::string(e.what()).find("iterations: expected 1 or 2 values (one per level of levels = bb), got 3"), std::string::npos)
+        EXPECT_NE(
+            std::string(e.what()).find("iterations: expected 1 or 2 values (one per level of levels = bb), got 3"),
+            std::string::npos)
             << e.what();
     }
     std::remove(path.c_str());
@@ -168,7 +170,9 @@ TEST(TrackerSettingsTest, SingleValuesAreNamedByTheirOriginAndAFolderIsNoFile) {
     } catch (const ParseError& e) {
         FAIL() << "a line number for values that came from no file: " << e.what();
     } catch (const ConfigError& e) {
-        EXPECT_NE(std::string(e.what()).find("the --tracker options: iterations: expected 1 or 3 values"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("the --tracker options: iterations: expected 1 or 3 values"),
+                  std::string::npos)
+            << e.what();
     }
     const std::string folder = std::filesystem::temp_directory_path().string();
     try {

@@ -15,7 +15,8 @@ namespace {
 
 Mat4f pose(const Eigen::Vector3f& t, float yaw_deg = 0.f, const Eigen::Vector3f& axis = Eigen::Vector3f::UnitZ()) {
     Eigen::Matrix4f T = Eigen::Matrix4f::Identity();
-    T.topLeftCorner<3, 3>() = Eigen::AngleAxisf(yaw_deg * float(EIGEN_PI) / 180.f, axis.normalized()).toRotationMatrix();
+    T.topLeftCorner<3, 3>() =
+        Eigen::AngleAxisf(yaw_deg * float(EIGEN_PI) / 180.f, axis.normalized()).toRotationMatrix();
     T.topRightCorner<3, 1>() = t;
     return toMat4f(T);
 }
@@ -46,7 +47,8 @@ TEST(TrajectoryErrorTest, RigidOffsetPlusKnownErrorsGivesTheExpectedAte) {
     EXPECT_NEAR(e.ate_mean_m, (d1 + d2) / 2.0, 1e-5);
     EXPECT_NEAR(e.ate_median_m, (d1 + d2) / 2.0, 1e-5);
     EXPECT_NEAR(e.ate_max_m, d2, 1e-5);
-    for (int k = 0; k < 16; ++k) EXPECT_NEAR(e.T_truth_estimate.m[k], kWorldOffset.m[k], 1e-4) << "alignment entry " << k;
+    for (int k = 0; k < 16; ++k)
+        EXPECT_NEAR(e.T_truth_estimate.m[k], kWorldOffset.m[k], 1e-4) << "alignment entry " << k;
 }
 
 TEST(TrajectoryErrorTest, PosesFartherThanTwentyMillisecondsAreNotPaired) {

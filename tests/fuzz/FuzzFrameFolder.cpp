@@ -22,7 +22,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     const bool pose = data[0] & 1;
     static const std::uint8_t good_k[] = "4 0 3.5\n0 4 2.5\n0 0 1\n";
     static const std::uint8_t identity[] = "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n";
-    const std::string k_file = fuzz::writeInput(pose ? good_k : data + 1, pose ? sizeof good_k - 1 : size - 1, "frames/intrinsics.K.txt");
+    const std::string k_file =
+        fuzz::writeInput(pose ? good_k : data + 1, pose ? sizeof good_k - 1 : size - 1, "frames/intrinsics.K.txt");
     fuzz::writeInput(pose ? data + 1 : identity, pose ? size - 1 : sizeof identity - 1, "frames/frame-000000.pose.txt");
     try {
         FrameFolderSource source(folder);

@@ -26,7 +26,8 @@ void putCrc(std::vector<std::uint8_t>& bytes, std::size_t begin, std::size_t end
 bool smallEnough(const voxfuse::MapFileInfo& info) {
     if (!info.hash) return std::uint64_t(info.dense_size.x) * info.dense_size.y * info.dense_size.z <= (1u << 18);
     const auto& h = info.hash_settings;
-    return (long long)h.bucket_count * h.entries_per_bucket + h.excess_entry_count <= (1 << 16) && h.max_block_count <= (1 << 12);
+    return (long long)h.bucket_count * h.entries_per_bucket + h.excess_entry_count <= (1 << 16) &&
+           h.max_block_count <= (1 << 12);
 }
 
 }  // namespace

@@ -7,7 +7,8 @@
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
     using namespace voxfuse;
     try {
-        const TrackerSettings s = parseTrackerSettings(std::string(reinterpret_cast<const char*>(data), size), "fuzz.txt");
+        const TrackerSettings s =
+            parseTrackerSettings(std::string(reinterpret_cast<const char*>(data), size), "fuzz.txt");
         validateTrackerSettings(s);  // what the parser returns must be valid (this throws only on a parser bug)
     } catch (const ParseError&) {
     }

@@ -42,7 +42,8 @@ TEST(ArkitPose, QuaternionsAreNormalisedAndTheResultIsARotation) {
             for (int k = 0; k < 3; ++k) dot += R(i, k) * R(j, k);
             EXPECT_NEAR(dot, i == j ? 1.f : 0.f, 1e-5f);
         }
-    const float det = R(0, 0) * (R(1, 1) * R(2, 2) - R(1, 2) * R(2, 1)) - R(0, 1) * (R(1, 0) * R(2, 2) - R(1, 2) * R(2, 0)) +
+    const float det = R(0, 0) * (R(1, 1) * R(2, 2) - R(1, 2) * R(2, 1)) -
+                      R(0, 1) * (R(1, 0) * R(2, 2) - R(1, 2) * R(2, 0)) +
                       R(0, 2) * (R(1, 0) * R(2, 1) - R(1, 1) * R(2, 0));
     EXPECT_NEAR(det, 1.f, 1e-5f);  // flipping two axes keeps it a proper rotation
 }

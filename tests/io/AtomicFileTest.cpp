@@ -66,10 +66,11 @@ TEST(AtomicFile, AnAbandonedWriteLeavesTheTargetAndNoTemporaryFile) {
     EXPECT_EQ(readBytes(path), "{}\n");
     EXPECT_EQ(namesIn(dir.path()), std::vector<std::string>{"summary.json"});
 
-    EXPECT_THROW(writeFileAtomically(path, [](const std::string& temporary) {
-                     writeBytes(temporary, "partial");
-                     throw IoError(temporary, "the encoder failed");
-                 }),
+    EXPECT_THROW(writeFileAtomically(path,
+                                     [](const std::string& temporary) {
+                                         writeBytes(temporary, "partial");
+                                         throw IoError(temporary, "the encoder failed");
+                                     }),
                  IoError);
     EXPECT_EQ(readBytes(path), "{}\n");
     EXPECT_EQ(namesIn(dir.path()), std::vector<std::string>{"summary.json"});
@@ -87,7 +88,8 @@ TEST(AtomicFile, FileNameWritersGetATemporaryNameWithTheSameExtension) {
     EXPECT_EQ(fs::path(seen).parent_path(), fs::path(path).parent_path());
     EXPECT_EQ(readBytes(path), "png");
     // A writer that leaves no file is an error naming the target, not a silent success.
-    const std::string reason = errorOf([&] { writeFileAtomically(dir.file("nothing.png"), [](const std::string&) {}); });
+    const std::string reason =
+        errorOf([&] { writeFileAtomically(dir.file("nothing.png"), [](const std::string&) {}); });
     EXPECT_NE(reason.find("nothing.png"), std::string::npos) << reason;
     EXPECT_FALSE(fs::exists(dir.file("nothing.png")));
 }

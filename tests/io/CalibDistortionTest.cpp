@@ -49,9 +49,10 @@ TEST(CalibDistortion, FilesWithoutDistortionLinesStillReadAsPinholeCameras) {
 
 TEST(CalibDistortion, ReadsBothLinesInEitherOrder) {
     ScratchDir dir;
-    const RGBDCalib c = readText(dir, kBase + "distortion_depth -0.1 0.02 0 0 0\n"
-                                               "# the colour lens\n"
-                                               "distortion_rgb 0.2624 -0.9531 -0.0054 0.0026 1.1633\n");
+    const RGBDCalib c = readText(dir, kBase +
+                                          "distortion_depth -0.1 0.02 0 0 0\n"
+                                          "# the colour lens\n"
+                                          "distortion_rgb 0.2624 -0.9531 -0.0054 0.0026 1.1633\n");
     expectDistortionEq(c.rgb_distortion, LensDistortion{0.2624f, -0.9531f, -0.0054f, 0.0026f, 1.1633f});
     expectDistortionEq(c.depth_distortion, LensDistortion{-0.1f, 0.02f, 0.f, 0.f, 0.f});
 }

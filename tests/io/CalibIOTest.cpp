@@ -85,10 +85,11 @@ TEST(CalibIO, ReadsAffineKeywordDisparity) {
 
 TEST(CalibIO, AcceptsCommentsAndMissingBlankLines) {
     ScratchDir dir;
-    const std::string with_comments = "# my camera\n\n" + kRgbBlock + "  # depth next\n" + kDepthBlock + "\n\n# extrinsics\n" +
-                                      kExtrinsics + "affine 0.001 0\n\n# end\n";
+    const std::string with_comments = "# my camera\n\n" + kRgbBlock + "  # depth next\n" + kDepthBlock +
+                                      "\n\n# extrinsics\n" + kExtrinsics + "affine 0.001 0\n\n# end\n";
     const RGBDCalib a = readCalibText(dir, with_comments);
-    const RGBDCalib b = readCalibText(dir, kRgbBlock + kDepthBlock + kExtrinsics + "affine 0.001 0");  // no final newline
+    const RGBDCalib b =
+        readCalibText(dir, kRgbBlock + kDepthBlock + kExtrinsics + "affine 0.001 0");  // no final newline
     expectCalibEq(a, b);
     EXPECT_FLOAT_EQ(a.depth.fx, 573.71f);
 }
@@ -170,22 +171,27 @@ TEST(CalibIO, MalformedFilesNameFileLineAndReason) {
         {"zero height", replaceLine(good, 1, "640 0"), 1, "must be positive"},
         {"negative focal length", replaceLine(good, 2, "-504.261 503.905"), 2, "focal lengths must be positive"},
         {"zero focal length", replaceLine(good, 6, "573.71 0"), 6, "focal lengths must be positive"},
-        {"focal length of no real camera", replaceLine(good, 2, "1e-20 503.905"), 2, "give no field of view between 1 and 170 degrees"},
-        {"focal length in metres", replaceLine(good, 6, "0.0035 0.0035"), 6, "give no field of view between 1 and 170 degrees"},
+        {"focal length of no real camera", replaceLine(good, 2, "1e-20 503.905"), 2,
+         "give no field of view between 1 and 170 degrees"},
+        {"focal length in metres", replaceLine(good, 6, "0.0035 0.0035"), 6,
+         "give no field of view between 1 and 170 degrees"},
         {"non-number focal length", replaceLine(good, 6, "573.71 x"), 6, "not a number: 'x'"},
         {"number with garbage suffix", replaceLine(good, 3, "352.457 272.202abc"), 3, "not a number: '272.202abc'"},
         {"trailing garbage", replaceLine(good, 7, "346.471 249.031 junk"), 7, "expected 2 numbers"},
         {"nan focal length", replaceLine(good, 2, "nan 503.905"), 2, "non-finite"},
         {"short extrinsics row", replaceLine(good, 10, "-0.0051649 0.999986 -0.0011465"), 10, "expected 4 numbers"},
         {"extrinsics not a rotation", replaceLine(good, 9, "2 0.00518867 0.0217975 0.0243073"), 9, "not a rotation"},
-        {"unknown disparity keyword", replaceLine(good, 13, "disparity 1135.09 0.08"), 13, "unknown disparity calibration type 'disparity'"},
-        {"affine with three numbers", replaceLine(good, 13, "affine 0.001 0 5"), 13, "expected 2 numbers after the disparity type 'affine'"},
+        {"unknown disparity keyword", replaceLine(good, 13, "disparity 1135.09 0.08"), 13,
+         "unknown disparity calibration type 'disparity'"},
+        {"affine with three numbers", replaceLine(good, 13, "affine 0.001 0 5"), 13,
+         "expected 2 numbers after the disparity type 'affine'"},
         {"bare disparity with one number", replaceLine(good, 13, "1135.09"), 13, "expected 2 numbers"},
         {"affine zero scale", replaceLine(good, 13, "affine 0 0"), 13, "affine depth scale must be positive"},
         {"kinect non-positive k2", replaceLine(good, 13, "kinect 1135.09 0"), 13, "k2 must be positive"},
         {"content after the disparity line", good + "\n7 7\n", 15, "unexpected content after the disparity"},
         {"missing disparity line", kRgbBlock + "\n" + kDepthBlock + "\n" + kExtrinsics, 11, "unexpected end of file"},
-        {"missing extrinsics row", kRgbBlock + "\n" + kDepthBlock + "\n" + "1 0 0 0\n0 1 0 0\n\n", 11, "unexpected end of file: expected row 3"},
+        {"missing extrinsics row", kRgbBlock + "\n" + kDepthBlock + "\n" + "1 0 0 0\n0 1 0 0\n\n", 11,
+         "unexpected end of file: expected row 3"},
         {"only the rgb block", kRgbBlock, 3, "unexpected end of file: expected depth camera image size"},
         {"empty file", "", 1, "unexpected end of file"},
         {"comment lines count", "# header\n# more\n" + replaceLine(good, 1, "640"), 3, "expected 2 integers"},
@@ -197,18 +203,27 @@ TEST(CalibIO, MalformedFilesNameFileLineAndReason) {
 TEST(CalibIO, ValuesAreCheckedInTheTypeTheyAreUsedIn) {
     const std::string good = calibText("affine 0.001 0");
     const std::vector<MalformedCase> cases = {
-        {"focal length finite as a double, infinite as a float", replaceLine(good, 2, "1e39 503.905"), 2, "non-finite value '1e39'"},
-        {"focal length that rounds to zero as a float", replaceLine(good, 6, "1e-50 574.394"), 6, "focal lengths must be positive"},
-        {"principal point outside the image", replaceLine(good, 3, "900 272.202"), 3, "principal point (900, 272.202) lies outside"},
+        {"focal length finite as a double, infinite as a float", replaceLine(good, 2, "1e39 503.905"), 2,
+         "non-finite value '1e39'"},
+        {"focal length that rounds to zero as a float", replaceLine(good, 6, "1e-50 574.394"), 6,
+         "focal lengths must be positive"},
+        {"principal point outside the image", replaceLine(good, 3, "900 272.202"), 3,
+         "principal point (900, 272.202) lies outside"},
         {"negative principal point", replaceLine(good, 7, "346.471 -20"), 7, "lies outside its 640x480 image"},
         {"principal point 1e39", replaceLine(good, 7, "1e39 249.031"), 7, "non-finite value"},
         {"absurd image size", replaceLine(good, 5, "1000000 480"), 5, "larger than 16384 pixels"},
-        {"translation infinite as a float", replaceLine(good, 9, "0.999749 0.00518867 0.0217975 4e38"), 9, "non-finite value '4e38'"},
-        {"a reflection is no rotation", replaceLine(good, 11, "0.0218031 -0.00103363 -0.999762 0.0151706"), 9, "reflection"},
-        {"affine scale that rounds to zero", replaceLine(good, 13, "affine 1e-50 0"), 13, "affine depth scale must be positive"},
-        {"affine offset infinite as a float", replaceLine(good, 13, "affine 0.001 1e39"), 13, "non-finite value in the disparity"},
-        {"distortion infinite as a float", good + "distortion_rgb 0.1 1e39 0 0 0\n", 14, "non-finite value in distortion_rgb"},
-        {"a line longer than any calibration's", replaceLine(good, 2, std::string(70000, '5')), 2, "line longer than 65536 bytes"},
+        {"translation infinite as a float", replaceLine(good, 9, "0.999749 0.00518867 0.0217975 4e38"), 9,
+         "non-finite value '4e38'"},
+        {"a reflection is no rotation", replaceLine(good, 11, "0.0218031 -0.00103363 -0.999762 0.0151706"), 9,
+         "reflection"},
+        {"affine scale that rounds to zero", replaceLine(good, 13, "affine 1e-50 0"), 13,
+         "affine depth scale must be positive"},
+        {"affine offset infinite as a float", replaceLine(good, 13, "affine 0.001 1e39"), 13,
+         "non-finite value in the disparity"},
+        {"distortion infinite as a float", good + "distortion_rgb 0.1 1e39 0 0 0\n", 14,
+         "non-finite value in distortion_rgb"},
+        {"a line longer than any calibration's", replaceLine(good, 2, std::string(70000, '5')), 2,
+         "line longer than 65536 bytes"},
         {"control bytes are shown escaped", replaceLine(good, 13, "\x1b[2Jaffine 0.001 0"), 13, "'\\x1b[2Jaffine'"},
     };
     expectParseErrors(cases);

@@ -112,7 +112,8 @@ TEST(FrameUndistorter, AStraightLineIsStraightAgain) {
     // The lens bends the line: the raw spots leave the chord through the raw end points.
     const Vec2f raw_a = distortPixel(kCamera, kLens, a), raw_b = distortPixel(kCamera, kLens, b);
     double worst_raw = 0.0;
-    for (Vec2f p : ideal) worst_raw = std::max(worst_raw, distanceToLine(distortPixel(kCamera, kLens, p), raw_a, raw_b));
+    for (Vec2f p : ideal)
+        worst_raw = std::max(worst_raw, distanceToLine(distortPixel(kCamera, kLens, p), raw_a, raw_b));
     EXPECT_GT(worst_raw, 2.0);
 
     FrameUndistorter(calibWithLens()).apply(frame);
@@ -162,7 +163,8 @@ TEST(FrameUndistorter, UndistortingThroughAScratchAllocatesNoImagesAfterTheFirst
         std::copy(raw_depth.host(), raw_depth.host() + raw_depth.pixelCount(), frame.depth_raw.host());
         std::copy(raw_rgb.host(), raw_rgb.host() + raw_rgb.pixelCount(), frame.rgb.host());
         undistorter.apply(frame, scratch);
-        ASSERT_TRUE(std::equal(frame.depth_raw.host(), frame.depth_raw.host() + frame.depth_raw.pixelCount(), expected.depth_raw.host()));
+        ASSERT_TRUE(std::equal(frame.depth_raw.host(), frame.depth_raw.host() + frame.depth_raw.pixelCount(),
+                               expected.depth_raw.host()));
         ASSERT_EQ(std::memcmp(frame.rgb.host(), expected.rgb.host(), frame.rgb.pixelCount() * sizeof(Vec4u8)), 0);
         memory.push_back(frame.depth_raw.host());
         memory.push_back(frame.rgb.host());
@@ -185,7 +187,9 @@ TEST(FrameUndistorter, LabelsAreUndistortedLikeColourAtTheirOwnResolution) {
     Image<ClassId> labels(half.size());
     for (int y = 0; y < half.height; ++y)
         for (int x = 0; x < half.width; ++x)
-            labels.at(x, y) = std::abs(x - raw.x) <= 1.5f && std::abs(y - raw.y) <= 1.5f ? ClassId(9) : ClassId(x < half.width / 2 ? 1 : 2);
+            labels.at(x, y) = std::abs(x - raw.x) <= 1.5f && std::abs(y - raw.y) <= 1.5f
+                                  ? ClassId(9)
+                                  : ClassId(x < half.width / 2 ? 1 : 2);
     RGBDFrame frame = frameWith(Image<Vec4u8>(), Image<std::uint16_t>());
     frame.labels = std::move(labels);
     FrameUndistorter(calibWithLens()).apply(frame);

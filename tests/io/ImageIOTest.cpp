@@ -88,7 +88,8 @@ TEST(ImageIO, Pgm16RoundTrip) {
 TEST(ImageIO, NetpbmHeaderCommentsAndWhitespace) {
     ScratchDir dir;
     const std::string path = dir.file("comments.ppm");
-    writeBytes(path, "P6 # a comment right after the magic\n# another\n  2\t1 # size\n255\n" + bytesOf({1, 2, 3, 4, 5, 6}));
+    writeBytes(path,
+               "P6 # a comment right after the magic\n# another\n  2\t1 # size\n255\n" + bytesOf({1, 2, 3, 4, 5, 6}));
     const Image<Vec4u8> rgb = readPPM(path);
     ASSERT_EQ(rgb.size(), (Vec2i{2, 1}));
     EXPECT_EQ(rgb.at(1, 0).x, 4);
@@ -115,7 +116,8 @@ TEST(ImageIO, BadNetpbmFilesGiveReasons) {
         const char* reason_part;
     };
     const std::vector<Case> cases = {
-        {"truncated.ppm", "P6\n2 2\n255\n" + std::string(11, 'x'), false, "truncated: 2x2 needs 12 bytes of pixel data, the file has 11"},
+        {"truncated.ppm", "P6\n2 2\n255\n" + std::string(11, 'x'), false,
+         "truncated: 2x2 needs 12 bytes of pixel data, the file has 11"},
         {"truncated.pgm", "P5\n2 2\n65535\n" + std::string(7, 'x'), true, "truncated: 2x2 needs 8 bytes"},
         {"no_data.ppm", "P6\n2 2\n255", false, "truncated"},
         {"huge.ppm", "P6\n100000 100000\n255\n" + std::string(10, 'x'), false, "truncated"},
@@ -131,7 +133,8 @@ TEST(ImageIO, BadNetpbmFilesGiveReasons) {
         {"maxval_16bit.ppm", "P6\n1 1\n65535\n" + std::string(6, 'x'), false, "maxval 65535 out of range"},
         {"maxval_zero.pgm", "P5\n1 1\n0\n" + std::string(2, 'x'), true, "maxval 0 out of range"},
         {"maxval_big.pgm", "P5\n1 1\n70000\n" + std::string(2, 'x'), true, "maxval 70000 out of range"},
-        {"8bit.pgm", "P5\n1 1\n255\n" + std::string(1, 'x'), true, "8-bit PGM (maxval 255): expected a 16-bit depth PGM"},
+        {"8bit.pgm", "P5\n1 1\n255\n" + std::string(1, 'x'), true,
+         "8-bit PGM (maxval 255): expected a 16-bit depth PGM"},
     };
     for (const Case& c : cases) {
         SCOPED_TRACE(c.name);
@@ -178,7 +181,8 @@ TEST(ImageIO, PngDepthRoundTrip) {
 // per-thread decode buffers never leak one file's pixels into another's image.
 TEST(ImageIO, ReadingIntoAnImageReusesItsMemoryOnlyAtTheSameSize) {
     ScratchDir dir;
-    const std::string small_png = dir.file("small.png"), large_png = dir.file("large.png"), small_ppm = dir.file("small.ppm");
+    const std::string small_png = dir.file("small.png"), large_png = dir.file("large.png"),
+                      small_ppm = dir.file("small.ppm");
     const std::string small_depth = dir.file("small_d.png"), large_depth = dir.file("large_d.pgm");
     writePNG(small_png, makeRgb({6, 4}, 1));
     writePNG(large_png, makeRgb({9, 7}, 2));

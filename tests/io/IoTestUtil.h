@@ -71,7 +71,8 @@ inline Image<Vec4u8> makeRgb(Vec2i size, int seed) {
     Image<Vec4u8> image(size);
     for (int y = 0; y < size.y; ++y)
         for (int x = 0; x < size.x; ++x)
-            image.at(x, y) = Vec4u8{std::uint8_t(seed * 40 + x), std::uint8_t(seed * 7 + y * 3), std::uint8_t(200 - x - y), 255};
+            image.at(x, y) =
+                Vec4u8{std::uint8_t(seed * 40 + x), std::uint8_t(seed * 7 + y * 3), std::uint8_t(200 - x - y), 255};
     return image;
 }
 
@@ -104,7 +105,7 @@ inline std::string sharedDataDir() {
 }  // namespace voxfuse
 
 // Skips the test when a data set from ../shared/data is not there.
-#define VOXFUSE_REQUIRE_SHARED_DATA(subfolder, out_path)                                                     \
-    const std::string out_path = ::voxfuse::test::sharedDataDir() + "/" + (subfolder);                    \
-    if (::voxfuse::test::sharedDataDir().empty() || !std::filesystem::is_directory(out_path))             \
-        GTEST_SKIP() << "../shared/data not found: " << out_path << " (define VOXFUSE_SHARED_DATA_DIR)"
+#define VOXFUSE_REQUIRE_SHARED_DATA(subfolder, out_path)                                      \
+    const std::string out_path = ::voxfuse::test::sharedDataDir() + "/" + (subfolder);        \
+    if (::voxfuse::test::sharedDataDir().empty() || !std::filesystem::is_directory(out_path)) \
+    GTEST_SKIP() << "../shared/data not found: " << out_path << " (define VOXFUSE_SHARED_DATA_DIR)"

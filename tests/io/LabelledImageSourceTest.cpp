@@ -130,18 +130,20 @@ TEST(LabelledImageSource, IndexMatchingFollowsFrameIndexNotPosition) {
     // A source that starts later and skips frames: the index decides, not the call count.
     LabelledImageSource source(std::make_unique<FakeSource>(std::vector<FakeFrame>{{2, 0.0}, {4, 0.1}, {9, 0.2}}),
                                optionsFor(dir.path()));
-    EXPECT_EQ(source.match(), Match::Index);  // whole numbers are not timestamps
+    EXPECT_EQ(source.match(), Match::Index);                     // whole numbers are not timestamps
     EXPECT_EQ(readIds(source), (std::vector<int>{52, -1, 59}));  // 3 to 8 have no image
 }
 
 TEST(LabelledImageSource, NumberedImagesKeepTheirFramesAcrossGaps) {
     ScratchDir dir;
     // A segmentation that skipped frame 2 (and 4): the frames after a gap keep their own images.
-    for (int i : {0, 1, 3, 5}) writeLabels(dir.file("zero/" + std::string(i < 10 ? "00000" : "0000") + std::to_string(i) + ".png"), 10 + i);
+    for (int i : {0, 1, 3, 5})
+        writeLabels(dir.file("zero/" + std::string(i < 10 ? "00000" : "0000") + std::to_string(i) + ".png"), 10 + i);
     LabelledImageSource from_zero(FakeSource::sequence(7), optionsFor(dir.file("zero")));
     EXPECT_EQ(from_zero.labelImageCount(), 4);
     EXPECT_EQ(readIds(from_zero), (std::vector<int>{10, 11, -1, 13, -1, 15, -1}));
-    EXPECT_NE(from_zero.description().find("2 frames in between without one"), std::string::npos) << from_zero.description();
+    EXPECT_NE(from_zero.description().find("2 frames in between without one"), std::string::npos)
+        << from_zero.description();
     // Numbered from 1, with a prefix: the smallest number goes with frame 0.
     for (int i : {1, 2, 4}) writeLabels(dir.file("one/frame-" + std::to_string(i) + ".png"), 20 + i);
     LabelledImageSource from_one(FakeSource::sequence(4), optionsFor(dir.file("one")));
@@ -156,7 +158,8 @@ TEST(LabelledImageSource, NumberedImagesMeetFramesNumberedByTheirFilesByNumber) 
     for (int i = 0; i < 6; ++i) {
         const int number = 15 + 2 * i;
         frames.push_back({i, number / 30.0, -1.0, number});
-        if (number != 21) writeLabels(dir.file("labels/frame-0000" + std::to_string(number) + ".png"), number);  // 21 left out
+        if (number != 21)
+            writeLabels(dir.file("labels/frame-0000" + std::to_string(number) + ".png"), number);  // 21 left out
     }
     LabelledImageSource source(std::make_unique<FakeSource>(frames), optionsFor(dir.file("labels")));
     EXPECT_EQ(source.match(), Match::Index);
@@ -220,7 +223,8 @@ TEST(LabelledImageSource, TimestampMatchingTakesNearestWithinTolerance) {
 
     // Where the source knows when the colour image was taken (TUM pairs depth with a colour image up
     // to 0.02 s apart), the labels, computed from colour, are matched to that time.
-    LabelledImageSource by_colour(std::make_unique<FakeSource>(std::vector<FakeFrame>{{0, 100.045, 100.064}}), optionsFor(dir.path()));
+    LabelledImageSource by_colour(std::make_unique<FakeSource>(std::vector<FakeFrame>{{0, 100.045, 100.064}}),
+                                  optionsFor(dir.path()));
     EXPECT_EQ(readIds(by_colour), (std::vector<int>{3}));
 
     // A wider tolerance lets frame 3 take #3.
@@ -296,8 +300,9 @@ TEST(LabelledImageSource, AutomaticModeChoice) {
     writeLabels(dir.file("mixed/extra.png"), 2);
     const std::string mixed = dir.file("mixed");
     EXPECT_EQ(LabelledImageSource(FakeSource::sequence(1), optionsFor(mixed)).match(), Match::Index);
-    expectConstructionIoError([&] { LabelledImageSource s(FakeSource::sequence(1), optionsFor(mixed, Match::Timestamp)); },
-                              mixed, "'extra.png' is not");
+    expectConstructionIoError(
+        [&] { LabelledImageSource s(FakeSource::sequence(1), optionsFor(mixed, Match::Timestamp)); }, mixed,
+        "'extra.png' is not");
 }
 
 TEST(LabelledImageSource, LowerResolutionOfTheSameAspectIsAccepted) {
@@ -407,7 +412,8 @@ TEST(LabelledImageSource, ConstructionErrors) {
     const std::string jpegs = dir.file("jpegs");
     std::filesystem::create_directories(jpegs);
     ASSERT_TRUE(cv::imwrite(jpegs + "/0.jpg", cv::Mat(6, 8, CV_8UC1, cv::Scalar(1))));
-    expectConstructionIoError([&] { LabelledImageSource s(FakeSource::sequence(1), optionsFor(jpegs)); }, jpegs, "JPEG");
+    expectConstructionIoError([&] { LabelledImageSource s(FakeSource::sequence(1), optionsFor(jpegs)); }, jpegs,
+                              "JPEG");
 
     const std::string missing = dir.file("nowhere");
     expectConstructionIoError([&] { LabelledImageSource s(FakeSource::sequence(1), optionsFor(missing)); }, missing,
@@ -415,8 +421,8 @@ TEST(LabelledImageSource, ConstructionErrors) {
 
     const std::string empty_list = dir.file("empty.txt");
     writeBytes(empty_list, "# nothing\n");
-    expectConstructionIoError([&] { LabelledImageSource s(FakeSource::sequence(1), optionsFor(empty_list)); }, empty_list,
-                              "names no images");
+    expectConstructionIoError([&] { LabelledImageSource s(FakeSource::sequence(1), optionsFor(empty_list)); },
+                              empty_list, "names no images");
 
     const std::string single = dir.file("one.png");
     writeLabels(single, 1);

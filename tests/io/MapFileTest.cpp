@@ -150,7 +150,8 @@ TEST(MapFileTest, BadFilesAreRefusedWithTheReason) {
         const std::string error = loadError(bad);
         EXPECT_NE(error.find(reason), std::string::npos) << "expected '" << reason << "', got '" << error << "'";
     };
-    for (std::size_t cut : {std::size_t(0), std::size_t(5), std::size_t(100), bytes.size() / 2, bytes.size() - 9, bytes.size() - 1}) {
+    for (std::size_t cut :
+         {std::size_t(0), std::size_t(5), std::size_t(100), bytes.size() / 2, bytes.size() - 9, bytes.size() - 1}) {
         std::vector<char> b(bytes.begin(), bytes.begin() + std::ptrdiff_t(cut));
         expectRefused(b, "truncated");
     }
@@ -200,7 +201,8 @@ TEST(MapFileTest, AHeaderListingMoreBlocksThanTheFileHoldsIsRefusedAtOnce) {
     const std::size_t crc_at = 16 + header_bytes - 4, count_at = crc_at - 8;
     const std::uint64_t blocks = std::uint64_t(1) << 20;
     std::memcpy(b.data() + count_at, &blocks, 8);
-    const auto crc = std::uint32_t(crc32(crc32(0L, Z_NULL, 0), reinterpret_cast<const Bytef*>(b.data() + 16), uInt(crc_at - 16)));
+    const auto crc =
+        std::uint32_t(crc32(crc32(0L, Z_NULL, 0), reinterpret_cast<const Bytef*>(b.data() + 16), uInt(crc_at - 16)));
     std::memcpy(b.data() + crc_at, &crc, 4);
     writeBytes(bad, b);
     const std::string error = loadError(bad);
@@ -235,7 +237,8 @@ TEST(MapFileTest, AMapOfOtherSettingsIsRefusedByName) {
 TEST(MapFileTest, AResumePoseThatIsNoCameraIsRefused) {
     const test::ScratchDir scratch;
     const auto scene = fusedScene<VoxelS>(VoxelBlockHash());
-    for (auto [what, change] : {std::pair{"a shear", std::pair{1, 3e38f}}, {"a position 10^7 m away", std::pair{3, 1e7f}}}) {
+    for (auto [what, change] :
+         {std::pair{"a shear", std::pair{1, 3e38f}}, {"a position 10^7 m away", std::pair{3, 1e7f}}}) {
         SCOPED_TRACE(what);
         MapFileInfo pose = somePose();
         pose.T_world_camera.m[change.first] = change.second;
@@ -287,7 +290,8 @@ TEST_P(MapFileEngineTest, ARunContinuedFromItsMapTracksOn) {
     const std::string path = scratch.file(std::string("engine_") + deviceName(GetParam()) + ".vfm");
 
     auto first = MainEngine::create(s, calib);
-    for (int k = 0; k < 8; ++k) first->processFrame(test::toRgbdFrame(test::renderView(world, intr, pose(k)), k), nullptr);
+    for (int k = 0; k < 8; ++k)
+        first->processFrame(test::toRgbdFrame(test::renderView(world, intr, pose(k)), k), nullptr);
     first->saveMap(path);
     Mesh saved_mesh;
     first->extractMesh(saved_mesh);
@@ -299,7 +303,8 @@ TEST_P(MapFileEngineTest, ARunContinuedFromItsMapTracksOn) {
     EXPECT_EQ(saved_mesh.triangles.size(), loaded_mesh.triangles.size());
     // Tracking resumes at the saved pose: the next frames track against the loaded map.
     for (int k = 8; k < 14; ++k) {
-        const FrameResult r = second->processFrame(test::toRgbdFrame(test::renderView(world, intr, pose(k)), k), nullptr);
+        const FrameResult r =
+            second->processFrame(test::toRgbdFrame(test::renderView(world, intr, pose(k)), k), nullptr);
         EXPECT_TRUE(r.fused) << "frame " << k;
         // The world is the first frame's camera: the truth is pose(0)^-1 * pose(k).
         const Mat4f truth = rigidInverse(pose(0)) * pose(k);

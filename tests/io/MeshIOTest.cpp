@@ -78,12 +78,15 @@ PlyContents readPly(const std::string& path) {
     for (std::size_t i = 0; i < vertex_count; ++i) {
         c.points.push_back({take<float>(bytes, at), take<float>(bytes, at), take<float>(bytes, at)});
         if (has_normals) c.normals.push_back({take<float>(bytes, at), take<float>(bytes, at), take<float>(bytes, at)});
-        if (has_colors) c.colors.push_back({take<std::uint8_t>(bytes, at), take<std::uint8_t>(bytes, at), take<std::uint8_t>(bytes, at)});
+        if (has_colors)
+            c.colors.push_back(
+                {take<std::uint8_t>(bytes, at), take<std::uint8_t>(bytes, at), take<std::uint8_t>(bytes, at)});
         if (has_labels) c.labels.push_back(take<std::uint16_t>(bytes, at));
     }
     for (std::size_t i = 0; i < face_count; ++i) {
         EXPECT_EQ(take<std::uint8_t>(bytes, at), 3);
-        c.faces.push_back({take<std::int32_t>(bytes, at), take<std::int32_t>(bytes, at), take<std::int32_t>(bytes, at)});
+        c.faces.push_back(
+            {take<std::int32_t>(bytes, at), take<std::int32_t>(bytes, at), take<std::int32_t>(bytes, at)});
     }
     c.trailing_bytes = bytes.size() - at;
     return c;
@@ -97,11 +100,14 @@ TEST(MeshIO, PlyRoundTripWithNormalsAndColours) {
     ASSERT_GE(c.header.size(), 3u);
     EXPECT_EQ(c.header[0], "ply");
     EXPECT_EQ(c.header[1], "format binary_little_endian 1.0");
-    const std::vector<std::string> expected_properties = {"element vertex 4", "property float x", "property float y", "property float z",
-                                                          "property float nx", "property float ny", "property float nz",
-                                                          "property uchar red", "property uchar green", "property uchar blue",
-                                                          "element face 4", "property list uchar int vertex_indices", "end_header"};
-    const std::vector<std::string> properties(c.header.end() - std::ptrdiff_t(expected_properties.size()), c.header.end());
+    const std::vector<std::string> expected_properties = {
+        "element vertex 4",    "property float x",   "property float y",
+        "property float z",    "property float nx",  "property float ny",
+        "property float nz",   "property uchar red", "property uchar green",
+        "property uchar blue", "element face 4",     "property list uchar int vertex_indices",
+        "end_header"};
+    const std::vector<std::string> properties(c.header.end() - std::ptrdiff_t(expected_properties.size()),
+                                              c.header.end());
     EXPECT_EQ(properties, expected_properties);
     EXPECT_EQ(c.points, m.vertices);
     EXPECT_EQ(c.normals, m.normals);
@@ -150,9 +156,10 @@ TEST(MeshIO, PlyWithLabelsHasAUshortLabelAfterTheColours) {
     m.labels = {3, 0, kNoLabel, 0x1234};  // 0x1234 tells the byte order
     writeMesh(dir.file("labelled.ply"), m);
     const PlyContents c = readPly(dir.file("labelled.ply"));
-    const std::vector<std::string> expected_properties = {"property uchar red", "property uchar green", "property uchar blue",
-                                                          "property ushort label", "element face 4"};
-    const std::vector<std::string> properties(c.header.end() - 2 - std::ptrdiff_t(expected_properties.size()), c.header.end() - 2);
+    const std::vector<std::string> expected_properties = {
+        "property uchar red", "property uchar green", "property uchar blue", "property ushort label", "element face 4"};
+    const std::vector<std::string> properties(c.header.end() - 2 - std::ptrdiff_t(expected_properties.size()),
+                                              c.header.end() - 2);
     EXPECT_EQ(properties, expected_properties);
     EXPECT_EQ(c.points, m.vertices);
     EXPECT_EQ(c.normals, m.normals);
@@ -161,7 +168,8 @@ TEST(MeshIO, PlyWithLabelsHasAUshortLabelAfterTheColours) {
     EXPECT_EQ(c.faces, m.triangles);
     EXPECT_EQ(c.trailing_bytes, 0u);
     const std::string bytes = readBytes(dir.file("labelled.ply"));
-    const std::size_t last_label = bytes.find("end_header\n") + 11 + 3 * 29 + 27;  // vertex 3's label: 27 bytes into its 29
+    const std::size_t last_label =
+        bytes.find("end_header\n") + 11 + 3 * 29 + 27;  // vertex 3's label: 27 bytes into its 29
     EXPECT_EQ(std::uint8_t(bytes[last_label]), 0x34) << "little-endian";
     EXPECT_EQ(std::uint8_t(bytes[last_label + 1]), 0x12);
 
@@ -171,9 +179,10 @@ TEST(MeshIO, PlyWithLabelsHasAUshortLabelAfterTheColours) {
     cloud.labels = {7, kNoLabel, 40};
     writePointCloudPly(dir.file("labelled_cloud.ply"), cloud);
     const PlyContents cc = readPly(dir.file("labelled_cloud.ply"));
-    const std::vector<std::string> expected_cloud = {"element vertex 3", "property float x", "property float y", "property float z",
-                                                     "property ushort label", "end_header"};
-    const std::vector<std::string> cloud_properties(cc.header.end() - std::ptrdiff_t(expected_cloud.size()), cc.header.end());
+    const std::vector<std::string> expected_cloud = {"element vertex 3", "property float x",      "property float y",
+                                                     "property float z", "property ushort label", "end_header"};
+    const std::vector<std::string> cloud_properties(cc.header.end() - std::ptrdiff_t(expected_cloud.size()),
+                                                    cc.header.end());
     EXPECT_EQ(cloud_properties, expected_cloud);
     EXPECT_EQ(cc.points, cloud.points);
     EXPECT_EQ(cc.labels, cloud.labels);
@@ -181,7 +190,8 @@ TEST(MeshIO, PlyWithLabelsHasAUshortLabelAfterTheColours) {
 
     // Without labels, no label property.
     writeMeshPly(dir.file("unlabelled.ply"), tetrahedron(true, true));
-    for (const std::string& line : readPly(dir.file("unlabelled.ply")).header) EXPECT_EQ(line.find("label"), std::string::npos);
+    for (const std::string& line : readPly(dir.file("unlabelled.ply")).header)
+        EXPECT_EQ(line.find("label"), std::string::npos);
 }
 
 TEST(MeshIO, ObjAndStlIgnoreLabelsAndBadLabelCountsAreRefused) {

@@ -94,7 +94,7 @@ TEST(OniPlayback, EveryFrameOfBothStreamsOfTheKinectRecording) {
             farthest = std::max(farthest, d);
         }
         EXPECT_GE(nearest, 500);
-        EXPECT_LE(farthest, 10000);  // the sensor's maximum
+        EXPECT_LE(farthest, 10000);         // the sensor's maximum
         EXPECT_GT(s.mean_intensity, 30.0);  // a lit room, not a black or garbage image
         // 30 Hz, every frame (no skipping), increasing.
         if (previous_time >= 0.0) {
@@ -140,7 +140,8 @@ TEST(OniPlayback, ATruncatedRecordingIsAClearError) {
         ADD_FAILURE() << "opened a truncated recording: " << source->description();
     } catch (const IoError& e) {
         EXPECT_EQ(e.file(), truncated);
-        EXPECT_NE(e.reason().find(OpenNISource::available() ? "truncated" : "not available in this build"), std::string::npos)
+        EXPECT_NE(e.reason().find(OpenNISource::available() ? "truncated" : "not available in this build"),
+                  std::string::npos)
             << e.what();
     }
 }

@@ -44,8 +44,10 @@ TEST(OpenNISource, AMissingRecordingIsNamed) {
     const std::string path = dir.path() + "/missing.oni";
     for (bool through_open_image_source : {false, true}) {
         const IoError e = expectIoError([&] {
-            if (through_open_image_source) openImageSource(path);
-            else OpenNISource::openFile(path);
+            if (through_open_image_source)
+                openImageSource(path);
+            else
+                OpenNISource::openFile(path);
         });
         EXPECT_EQ(e.file(), path);
         EXPECT_TRUE(contains(e.reason(), OpenNISource::available() ? "no such file" : kNotBuilt)) << e.what();
@@ -55,8 +57,8 @@ TEST(OpenNISource, AMissingRecordingIsNamed) {
 TEST(OpenNISource, AFileThatIsNoRecordingIsAClearError) {
     Watchdog watchdog(60s, "AFileThatIsNoRecordingIsAClearError");
     ScratchDir dir;
-    for (const std::string& bytes : {std::string(), std::string("NI10 but nothing after the magic"),
-                                     std::string(4096, '\x5a')}) {
+    for (const std::string& bytes :
+         {std::string(), std::string("NI10 but nothing after the magic"), std::string(4096, '\x5a')}) {
         const std::string path = dir.file("bad.oni");
         test::writeBytes(path, bytes);
         const IoError e = expectIoError([&] { openImageSource(path); });
@@ -68,7 +70,8 @@ TEST(OpenNISource, AFileThatIsNoRecordingIsAClearError) {
 
 TEST(OpenNISource, NoCameraIsAClearErrorNotAHang) {
     Watchdog watchdog(60s, "NoCameraIsAClearErrorNotAHang");
-    if (!OpenNISource::deviceUris().empty()) GTEST_SKIP() << "a camera is connected: the no-camera error cannot be shown";
+    if (!OpenNISource::deviceUris().empty())
+        GTEST_SKIP() << "a camera is connected: the no-camera error cannot be shown";
     const IoError e = expectIoError([] { OpenNISource::openDevice(); });
     EXPECT_EQ(e.file(), "OpenNI2 camera");
     EXPECT_TRUE(contains(e.reason(), OpenNISource::available() ? "no OpenNI2 camera found" : kNotBuilt)) << e.what();

@@ -39,7 +39,9 @@ std::string writeSmallCalib(const std::string& path, float depth_scale) {
     return path;
 }
 
-bool containsText(const std::string& haystack, const std::string& needle) { return haystack.find(needle) != std::string::npos; }
+bool containsText(const std::string& haystack, const std::string& needle) {
+    return haystack.find(needle) != std::string::npos;
+}
 
 // ----------------------------------------------------------------------------------------------
 // TUM folders
@@ -50,7 +52,8 @@ struct HandMadeTumFolder {
     HandMadeTumFolder() {
         writeSmallCalib(dir.file("calib.txt"), 0.0002f);
         std::string rgb_list = "# color images\n# timestamp filename\n";
-        const std::vector<std::pair<std::string, int>> rgb = {{"1.000000", 10}, {"1.033000", 11}, {"1.067000", 12}, {"1.250000", 13}};
+        const std::vector<std::pair<std::string, int>> rgb = {
+            {"1.000000", 10}, {"1.033000", 11}, {"1.067000", 12}, {"1.250000", 13}};
         for (const auto& [time, seed] : rgb) {
             writePNG(dir.file("rgb/" + time + ".png"), makeRgb(kSmall, seed));
             rgb_list += time + " rgb/" + time + ".png\n";
@@ -111,8 +114,10 @@ TEST(TumSource, AListedImageMissingBetweenOnesOnDiskIsAnUnreadableFrameInItsPlac
     TumSource source(folder.dir.path());
     EXPECT_EQ(source.frameCount(), 3);
     EXPECT_EQ(source.missingListedFiles(), 2);
-    EXPECT_TRUE(containsText(source.description(), "1 listed images beyond those on disk left out")) << source.description();
-    EXPECT_TRUE(containsText(source.description(), "1 listed images missing between those on disk (their frames are unreadable)"))
+    EXPECT_TRUE(containsText(source.description(), "1 listed images beyond those on disk left out"))
+        << source.description();
+    EXPECT_TRUE(containsText(source.description(),
+                             "1 listed images missing between those on disk (their frames are unreadable)"))
         << source.description();
     RGBDFrame frame;
     ASSERT_TRUE(source.next(frame));
@@ -140,7 +145,8 @@ TEST(TumSource, FramesAreDecodedIntoTheMemoryOfEarlierFrames) {
     const std::uint16_t* first_depth = frame.depth_raw.host();
     const Vec4u8* first_rgb = frame.rgb.host();
     ASSERT_TRUE(source.next(frame));
-    EXPECT_NE(frame.depth_raw.host(), first_depth) << "the second frame needs images of its own: the first is the caller's";
+    EXPECT_NE(frame.depth_raw.host(), first_depth)
+        << "the second frame needs images of its own: the first is the caller's";
     // Were the first frame's images freed, these would take their memory (allocators reuse the last freed).
     const Image<std::uint16_t> depth_blocker(kSmall);
     const Image<Vec4u8> rgb_blocker(kSmall);
@@ -354,14 +360,15 @@ TEST(PpmPgmSource, ImageSizeMustMatchCalibration) {
         source.next(frame);
         FAIL() << "expected IoError";
     } catch (const IoError& e) {
-        EXPECT_TRUE(containsText(e.reason(), "depth image is 5x3 but the calibration's depth camera is 4x3")) << e.what();
+        EXPECT_TRUE(containsText(e.reason(), "depth image is 5x3 but the calibration's depth camera is 4x3"))
+            << e.what();
     }
 }
 
 TEST(PpmPgmSource, RejectsBadPatterns) {
     PpmPgmFolder folder({0});
     for (const std::string pattern : {"/depth/%s.pgm", "/depth/0000.pgm", "/depth/%04i_%04i.pgm", "/depth/%ld.pgm",
-                                       "/depth/%*d.pgm", "/depth/%04i%n.pgm", "/depth/%04f.pgm", "/depth/%"}) {
+                                      "/depth/%*d.pgm", "/depth/%04i%n.pgm", "/depth/%04f.pgm", "/depth/%"}) {
         SCOPED_TRACE(pattern);
         try {
             PpmPgmSource source("", folder.dir.path() + pattern, folder.calib);
@@ -419,7 +426,8 @@ TEST(FrameFolderSource, SortsByNumberAndScalesColourIntrinsics) {
     }
     writeBytes(dir.file("frame-000003.pose.txt"), "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n");
     writeBytes(dir.file("frame-000007.pose.txt"), "1 0 0 0.5\n0 1 0 0\n0 0 1 0\n0 0 0 1\n");
-    writeBytes(dir.file("frame-000010.pose.txt"), "-inf -inf -inf -inf\n-inf -inf -inf -inf\n-inf -inf -inf -inf\n0 0 0 1\n");
+    writeBytes(dir.file("frame-000010.pose.txt"),
+               "-inf -inf -inf -inf\n-inf -inf -inf -inf\n-inf -inf -inf -inf\n0 0 0 1\n");
     writeBytes(dir.file("camera-intrinsics.txt"), "5 0 1.5\n0 6 1\n0 0 1\n");
     writeBytes(dir.file("frame-notanumber.depth.png"), "ignored");
 
@@ -496,7 +504,8 @@ TEST(FrameFolderSource, PosesAreRotationsOrMarkedLost) {
     ScratchDir dir;
     writeDepthPNG(dir.file("frame-000001.depth.png"), makeDepth(kSmall, 1));
     writeBytes(dir.file("intrinsics.K.txt"), "5 0 1.5\n0 5 1\n0 0 1\n");
-    writeBytes(dir.file("frame-000001.pose.txt"), "-inf -inf -inf -inf\n-inf -inf -inf -inf\n-inf -inf -inf -inf\n-inf -inf -inf -inf\n");
+    writeBytes(dir.file("frame-000001.pose.txt"),
+               "-inf -inf -inf -inf\n-inf -inf -inf -inf\n-inf -inf -inf -inf\n-inf -inf -inf -inf\n");
     FrameFolderSource source(dir.path());
     EXPECT_TRUE(source.groundTruth().empty());
     EXPECT_TRUE(containsText(source.description(), "1 whose pose files mark lost tracking")) << source.description();

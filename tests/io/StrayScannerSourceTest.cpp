@@ -70,8 +70,8 @@ struct StrayCapture {
         for (int i = 0; i < frames && i < int(kPoses.size()); ++i) {
             const Pose& p = kPoses[std::size_t(i)];
             char line[256];
-            std::snprintf(line, sizeof line, "%.4f, %06d, %g, %g, %g, %g, %g, %g, %g\n", p.t, i, p.position.x, p.position.y,
-                          p.position.z, p.q.x, p.q.y, p.q.z, p.q.w);
+            std::snprintf(line, sizeof line, "%.4f, %06d, %g, %g, %g, %g, %g, %g, %g\n", p.t, i, p.position.x,
+                          p.position.y, p.position.z, p.q.x, p.q.y, p.q.z, p.q.w);
             odometry += line;
         }
         writeBytes(dir.file("odometry.csv"), odometry);
@@ -255,7 +255,8 @@ TEST(StrayScannerSource, MissingPartsAreNamed) {
     {
         StrayCapture capture(1);
         writeBytes(capture.dir.file("rgb.mp4"), "not a video at all");
-        expectIoError([&] { StrayScannerSource source(capture.path()); }, capture.dir.file("rgb.mp4"), "cannot open this video");
+        expectIoError([&] { StrayScannerSource source(capture.path()); }, capture.dir.file("rgb.mp4"),
+                      "cannot open this video");
     }
 }
 
@@ -296,9 +297,12 @@ TEST(StrayScannerSource, OdometryValuesAreCheckedAsFloatsAndOneFrameHasOnePose) 
         const char* reason_part;
     };
     const std::vector<Case> cases = {
-        {"position finite as a double, infinite as a float", "1.0, 0, 1e39, 0, 0, 0, 0, 0, 1\n", 2, "non-finite value '1e39'"},
-        {"one frame, two poses", "1.0, 0, 0, 0, 0, 0, 0, 0, 1\n1.1, 0, 0.5, 0, 0, 0, 0, 0, 1\n", 3, "frame 0 is given twice, differently (line 2"},
-        {"one time, two poses", "1.0, 0, 0, 0, 0, 0, 0, 0, 1\n1.0, 1, 0.5, 0, 0, 0, 0, 0, 1\n", 3, "timestamp 1.0 is given twice"},
+        {"position finite as a double, infinite as a float", "1.0, 0, 1e39, 0, 0, 0, 0, 0, 1\n", 2,
+         "non-finite value '1e39'"},
+        {"one frame, two poses", "1.0, 0, 0, 0, 0, 0, 0, 0, 1\n1.1, 0, 0.5, 0, 0, 0, 0, 0, 1\n", 3,
+         "frame 0 is given twice, differently (line 2"},
+        {"one time, two poses", "1.0, 0, 0, 0, 0, 0, 0, 0, 1\n1.0, 1, 0.5, 0, 0, 0, 0, 0, 1\n", 3,
+         "timestamp 1.0 is given twice"},
         {"a folder for the file", "", 0, "is a folder, not a file"},
     };
     for (const Case& c : cases) {
@@ -314,20 +318,24 @@ TEST(StrayScannerSource, OdometryValuesAreCheckedAsFloatsAndOneFrameHasOnePose) 
         } catch (const IoError& e) {
             EXPECT_EQ(e.file(), odometry) << e.what();
             if (c.line > 0) {
-                EXPECT_NE(std::string(e.what()).find(odometry + ":" + std::to_string(c.line)), std::string::npos) << e.what();
+                EXPECT_NE(std::string(e.what()).find(odometry + ":" + std::to_string(c.line)), std::string::npos)
+                    << e.what();
             }
             EXPECT_NE(e.reason().find(c.reason_part), std::string::npos) << e.what();
         }
     }
     std::filesystem::remove_all(odometry);
-    writeBytes(odometry, header + "1.0, 0, 0, 0, 0, 0, 0, 0, 1\n1.0, 0, 0, 0, 0, 0, 0, 0, 1\n");  // the same row twice is harmless
+    writeBytes(
+        odometry,
+        header + "1.0, 0, 0, 0, 0, 0, 0, 0, 1\n1.0, 0, 0, 0, 0, 0, 0, 0, 1\n");  // the same row twice is harmless
     EXPECT_EQ(StrayScannerSource(capture.path()).groundTruth().size(), 1u);
 }
 
 TEST(StrayScannerSource, OdometryColumnsAreFoundByName) {
     StrayCapture capture(2);
     // Columns reordered, no frame column: row i belongs to frame i.
-    writeBytes(capture.dir.file("odometry.csv"), "qw,qx,qy,qz,x,y,z,timestamp\n1,0,0,0,0,0,0,5.0\n1,0,0,0,0.5,0,0,5.5\n");
+    writeBytes(capture.dir.file("odometry.csv"),
+               "qw,qx,qy,qz,x,y,z,timestamp\n1,0,0,0,0,0,0,5.0\n1,0,0,0,0.5,0,0,5.5\n");
     StrayScannerSource source(capture.path());
     ASSERT_EQ(source.groundTruth().size(), 2u);
     EXPECT_DOUBLE_EQ(source.groundTruth()[1].timestamp_s, 5.5);
@@ -336,7 +344,8 @@ TEST(StrayScannerSource, OdometryColumnsAreFoundByName) {
 
 TEST(StrayScannerSource, FramesWithoutOdometryHaveNoGroundTruth) {
     StrayCapture capture(3);
-    writeBytes(capture.dir.file("odometry.csv"), "timestamp, frame, x, y, z, qx, qy, qz, qw\n2.0, 1, 0, 0, 0, 0, 0, 0, 1\n");
+    writeBytes(capture.dir.file("odometry.csv"),
+               "timestamp, frame, x, y, z, qx, qy, qz, qw\n2.0, 1, 0, 0, 0, 0, 0, 0, 1\n");
     StrayScannerSource source(capture.path());
     EXPECT_EQ(source.groundTruth().size(), 1u);
     RGBDFrame frame;

@@ -51,7 +51,8 @@ class ScriptedSource : public ImageSource {
 public:
     static constexpr int kSize = 8;
 
-    ScriptedSource(Script script, std::shared_ptr<Progress> progress) : script_(std::move(script)), progress_(std::move(progress)) {
+    ScriptedSource(Script script, std::shared_ptr<Progress> progress)
+        : script_(std::move(script)), progress_(std::move(progress)) {
         calib_.depth = Intrinsics{kSize, kSize, 10.f, 10.f, 3.5f, 3.5f};
         calib_.rgb = calib_.depth;
         calib_.depth_distortion = script_.depth_distortion;
@@ -71,7 +72,8 @@ public:
         if (index == script_.fatal_frame) throw std::runtime_error("device lost");
         frame.index = index;
         frame.depth_raw.resize({kSize, kSize});
-        for (std::size_t i = 0; i < frame.depth_raw.pixelCount(); ++i) frame.depth_raw.host()[i] = std::uint16_t(index + 1);
+        for (std::size_t i = 0; i < frame.depth_raw.pixelCount(); ++i)
+            frame.depth_raw.host()[i] = std::uint16_t(index + 1);
         std::lock_guard<std::mutex> lock(progress_->mutex);
         ++progress_->produced;
         progress_->changed.notify_all();
@@ -92,7 +94,8 @@ private:
 
 std::unique_ptr<ThreadedImageSource> threaded(const Script& script, std::shared_ptr<Progress> progress,
                                               ThreadedSourceOptions options = {}) {
-    return std::make_unique<ThreadedImageSource>(std::make_unique<ScriptedSource>(script, std::move(progress)), options);
+    return std::make_unique<ThreadedImageSource>(std::make_unique<ScriptedSource>(script, std::move(progress)),
+                                                 options);
 }
 
 ThreadedSourceOptions capacity(int n) {
@@ -346,7 +349,9 @@ TEST(FramesForEngine, UndistortWhetherOrNotTheyAreReadAhead) {
         ASSERT_TRUE(direct->next(a));
         ASSERT_TRUE(ahead->next(b));
         ASSERT_EQ(a.depth_raw.size(), b.depth_raw.size());
-        EXPECT_EQ(std::memcmp(a.depth_raw.host(), b.depth_raw.host(), a.depth_raw.pixelCount() * sizeof(std::uint16_t)), 0) << "frame " << i;
+        EXPECT_EQ(std::memcmp(a.depth_raw.host(), b.depth_raw.host(), a.depth_raw.pixelCount() * sizeof(std::uint16_t)),
+                  0)
+            << "frame " << i;
     }
     EXPECT_EQ(a.depth_raw.at(0, 0), 0);  // undistorted: the corner sees outside the raw image
     // Without distortion the source itself is handed over, unwrapped.

@@ -34,9 +34,11 @@ TEST(TrajectoryIO, ReadsPosesAndNormalisesQuaternions) {
     const std::string path = dir.file("traj.txt");
     const double s = std::sqrt(0.5);
     // Second pose: 90 degrees about z, quaternion written at twice unit length.
-    writeBytes(path, "# timestamp tx ty tz qx qy qz qw\n\n"
-                     "1341841873.4151 1 2 3 0 0 0 1\n"
-                     "1341841873.4251 -2.5 0 0.5 0 0 " + std::to_string(2 * s) + " " + std::to_string(2 * s) + "\n");
+    writeBytes(path,
+               "# timestamp tx ty tz qx qy qz qw\n\n"
+               "1341841873.4151 1 2 3 0 0 0 1\n"
+               "1341841873.4251 -2.5 0 0.5 0 0 " +
+                   std::to_string(2 * s) + " " + std::to_string(2 * s) + "\n");
     const std::vector<TimedPose> poses = readTumTrajectory(path);
     ASSERT_EQ(poses.size(), 2u);
     EXPECT_DOUBLE_EQ(poses[0].timestamp_s, 1341841873.4151);

@@ -46,9 +46,11 @@ TEST(OccupancyMapperTest, WallIsOccupiedWithFreeSpaceBeforeAndUnknownBehind) {
     ASSERT_TRUE(mapper.submit(constantDepth(intrinsics, 2.0f), intrinsics, lookingAlongX()));
     mapper.finish();
 
-    for (float d = 0.1f; d < 1.94f; d += 0.05f) EXPECT_EQ(mapper.occupancyAt(onCentralRay(d)), Occupancy::Free) << "at " << d << " m";
+    for (float d = 0.1f; d < 1.94f; d += 0.05f)
+        EXPECT_EQ(mapper.occupancyAt(onCentralRay(d)), Occupancy::Free) << "at " << d << " m";
     EXPECT_EQ(mapper.occupancyAt(onCentralRay(2.0f)), Occupancy::Occupied);
-    for (float d = 2.06f; d < 3.0f; d += 0.05f) EXPECT_EQ(mapper.occupancyAt(onCentralRay(d)), Occupancy::Unknown) << "at " << d << " m";
+    for (float d = 2.06f; d < 3.0f; d += 0.05f)
+        EXPECT_EQ(mapper.occupancyAt(onCentralRay(d)), Occupancy::Unknown) << "at " << d << " m";
     EXPECT_EQ(mapper.occupancyAt(onCentralRay(-0.5f)), Occupancy::Unknown) << "behind the camera";
 }
 
@@ -107,7 +109,8 @@ TEST(OccupancyMapperTest, FullQueueDropsFramesWithoutBlocking) {
     EXPECT_GT(s.frames_dropped, 0);
     EXPECT_EQ(s.frames_dropped, burst - accepted);
     EXPECT_EQ(s.frames_inserted, accepted);
-    EXPECT_LT(burst_s * 1000.0, s.insert_ms) << "the burst took about as long as inserting: submit() waited for the worker";
+    EXPECT_LT(burst_s * 1000.0, s.insert_ms)
+        << "the burst took about as long as inserting: submit() waited for the worker";
 }
 
 TEST(OccupancyMapperTest, DestructionWithoutFinishDoesNotWaitForTheQueue) {

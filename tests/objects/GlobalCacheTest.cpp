@@ -77,10 +77,9 @@ TEST(GlobalCacheTest, ASwapFileThatCannotBeMadeIsNamed) {
 TEST(GlobalCacheTest, AnExistingFileIsNeverTakenForTheSwapFile) {
     // The swap file is unlinked as soon as it is open: a path that names a user's file or a map would
     // lose it.
-    const std::string path = (std::filesystem::temp_directory_path() / ("voxfuse_cache_precious_" + std::to_string(::getpid()))).string();
-    {
-        std::ofstream(path) << "keep me\n";
-    }
+    const std::string path =
+        (std::filesystem::temp_directory_path() / ("voxfuse_cache_precious_" + std::to_string(::getpid()))).string();
+    { std::ofstream(path) << "keep me\n"; }
     try {
         GlobalCache cache(512, path);
         ADD_FAILURE() << "an existing file became the swap file";

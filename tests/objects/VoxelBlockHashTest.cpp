@@ -57,14 +57,16 @@ void expectConsistent(const HashScene& scene, const std::map<Key, float>& model)
             EXPECT_TRUE(ptrs.insert(e.ptr).second) << "voxel block " << e.ptr << " used twice";
             ++stored;
         }
-        for (int k = 0; k + 1 < h.entries_per_bucket; ++k) EXPECT_EQ(h.entries[first + k].next, kEndOfChain) << "only the last entry links";
+        for (int k = 0; k + 1 < h.entries_per_bucket; ++k)
+            EXPECT_EQ(h.entries[first + k].next, kEndOfChain) << "only the last entry links";
         const int head = h.entries[first + h.entries_per_bucket - 1].next;
         if (head != kEndOfChain) {
             EXPECT_TRUE(bucket_full) << "bucket " << bucket << " has a chain but a free entry";
         }
         for (int next = head; next != kEndOfChain; next = h.entries[h.ordered_entry_count + next].next) {
             ASSERT_TRUE(next >= 0 && next < h.excess_entry_count);
-            ASSERT_TRUE(reached_excess.insert(next).second) << "excess entry " << next << " reached twice (loop or shared)";
+            ASSERT_TRUE(reached_excess.insert(next).second)
+                << "excess entry " << next << " reached twice (loop or shared)";
             const HashEntry& e = h.entries[h.ordered_entry_count + next];
             ASSERT_GE(e.ptr, 0);
             EXPECT_EQ(hashBucket({e.pos.x, e.pos.y, e.pos.z}, h.bucket_count), bucket);
@@ -73,7 +75,8 @@ void expectConsistent(const HashScene& scene, const std::map<Key, float>& model)
         }
     }
     for (int i = 0; i < h.excess_entry_count; ++i)
-        EXPECT_TRUE(reached_excess.count(i) || h.entries[h.ordered_entry_count + i].ptr == kEntryFree) << "unreachable excess entry in use";
+        EXPECT_TRUE(reached_excess.count(i) || h.entries[h.ordered_entry_count + i].ptr == kEntryFree)
+            << "unreachable excess entry in use";
     EXPECT_EQ(stored, int(model.size()));
     EXPECT_EQ(hash.blocksInUse(), int(model.size()));
     EXPECT_EQ(hash.stats().blocks_allocated, int(model.size()));
@@ -147,7 +150,8 @@ INSTANTIATE_TEST_SUITE_P(EntriesPerBucket, VoxelBlockHashModelTest, ::testing::V
 
 TEST(VoxelBlockHashTest, HashIsTheReportsFormulaModuloTheBucketCount) {
     for (const Vec3i b : {Vec3i{0, 0, 0}, Vec3i{1, 2, 3}, Vec3i{-1, -7, 12}, Vec3i{32767, -32767, 5}}) {
-        const long long h = (((long long)b.x * 73856093) ^ ((long long)b.y * 19349669) ^ ((long long)b.z * 83492791)) & 0xffffffffLL;
+        const long long h =
+            (((long long)b.x * 73856093) ^ ((long long)b.y * 19349669) ^ ((long long)b.z * 83492791)) & 0xffffffffLL;
         EXPECT_EQ(hashBucket(b, 0x100000), int(h % 0x100000));
         EXPECT_EQ(hashBucket(b, 1000), int(h % 1000));
         EXPECT_EQ(hashBucket(b, 4), int(h % 4));
@@ -218,7 +222,8 @@ TEST(VoxelBlockHashTest, VoxelArrayGrowsInChunksAndKeepsItsContents) {
     EXPECT_EQ(scene.index().blockCapacity(), 16);
     ASSERT_EQ(scene.voxels().size(), 16u * kBlockVoxelCount);
     for (std::size_t i = 0; i < 8u * kBlockVoxelCount; ++i) ASSERT_EQ(scene.voxels().host()[i].sdf, float(i));
-    for (std::size_t i = 8u * kBlockVoxelCount; i < scene.voxels().size(); ++i) ASSERT_EQ(scene.voxels().host()[i].w_depth, 0);
+    for (std::size_t i = 8u * kBlockVoxelCount; i < scene.voxels().size(); ++i)
+        ASSERT_EQ(scene.voxels().host()[i].w_depth, 0);
     EXPECT_EQ(scene.index().freeBlocks(), 16);
     scene.reserveVoxelBlocks(1000);
     EXPECT_EQ(scene.index().blockCapacity(), 100) << "capped at the maximum";
@@ -270,7 +275,8 @@ TEST(VoxelBlockHashTest, TheVisibleListCoversItsCameraAndItsDownsampledCamerasOn
 
 // What create() checks against the machine's memory before allocating is what the index allocates.
 TEST(VoxelBlockHashTest, TableBytesFromTheSettingsAreWhatTheIndexAllocates) {
-    for (const auto& [buckets, per_bucket, excess, max_blocks] : {std::tuple{1, 1, 16, 32}, std::tuple{1 << 12, 2, 1 << 10, 1 << 14}}) {
+    for (const auto& [buckets, per_bucket, excess, max_blocks] :
+         {std::tuple{1, 1, 16, 32}, std::tuple{1 << 12, 2, 1 << 10, 1 << 14}}) {
         VoxelBlockHashSettings s;
         s.bucket_count = buckets;
         s.entries_per_bucket = per_bucket;

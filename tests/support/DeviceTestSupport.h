@@ -2,8 +2,9 @@
 // Running engine tests once per device: the CPU always, CUDA where a GPU is usable, and a visible skip
 // otherwise. Instances on the GPU have "cuda" in their names (CTest labels them cuda too).
 //
-// Value-parametrised tests take a Device:  INSTANTIATE_TEST_SUITE_P(Devices, Suite, test::kAllDevices, test::DeviceName());
-// typed tests a device and a voxel type:   TYPED_TEST_SUITE(Suite, test::DevicesAndVoxels, test::DeviceAndVoxelName);
+// Value-parametrised tests take a Device:  INSTANTIATE_TEST_SUITE_P(Devices, Suite, test::kAllDevices,
+// test::DeviceName()); typed tests a device and a voxel type:   TYPED_TEST_SUITE(Suite, test::DevicesAndVoxels,
+// test::DeviceAndVoxelName);
 
 #include <gtest/gtest.h>
 
@@ -21,9 +22,9 @@
 namespace voxfuse::test {
 
 // Skips the current test, saying why, when `device` cannot run here.
-#define VF_SKIP_IF_UNAVAILABLE(device)                                                                     \
-    do {                                                                                                   \
-        if ((device) == ::voxfuse::Device::CUDA && !::voxfuse::device_memory::cudaAvailable())             \
+#define VF_SKIP_IF_UNAVAILABLE(device)                                                                           \
+    do {                                                                                                         \
+        if ((device) == ::voxfuse::Device::CUDA && !::voxfuse::device_memory::cudaAvailable())                   \
             GTEST_SKIP() << "no usable GPU for the CUDA layer: " << ::voxfuse::device_memory::cudaDescription(); \
     } while (0)
 
@@ -40,9 +41,10 @@ struct DeviceAndVoxel {
 };
 
 using DevicesAndVoxels =
-    ::testing::Types<DeviceAndVoxel<Device::CPU, VoxelS>, DeviceAndVoxel<Device::CPU, VoxelF>, DeviceAndVoxel<Device::CPU, VoxelSRgb>,
-                     DeviceAndVoxel<Device::CPU, VoxelFRgb>, DeviceAndVoxel<Device::CPU, VoxelSLabel>,
-                     DeviceAndVoxel<Device::CPU, VoxelSRgbLabel>, DeviceAndVoxel<Device::CUDA, VoxelS>, DeviceAndVoxel<Device::CUDA, VoxelF>,
+    ::testing::Types<DeviceAndVoxel<Device::CPU, VoxelS>, DeviceAndVoxel<Device::CPU, VoxelF>,
+                     DeviceAndVoxel<Device::CPU, VoxelSRgb>, DeviceAndVoxel<Device::CPU, VoxelFRgb>,
+                     DeviceAndVoxel<Device::CPU, VoxelSLabel>, DeviceAndVoxel<Device::CPU, VoxelSRgbLabel>,
+                     DeviceAndVoxel<Device::CUDA, VoxelS>, DeviceAndVoxel<Device::CUDA, VoxelF>,
                      DeviceAndVoxel<Device::CUDA, VoxelSRgb>, DeviceAndVoxel<Device::CUDA, VoxelFRgb>,
                      DeviceAndVoxel<Device::CUDA, VoxelSLabel>, DeviceAndVoxel<Device::CUDA, VoxelSRgbLabel>>;
 
@@ -151,7 +153,8 @@ void addImageDifferences(ChannelDifferences& d, const char* name, const T* a, co
         } else {
             static const char* const kChannel[] = {"x", "y", "z", "w"};
             for (int c = 0; c < Channels; ++c)
-                if (!sameBits((&a[i].x)[c], (&b[i].x)[c])) d.count((std::string(name) + "." + kChannel[c]).c_str(), true);
+                if (!sameBits((&a[i].x)[c], (&b[i].x)[c]))
+                    d.count((std::string(name) + "." + kChannel[c]).c_str(), true);
         }
     }
     d.compared += (long long)pixels;

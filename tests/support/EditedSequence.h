@@ -39,7 +39,8 @@ struct PlayedResult {
 };
 
 // Runs `engine` over `script` (the played frames get consecutive indices and their recorded timestamps).
-inline std::vector<PlayedResult> play(MainEngine& engine, const std::vector<RGBDFrame>& frames, const std::vector<PlayedFrame>& script) {
+inline std::vector<PlayedResult> play(MainEngine& engine, const std::vector<RGBDFrame>& frames,
+                                      const std::vector<PlayedFrame>& script) {
     std::vector<PlayedResult> out;
     RGBDFrame frame;
     for (const PlayedFrame& p : script) {
@@ -57,10 +58,12 @@ inline std::vector<PlayedResult> play(MainEngine& engine, const std::vector<RGBD
 }
 
 // The frames with a pose (tracked or relocalised), for the trajectory error.
-inline std::vector<TimedPose> posedTrajectory(const std::vector<PlayedResult>& run, const std::vector<RGBDFrame>& frames) {
+inline std::vector<TimedPose> posedTrajectory(const std::vector<PlayedResult>& run,
+                                              const std::vector<RGBDFrame>& frames) {
     std::vector<TimedPose> trajectory;
     for (const PlayedResult& r : run)
-        if (r.result.status != TrackingStatus::Lost) trajectory.push_back({frames[std::size_t(r.played.frame)].timestamp_s, r.result.T_world_camera});
+        if (r.result.status != TrackingStatus::Lost)
+            trajectory.push_back({frames[std::size_t(r.played.frame)].timestamp_s, r.result.T_world_camera});
     return trajectory;
 }
 

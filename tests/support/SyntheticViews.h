@@ -14,7 +14,12 @@ namespace voxfuse::test {
 
 inline Intrinsics kinectIntrinsics(int width = 640, int height = 480) {
     const float s = float(width) / 640.f;
-    return Intrinsics{width, height, 525.f * s, 525.f * s, (319.5f + 0.5f) * s - 0.5f, (239.5f + 0.5f) * float(height) / 480.f - 0.5f};
+    return Intrinsics{width,
+                      height,
+                      525.f * s,
+                      525.f * s,
+                      (319.5f + 0.5f) * s - 0.5f,
+                      (239.5f + 0.5f) * float(height) / 480.f - 0.5f};
 }
 
 inline synth::PinholeCamera toPinhole(const Intrinsics& in) {
@@ -29,7 +34,8 @@ inline synth::PinholeCamera toPinhole(const Intrinsics& in) {
 }
 
 // A view with exact depth (and the scene's colours) of `scene` seen from T_world_camera.
-inline View renderView(const synth::SyntheticScene& scene, const Intrinsics& intr, const Mat4f& T_world_camera, bool with_color = true) {
+inline View renderView(const synth::SyntheticScene& scene, const Intrinsics& intr, const Mat4f& T_world_camera,
+                       bool with_color = true) {
     Eigen::Isometry3f pose;
     pose.matrix() = toEigen(T_world_camera);
     const synth::RenderedFrame frame = scene.render(toPinhole(intr), pose, 1);
@@ -41,7 +47,8 @@ inline View renderView(const synth::SyntheticScene& scene, const Intrinsics& int
     if (with_color) {
         view.rgb.resize(intr.size());
         for (std::size_t i = 0; i < frame.rgb.size(); ++i)
-            view.rgb.host()[i] = Vec4u8{(unsigned char)std::lround(255.f * frame.rgb[i].x()), (unsigned char)std::lround(255.f * frame.rgb[i].y()),
+            view.rgb.host()[i] = Vec4u8{(unsigned char)std::lround(255.f * frame.rgb[i].x()),
+                                        (unsigned char)std::lround(255.f * frame.rgb[i].y()),
                                         (unsigned char)std::lround(255.f * frame.rgb[i].z()), 255};
     }
     return view;
@@ -64,12 +71,13 @@ inline Mat4f lookAt(const Eigen::Vector3f& eye, const Eigen::Vector3f& target) {
 
 // A view with classes too: `classes` classes in vertical stripes of the label image (half the view's
 // resolution), moved by `shift` stripes, so that neighbouring voxels and frames disagree.
-inline View labelledView(const synth::SyntheticScene& scene, const Intrinsics& intr, const Mat4f& T_world_camera, int shift,
-                         int classes = 4) {
+inline View labelledView(const synth::SyntheticScene& scene, const Intrinsics& intr, const Mat4f& T_world_camera,
+                         int shift, int classes = 4) {
     View view = renderView(scene, intr, T_world_camera);
     view.labels.resize(Vec2i{intr.width / 2, intr.height / 2});
     for (int v = 0; v < view.labels.height(); ++v)
-        for (int u = 0; u < view.labels.width(); ++u) view.labels.at(u, v) = ClassId(1 + (u * classes / view.labels.width() + shift) % classes);
+        for (int u = 0; u < view.labels.width(); ++u)
+            view.labels.at(u, v) = ClassId(1 + (u * classes / view.labels.width() + shift) % classes);
     return view;
 }
 
@@ -79,7 +87,8 @@ inline RGBDFrame toRgbdFrame(const View& view, int index) {
     f.index = index;
     f.timestamp_s = index / 30.0;
     f.depth_raw.resize(view.depth.size());
-    for (std::size_t i = 0; i < view.depth.pixelCount(); ++i) f.depth_raw.host()[i] = std::uint16_t(std::lround(view.depth.host()[i] * 1000.f));
+    for (std::size_t i = 0; i < view.depth.pixelCount(); ++i)
+        f.depth_raw.host()[i] = std::uint16_t(std::lround(view.depth.host()[i] * 1000.f));
     f.rgb.resize(view.rgb.size());
     for (std::size_t i = 0; i < view.rgb.pixelCount(); ++i) f.rgb.host()[i] = view.rgb.host()[i];
     return f;

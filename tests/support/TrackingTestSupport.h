@@ -43,9 +43,11 @@ inline RenderState emptyModel(const Intrinsics& intrinsics) {
 
 // The pose after the camera rotates by `degrees` about `axis` (camera coordinates, through its centre)
 // and then translates by `translation_m` (camera coordinates).
-inline Mat4f moveInCamera(const Mat4f& T_world_camera, const Eigen::Vector3f& axis, float degrees, const Eigen::Vector3f& translation_m) {
+inline Mat4f moveInCamera(const Mat4f& T_world_camera, const Eigen::Vector3f& axis, float degrees,
+                          const Eigen::Vector3f& translation_m) {
     Eigen::Matrix4f M = Eigen::Matrix4f::Identity();
-    M.topLeftCorner<3, 3>() = Eigen::AngleAxisf(degrees * float(EIGEN_PI) / 180.f, axis.normalized()).toRotationMatrix();
+    M.topLeftCorner<3, 3>() =
+        Eigen::AngleAxisf(degrees * float(EIGEN_PI) / 180.f, axis.normalized()).toRotationMatrix();
     M.topRightCorner<3, 1>() = translation_m;
     return toMat4f(toEigen(T_world_camera) * M);
 }
@@ -54,7 +56,8 @@ inline float translationErrorM(const Mat4f& a, const Mat4f& b) { return length(a
 
 inline float rotationErrorDeg(const Mat4f& a, const Mat4f& b) {
     // Through a quaternion in double: acos of the trace cannot resolve angles below ~0.02 degrees in float.
-    const Eigen::Matrix3d R = toEigen(a).topLeftCorner<3, 3>().cast<double>().transpose() * toEigen(b).topLeftCorner<3, 3>().cast<double>();
+    const Eigen::Matrix3d R =
+        toEigen(a).topLeftCorner<3, 3>().cast<double>().transpose() * toEigen(b).topLeftCorner<3, 3>().cast<double>();
     const Eigen::AngleAxisd aa(R);
     return float(std::fabs(aa.angle()) * 180.0 / EIGEN_PI);
 }

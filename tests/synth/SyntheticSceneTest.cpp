@@ -212,8 +212,8 @@ TEST(SyntheticScene, DefaultRoomGivesEveryPrimitiveANamedClass) {
         EXPECT_TRUE(names.emplace(c.id, c.name).second) << "class " << c.id << " named twice";
     }
     const std::map<std::uint16_t, std::string> expected{
-        {room_class::kFloor, "floor"}, {room_class::kWall, "wall"},     {room_class::kCeiling, "ceiling"},
-        {room_class::kTable, "table"}, {room_class::kBall, "ball"},     {room_class::kCylinder, "cylinder"},
+        {room_class::kFloor, "floor"}, {room_class::kWall, "wall"},    {room_class::kCeiling, "ceiling"},
+        {room_class::kTable, "table"}, {room_class::kBall, "ball"},    {room_class::kCylinder, "cylinder"},
         {room_class::kBox, "box"},     {room_class::kPoster, "poster"}};
     EXPECT_EQ(names, expected);
 
@@ -355,7 +355,7 @@ TEST(KinectDepthModel, HolesAtGrazingAnglesEdgesAndOutOfRange) {
     const std::vector<float> out = model.apply(depth, cosine, w, h);
     EXPECT_NEAR(out[0], 1.0f, 0.02f);  // near side of the edge stays
     EXPECT_EQ(out[1], 0.0f);
-    EXPECT_EQ(out[2], 0.0f);           // far side of a 1 m jump
+    EXPECT_EQ(out[2], 0.0f);  // far side of a 1 m jump
     EXPECT_NEAR(out[3], 2.0f, 0.05f);
     EXPECT_NEAR(out[4], 2.0f, 0.05f);
     EXPECT_EQ(out[5], 0.0f);
@@ -493,11 +493,12 @@ std::vector<Eigen::Isometry3f> readGroundTruth(const fs::path& path) {
 // Runs the tool in PPM mode and compares its Kinect-raw depth with the exact
 // depth of the scene and poses it wrote.
 void checkPpmOutput(bool noise) {
-    const fs::path dir = fs::path(::testing::TempDir()) / (noise ? "voxfuse_synth_ppm_noisy" : "voxfuse_synth_ppm_exact");
+    const fs::path dir =
+        fs::path(::testing::TempDir()) / (noise ? "voxfuse_synth_ppm_noisy" : "voxfuse_synth_ppm_exact");
     fs::remove_all(dir);
     const std::string command = std::string("\"") + VOXFUSE_SYNTH_EXE + "\" --out \"" + dir.string() +
-                                "\" --format ppm --frames 3 --width 160 --height 120" +
-                                (noise ? "" : " --no-noise") + " > /dev/null";
+                                "\" --format ppm --frames 3 --width 160 --height 120" + (noise ? "" : " --no-noise") +
+                                " > /dev/null";
     ASSERT_EQ(std::system(command.c_str()), 0) << command;
 
     std::ifstream calib(dir / "calib.txt");
@@ -532,7 +533,7 @@ void checkPpmOutput(bool noise) {
         withinOneStep += error <= model.depthStepAt(z);
     }
     if (noise) {
-        EXPECT_GT(valid, static_cast<int>(raw.size() * 6 / 10));   // some holes, mostly valid
+        EXPECT_GT(valid, static_cast<int>(raw.size() * 6 / 10));  // some holes, mostly valid
         EXPECT_LT(valid, static_cast<int>(raw.size()));
         EXPECT_GT(withinOneStep, valid * 9 / 10);
     } else {
@@ -667,7 +668,8 @@ TEST(VoxfuseSynthTool, TumLabelImagesAreTheExactClasses) {
     EXPECT_EQ(std::system((twoFrames + " --overwrite > /dev/null").c_str()), 0);
     EXPECT_EQ(frameLines(), 2);
     for (const auto& entry : fs::directory_iterator(dir.parent_path()))
-        EXPECT_EQ(entry.path().filename().string().find(".voxfuse_synth_tum_labels.partial-"), std::string::npos) << "a staging folder was left";
+        EXPECT_EQ(entry.path().filename().string().find(".voxfuse_synth_tum_labels.partial-"), std::string::npos)
+            << "a staging folder was left";
     fs::remove_all(dir);
 }
 #else

@@ -13,7 +13,7 @@ using namespace voxfuse;
 
 namespace {
 
-constexpr double kMinLumaVariance = 50.0;        // a flat panel is ~0; a real image is in the hundreds
+constexpr double kMinLumaVariance = 50.0;  // a flat panel is ~0; a real image is in the hundreds
 constexpr double kMinModelSurfaceFraction = 0.25;
 
 int luma(Vec4u8 p) { return (299 * p.x + 587 * p.y + 114 * p.z) / 1000; }
@@ -60,13 +60,16 @@ int main(int argc, char** argv) {
             viewer::PanelRect rect;
         };
         bool ok = true;
-        for (const Named& panel : {Named{"model", layout.model}, Named{"live depth", layout.live_depth}, Named{"live colour", layout.live_colour}}) {
+        for (const Named& panel : {Named{"model", layout.model}, Named{"live depth", layout.live_depth},
+                                   Named{"live colour", layout.live_colour}}) {
             const PanelStats s = measure(shot, panel.rect);
             const bool varied = s.variance > kMinLumaVariance;
-            std::printf("%-12s %4dx%-4d at (%d,%d): luma variance %.1f%s, non-background %.0f%%\n", panel.name, panel.rect.width,
-                        panel.rect.height, panel.rect.x, panel.rect.y, s.variance, varied ? "" : " (BLANK)", 100.0 * s.surface_fraction);
+            std::printf("%-12s %4dx%-4d at (%d,%d): luma variance %.1f%s, non-background %.0f%%\n", panel.name,
+                        panel.rect.width, panel.rect.height, panel.rect.x, panel.rect.y, s.variance,
+                        varied ? "" : " (BLANK)", 100.0 * s.surface_fraction);
             ok = ok && varied;
-            if (panel.rect.x == layout.model.x && panel.rect.y == layout.model.y && s.surface_fraction < kMinModelSurfaceFraction) {
+            if (panel.rect.x == layout.model.x && panel.rect.y == layout.model.y &&
+                s.surface_fraction < kMinModelSurfaceFraction) {
                 std::printf("model panel shows too little surface (%.0f%% < %.0f%%)\n", 100.0 * s.surface_fraction,
                             100.0 * kMinModelSurfaceFraction);
                 ok = false;

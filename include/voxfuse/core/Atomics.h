@@ -25,7 +25,8 @@ VF_HOST_DEVICE inline int atomicMinInt(int* target, int value) {
     return atomicMin(target, value);
 #else
     int current = __atomic_load_n(target, __ATOMIC_RELAXED);
-    while (value < current && !__atomic_compare_exchange_n(target, &current, value, true, __ATOMIC_RELAXED, __ATOMIC_RELAXED)) {
+    while (value < current &&
+           !__atomic_compare_exchange_n(target, &current, value, true, __ATOMIC_RELAXED, __ATOMIC_RELAXED)) {
     }
     return current;
 #endif
@@ -41,7 +42,9 @@ VF_HOST_DEVICE inline bool floatSignBit(float v) {
 #endif
 }
 // a < b in that order: as by value, and -0 < +0.
-VF_HOST_DEVICE inline bool floatOrderedBefore(float a, float b) { return a < b || (a == b && floatSignBit(a) && !floatSignBit(b)); }
+VF_HOST_DEVICE inline bool floatOrderedBefore(float a, float b) {
+    return a < b || (a == b && floatSignBit(a) && !floatSignBit(b));
+}
 
 // *target = min(*target, value) and max, in the order above.
 VF_HOST_DEVICE inline void atomicMinFloat(float* target, float value) {
@@ -50,8 +53,10 @@ VF_HOST_DEVICE inline void atomicMinFloat(float* target, float value) {
     // order in reverse of their bits as unsigned ints, and below every float without it. The branch is
     // on the sign bit, not on value >= 0, which -0.0f passes while its bits (as a signed int, INT_MIN)
     // order below every negative float's.
-    if (!floatSignBit(value)) atomicMin(reinterpret_cast<int*>(target), __float_as_int(value));
-    else atomicMax(reinterpret_cast<unsigned*>(target), __float_as_uint(value));
+    if (!floatSignBit(value))
+        atomicMin(reinterpret_cast<int*>(target), __float_as_int(value));
+    else
+        atomicMax(reinterpret_cast<unsigned*>(target), __float_as_uint(value));
 #else
     float current;
     __atomic_load(target, &current, __ATOMIC_RELAXED);
@@ -63,8 +68,10 @@ VF_HOST_DEVICE inline void atomicMinFloat(float* target, float value) {
 
 VF_HOST_DEVICE inline void atomicMaxFloat(float* target, float value) {
 #if defined(__CUDA_ARCH__)
-    if (!floatSignBit(value)) atomicMax(reinterpret_cast<int*>(target), __float_as_int(value));
-    else atomicMin(reinterpret_cast<unsigned*>(target), __float_as_uint(value));
+    if (!floatSignBit(value))
+        atomicMax(reinterpret_cast<int*>(target), __float_as_int(value));
+    else
+        atomicMin(reinterpret_cast<unsigned*>(target), __float_as_uint(value));
 #else
     float current;
     __atomic_load(target, &current, __ATOMIC_RELAXED);
@@ -78,7 +85,8 @@ VF_HOST_DEVICE inline void atomicMaxFloat(float* target, float value) {
 VF_HOST_DEVICE inline std::uint64_t atomicCasU64(std::uint64_t* target, std::uint64_t expected, std::uint64_t desired) {
 #if defined(__CUDA_ARCH__)
     static_assert(sizeof(unsigned long long) == sizeof(std::uint64_t), "64-bit CAS");
-    return std::uint64_t(atomicCAS(reinterpret_cast<unsigned long long*>(target), (unsigned long long)expected, (unsigned long long)desired));
+    return std::uint64_t(atomicCAS(reinterpret_cast<unsigned long long*>(target), (unsigned long long)expected,
+                                   (unsigned long long)desired));
 #else
     __atomic_compare_exchange_n(target, &expected, desired, false, __ATOMIC_RELAXED, __ATOMIC_RELAXED);
     return expected;  // on failure the value found; on success the value replaced, which was `expected`

@@ -47,7 +47,9 @@ void forEachCpuShare(std::size_t n, std::size_t min_share, const Range& range) {
     if (n == 0) return;
     const std::size_t most = std::size_t(4 * cpuThreadCount());
     const int shares = int(std::max<std::size_t>(1, std::min(most, n / std::max<std::size_t>(min_share, 1))));
-    forEachCpuTask(shares, [&](int s) { range(n * std::size_t(s) / std::size_t(shares), n * std::size_t(s + 1) / std::size_t(shares)); });
+    forEachCpuTask(shares, [&](int s) {
+        range(n * std::size_t(s) / std::size_t(shares), n * std::size_t(s + 1) / std::size_t(shares));
+    });
 }
 
 }  // namespace voxfuse

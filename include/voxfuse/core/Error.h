@@ -16,7 +16,8 @@ public:
 class IoError : public Error {
 public:
     IoError(const std::string& file, const std::string& reason, int frame = -1)
-        : IoError(file, file + (frame >= 0 ? ": frame " + std::to_string(frame) : std::string()) + ": " + reason, reason, frame) {}
+        : IoError(file, file + (frame >= 0 ? ": frame " + std::to_string(frame) : std::string()) + ": " + reason,
+                  reason, frame) {}
     const std::string& file() const { return file_; }
     int frame() const { return frame_; }
     const std::string& reason() const { return reason_; }

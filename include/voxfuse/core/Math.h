@@ -45,18 +45,58 @@ using Vec4f = Vec4<float>;
 using Vec4u8 = Vec4<std::uint8_t>;
 
 // ---- Vec3 arithmetic ----
-template <typename T> VF_HOST_DEVICE inline Vec3<T> operator+(Vec3<T> a, Vec3<T> b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
-template <typename T> VF_HOST_DEVICE inline Vec3<T> operator-(Vec3<T> a, Vec3<T> b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-template <typename T> VF_HOST_DEVICE inline Vec3<T> operator-(Vec3<T> a) { return {-a.x, -a.y, -a.z}; }
-template <typename T> VF_HOST_DEVICE inline Vec3<T> operator*(Vec3<T> a, T s) { return {a.x * s, a.y * s, a.z * s}; }
-template <typename T> VF_HOST_DEVICE inline Vec3<T> operator*(T s, Vec3<T> a) { return {a.x * s, a.y * s, a.z * s}; }
-template <typename T> VF_HOST_DEVICE inline Vec3<T> operator/(Vec3<T> a, T s) { return {a.x / s, a.y / s, a.z / s}; }
-template <typename T> VF_HOST_DEVICE inline Vec3<T>& operator+=(Vec3<T>& a, Vec3<T> b) { a.x += b.x; a.y += b.y; a.z += b.z; return a; }
-template <typename T> VF_HOST_DEVICE inline Vec3<T>& operator-=(Vec3<T>& a, Vec3<T> b) { a.x -= b.x; a.y -= b.y; a.z -= b.z; return a; }
-template <typename T> VF_HOST_DEVICE inline bool operator==(Vec3<T> a, Vec3<T> b) { return a.x == b.x && a.y == b.y && a.z == b.z; }
-template <typename T> VF_HOST_DEVICE inline bool operator!=(Vec3<T> a, Vec3<T> b) { return !(a == b); }
-template <typename T> VF_HOST_DEVICE inline T dot(Vec3<T> a, Vec3<T> b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-template <typename T> VF_HOST_DEVICE inline Vec3<T> cross(Vec3<T> a, Vec3<T> b) {
+template <typename T>
+VF_HOST_DEVICE inline Vec3<T> operator+(Vec3<T> a, Vec3<T> b) {
+    return {a.x + b.x, a.y + b.y, a.z + b.z};
+}
+template <typename T>
+VF_HOST_DEVICE inline Vec3<T> operator-(Vec3<T> a, Vec3<T> b) {
+    return {a.x - b.x, a.y - b.y, a.z - b.z};
+}
+template <typename T>
+VF_HOST_DEVICE inline Vec3<T> operator-(Vec3<T> a) {
+    return {-a.x, -a.y, -a.z};
+}
+template <typename T>
+VF_HOST_DEVICE inline Vec3<T> operator*(Vec3<T> a, T s) {
+    return {a.x * s, a.y * s, a.z * s};
+}
+template <typename T>
+VF_HOST_DEVICE inline Vec3<T> operator*(T s, Vec3<T> a) {
+    return {a.x * s, a.y * s, a.z * s};
+}
+template <typename T>
+VF_HOST_DEVICE inline Vec3<T> operator/(Vec3<T> a, T s) {
+    return {a.x / s, a.y / s, a.z / s};
+}
+template <typename T>
+VF_HOST_DEVICE inline Vec3<T>& operator+=(Vec3<T>& a, Vec3<T> b) {
+    a.x += b.x;
+    a.y += b.y;
+    a.z += b.z;
+    return a;
+}
+template <typename T>
+VF_HOST_DEVICE inline Vec3<T>& operator-=(Vec3<T>& a, Vec3<T> b) {
+    a.x -= b.x;
+    a.y -= b.y;
+    a.z -= b.z;
+    return a;
+}
+template <typename T>
+VF_HOST_DEVICE inline bool operator==(Vec3<T> a, Vec3<T> b) {
+    return a.x == b.x && a.y == b.y && a.z == b.z;
+}
+template <typename T>
+VF_HOST_DEVICE inline bool operator!=(Vec3<T> a, Vec3<T> b) {
+    return !(a == b);
+}
+template <typename T>
+VF_HOST_DEVICE inline T dot(Vec3<T> a, Vec3<T> b) {
+    return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+template <typename T>
+VF_HOST_DEVICE inline Vec3<T> cross(Vec3<T> a, Vec3<T> b) {
     return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
 VF_HOST_DEVICE inline float length(Vec3f a) { return sqrtf(dot(a, a)); }
@@ -68,11 +108,26 @@ VF_HOST_DEVICE inline Vec3f toFloat(Vec3i a) { return {float(a.x), float(a.y), f
 VF_HOST_DEVICE inline Vec3i floorToInt(Vec3f a) { return {int(floorf(a.x)), int(floorf(a.y)), int(floorf(a.z))}; }
 
 // ---- Vec2 arithmetic ----
-template <typename T> VF_HOST_DEVICE inline Vec2<T> operator+(Vec2<T> a, Vec2<T> b) { return {a.x + b.x, a.y + b.y}; }
-template <typename T> VF_HOST_DEVICE inline Vec2<T> operator-(Vec2<T> a, Vec2<T> b) { return {a.x - b.x, a.y - b.y}; }
-template <typename T> VF_HOST_DEVICE inline Vec2<T> operator*(Vec2<T> a, T s) { return {a.x * s, a.y * s}; }
-template <typename T> VF_HOST_DEVICE inline bool operator==(Vec2<T> a, Vec2<T> b) { return a.x == b.x && a.y == b.y; }
-template <typename T> VF_HOST_DEVICE inline bool operator!=(Vec2<T> a, Vec2<T> b) { return !(a == b); }
+template <typename T>
+VF_HOST_DEVICE inline Vec2<T> operator+(Vec2<T> a, Vec2<T> b) {
+    return {a.x + b.x, a.y + b.y};
+}
+template <typename T>
+VF_HOST_DEVICE inline Vec2<T> operator-(Vec2<T> a, Vec2<T> b) {
+    return {a.x - b.x, a.y - b.y};
+}
+template <typename T>
+VF_HOST_DEVICE inline Vec2<T> operator*(Vec2<T> a, T s) {
+    return {a.x * s, a.y * s};
+}
+template <typename T>
+VF_HOST_DEVICE inline bool operator==(Vec2<T> a, Vec2<T> b) {
+    return a.x == b.x && a.y == b.y;
+}
+template <typename T>
+VF_HOST_DEVICE inline bool operator!=(Vec2<T> a, Vec2<T> b) {
+    return !(a == b);
+}
 
 // ---- 3x3 and rigid 4x4 matrices, row-major ----
 struct Mat3f {
@@ -99,8 +154,7 @@ struct Mat4f {
 
 // Applies rotation and translation (the point is taken as homogeneous with w = 1).
 VF_HOST_DEVICE inline Vec3f transformPoint(const Mat4f& T, Vec3f p) {
-    return {T.m[0] * p.x + T.m[1] * p.y + T.m[2] * p.z + T.m[3],
-            T.m[4] * p.x + T.m[5] * p.y + T.m[6] * p.z + T.m[7],
+    return {T.m[0] * p.x + T.m[1] * p.y + T.m[2] * p.z + T.m[3], T.m[4] * p.x + T.m[5] * p.y + T.m[6] * p.z + T.m[7],
             T.m[8] * p.x + T.m[9] * p.y + T.m[10] * p.z + T.m[11]};
 }
 // Applies the rotation only (for directions and normals of rigid transforms).
@@ -128,7 +182,10 @@ VF_HOST_DEVICE inline Mat4f rigidInverse(const Mat4f& T) {
     return r;
 }
 
-template <typename T> VF_HOST_DEVICE inline T clampValue(T v, T lo, T hi) { return v < lo ? lo : (v > hi ? hi : v); }
+template <typename T>
+VF_HOST_DEVICE inline T clampValue(T v, T lo, T hi) {
+    return v < lo ? lo : (v > hi ? hi : v);
+}
 
 // The float whose bits are `bits`.
 VF_HOST_DEVICE inline float floatFromBits(std::uint32_t bits) {
@@ -155,9 +212,11 @@ VF_HOST_DEVICE inline float expOfNegative(float x) {
     float fl = (y + 8388608.f) - 8388608.f;
     fl = fl > y ? fl - 1.f : fl;
     const int n = int(fl);
-    const float f = y - fl;                // 2^-y = 2^-n 2^-f, f in [0, 1)
+    const float f = y - fl;  // 2^-y = 2^-n 2^-f, f in [0, 1)
     // 2^-f, a degree-5 least-squares fit on [0, 1] (relative error 8e-8).
-    const float p = 0.99999994f + f * (-0.69314218f + f * (0.24017160f + f * (-0.055278152f + f * (0.0091868825f + f * -0.00093811715f))));
+    const float p =
+        0.99999994f +
+        f * (-0.69314218f + f * (0.24017160f + f * (-0.055278152f + f * (0.0091868825f + f * -0.00093811715f))));
     const float e = p * floatFromBits(std::uint32_t(127 - n) << 23);  // n <= 125: 2^-n is a normal float
     return in_range ? e : 0.f;
 }

@@ -59,7 +59,8 @@ public:
     // then allocate again on the next call instead of handing out a null pointer.
     void allocate(std::size_t count, bool on_host, bool on_device, HostMemory host_kind = HostMemory::Pageable) {
         // A pinned host copy serves where pageable memory was asked for, not the other way round.
-        const bool host_ok = !on_host || (host_ && (host_kind == HostMemory::Pageable || host_kind_ == HostMemory::Pinned));
+        const bool host_ok =
+            !on_host || (host_ && (host_kind == HostMemory::Pageable || host_kind_ == HostMemory::Pinned));
         if (count == count_ && (count == 0 || (host_ok && (!on_device || device_)))) return;
         release();
         count_ = count;
@@ -143,17 +144,22 @@ public:
     void writeRange(Device where, std::size_t offset, const T* host_values, std::size_t count) {
         requireRange(where, offset, count, "writeRange");
         if (!count) return;
-        if (where == Device::CPU) std::memcpy(static_cast<void*>(host() + offset), host_values, count * sizeof(T));
-        else device_memory::copyHostToDevice(device() + offset, host_values, count * sizeof(T));
+        if (where == Device::CPU)
+            std::memcpy(static_cast<void*>(host() + offset), host_values, count * sizeof(T));
+        else
+            device_memory::copyHostToDevice(device() + offset, host_values, count * sizeof(T));
     }
     void readRange(Device where, std::size_t offset, T* host_values, std::size_t count) const {
         requireRange(where, offset, count, "readRange");
         if (!count) return;
-        if (where == Device::CPU) std::memcpy(static_cast<void*>(host_values), host_ + offset, count * sizeof(T));
-        else device_memory::copyDeviceToHost(host_values, device_ + offset, count * sizeof(T));
+        if (where == Device::CPU)
+            std::memcpy(static_cast<void*>(host_values), host_ + offset, count * sizeof(T));
+        else
+            device_memory::copyDeviceToHost(host_values, device_ + offset, count * sizeof(T));
     }
     // Copies `count` elements from `source` (its copy at `where`) into this block's copy at `where`.
-    void copyRangeFrom(Device where, const MemoryBlock& source, std::size_t source_offset, std::size_t offset, std::size_t count) {
+    void copyRangeFrom(Device where, const MemoryBlock& source, std::size_t source_offset, std::size_t offset,
+                       std::size_t count) {
         requireRange(where, offset, count, "copyRangeFrom");
         source.requireRange(where, source_offset, count, "copyRangeFrom (source)");
         if (!count) return;
@@ -167,8 +173,10 @@ public:
     void fill(Device where, const T& value, std::size_t offset, std::size_t count) {
         requireRange(where, offset, count, "fill");
         if (!count) return;
-        if (where == Device::CPU) std::fill(host() + offset, host() + offset + count, value);
-        else device_memory::fillPattern(device() + offset, &value, sizeof(T), count);
+        if (where == Device::CPU)
+            std::fill(host() + offset, host() + offset + count, value);
+        else
+            device_memory::fillPattern(device() + offset, &value, sizeof(T), count);
     }
     // Sets every element of every present copy to `value`; both stay current.
     void fill(const T& value) {
@@ -193,7 +201,9 @@ public:
     // mapping it reallocates and copies.
     void growHost(std::size_t count, std::size_t capacity) {
         if (device_) throw DeviceError("MemoryBlock::growHost: the block has a device copy");
-        if (count < count_) throw Error("MemoryBlock::growHost: " + std::to_string(count) + " elements would shrink a block of " + std::to_string(count_));
+        if (count < count_)
+            throw Error("MemoryBlock::growHost: " + std::to_string(count) + " elements would shrink a block of " +
+                        std::to_string(count_));
         if ((host_ && count <= host_capacity_) || (count == 0 && capacity == 0)) {
             count_ = count;
             return;
@@ -202,7 +212,8 @@ public:
         T* grown = nullptr;
         std::size_t grown_capacity = count, grown_mapped_bytes = 0;
 #if defined(__unix__)
-        void* mapped = mmap(nullptr, reserve * sizeof(T), PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS | MAP_NORESERVE, -1, 0);
+        void* mapped = mmap(nullptr, reserve * sizeof(T), PROT_READ | PROT_WRITE,
+                            MAP_PRIVATE | MAP_ANONYMOUS | MAP_NORESERVE, -1, 0);
         if (mapped != MAP_FAILED) {
             grown = static_cast<T*>(mapped);
             grown_capacity = reserve;
@@ -230,7 +241,9 @@ public:
     // changing nothing, where the GPU or driver cannot reserve: the caller reallocates and copies.
     bool growDevice(std::size_t count, std::size_t capacity) {
         if (host_) throw DeviceError("MemoryBlock::growDevice: the block has a host copy");
-        if (count < count_) throw Error("MemoryBlock::growDevice: " + std::to_string(count) + " elements would shrink a block of " + std::to_string(count_));
+        if (count < count_)
+            throw Error("MemoryBlock::growDevice: " + std::to_string(count) + " elements would shrink a block of " +
+                        std::to_string(count_));
         if (device_growable_ && count <= device_capacity_) {
             device_memory::growGrowable(device_, count * sizeof(T));
             count_ = count;
@@ -284,9 +297,12 @@ private:
         }
     }
     void freeHost() noexcept {
-        if (host_mapped_bytes_) unmapHost();
-        else if (host_pinned_) device_memory::releasePinned(host_);
-        else std::free(host_);
+        if (host_mapped_bytes_)
+            unmapHost();
+        else if (host_pinned_)
+            device_memory::releasePinned(host_);
+        else
+            std::free(host_);
         host_capacity_ = 0;
         host_mapped_bytes_ = 0;
         host_ = nullptr;
@@ -294,8 +310,10 @@ private:
         host_current_ = true;
     }
     void freeDevice() noexcept {
-        if (device_growable_) device_memory::releaseGrowable(device_);
-        else if (device_) device_memory::release(device_);
+        if (device_growable_)
+            device_memory::releaseGrowable(device_);
+        else if (device_)
+            device_memory::release(device_);
         device_ = nullptr;
         device_growable_ = false;
         device_capacity_ = 0;
@@ -306,14 +324,15 @@ private:
 #endif
     }
     void requireBoth(const char* what) const {
-        if (count_ && (!host_ || !device_)) throw DeviceError(std::string("MemoryBlock::") + what + ": needs both a host and a device copy");
+        if (count_ && (!host_ || !device_))
+            throw DeviceError(std::string("MemoryBlock::") + what + ": needs both a host and a device copy");
     }
     void requireRange(Device where, std::size_t offset, std::size_t count, const char* what) const {
         if (count && !(where == Device::CPU ? host_ : device_))
             throw DeviceError(std::string("MemoryBlock::") + what + ": no " + deviceName(where) + " copy");
         if (offset > count_ || count > count_ - offset)
-            throw Error(std::string("MemoryBlock::") + what + ": elements " + std::to_string(offset) + "+" + std::to_string(count) +
-                        " outside a block of " + std::to_string(count_));
+            throw Error(std::string("MemoryBlock::") + what + ": elements " + std::to_string(offset) + "+" +
+                        std::to_string(count) + " outside a block of " + std::to_string(count_));
     }
     void release() noexcept {
         freeHost();
@@ -339,13 +358,13 @@ private:
     T* device_ = nullptr;
     std::size_t count_ = 0;
     HostMemory host_kind_ = HostMemory::Pageable;
-    bool host_pinned_ = false;     // host_ came from allocatePinned
+    bool host_pinned_ = false;           // host_ came from allocatePinned
     std::size_t host_capacity_ = 0;      // elements host_ can hold (more than count_ after growHost)
     std::size_t host_mapped_bytes_ = 0;  // host_ is a mapping of this many bytes (growHost), else 0
     bool device_growable_ = false;       // device_ came from reserveGrowable (growDevice)
     std::size_t device_capacity_ = 0;    // elements its reservation holds
-    bool host_current_ = true;     // meaningful only while host_ exists
-    bool device_current_ = true;   // meaningful only while device_ exists
+    bool host_current_ = true;           // meaningful only while host_ exists
+    bool device_current_ = true;         // meaningful only while device_ exists
 };
 
 // Copies all of `source`'s copy at `from` into `target`'s copy at `to` (equal sizes), across the bus
@@ -353,9 +372,12 @@ private:
 template <typename T>
 void copyAcross(MemoryBlock<T>& target, Device to, const MemoryBlock<T>& source, Device from) {
     if (target.size() != source.size()) throw Error("copyAcross: the blocks differ in size");
-    if (from == Device::CPU) target.writeRange(to, 0, source.host(), source.size());
-    else if (to == Device::CPU) source.readRange(from, 0, target.host(), source.size());
-    else target.copyRangeFrom(to, source, 0, 0, source.size());
+    if (from == Device::CPU)
+        target.writeRange(to, 0, source.host(), source.size());
+    else if (to == Device::CPU)
+        source.readRange(from, 0, target.host(), source.size());
+    else
+        target.copyRangeFrom(to, source, 0, 0, source.size());
 }
 
 // Keeps only the copy at `where`, bringing it up to date first.

@@ -63,7 +63,8 @@ std::unique_ptr<AllocationEngine<TVoxel, TIndex>> makeAllocationEngine();
 // The engine of `device` for scenes on that device; DeviceError in a build without CUDA.
 template <class TVoxel, class TIndex>
 std::unique_ptr<AllocationEngine<TVoxel, TIndex>> makeAllocationEngine(Device device) {
-    return device == Device::CPU ? cpu::makeAllocationEngine<TVoxel, TIndex>() : cuda::makeAllocationEngine<TVoxel, TIndex>();
+    return device == Device::CPU ? cpu::makeAllocationEngine<TVoxel, TIndex>()
+                                 : cuda::makeAllocationEngine<TVoxel, TIndex>();
 }
 
 }  // namespace voxfuse

@@ -38,21 +38,23 @@ public:
     virtual void sobelGradient(const Image<float>& intensity, Image<Vec2f>& gradient) = 0;
     // The model points at every `step`-th pixel of the raycast (points image of size model / step),
     // coloured from `intensity`, an image taken by a colour camera `rgb` at T_rgb_world.
-    virtual void colorModelPoints(const RenderState& model, int step, const Image<float>& intensity, const Intrinsics& rgb,
-                                  const Mat4f& T_rgb_world, Image<ColorPoint>& points) = 0;
+    virtual void colorModelPoints(const RenderState& model, int step, const Image<float>& intensity,
+                                  const Intrinsics& rgb, const Mat4f& T_rgb_world, Image<ColorPoint>& points) = 0;
     // The far-field points of every `step`-th pixel of `far_depth` (points and gradient_sq images of
     // size far_depth / step; see shared farFieldPoint): a keyframe of depth camera `depth_camera` at
     // T_world_camera, coloured by its colour pyramid's finest level `color` (camera at T_rgb_world).
-    virtual void farFieldPoints(const Image<float>& far_depth, const Intrinsics& depth_camera, int step, const Mat4f& T_world_camera,
-                                const ColorFrameLevel& color, const Mat4f& T_rgb_world, Image<ColorPoint>& points,
-                                Image<float>& gradient_sq) = 0;
+    virtual void farFieldPoints(const Image<float>& far_depth, const Intrinsics& depth_camera, int step,
+                                const Mat4f& T_world_camera, const ColorFrameLevel& color, const Mat4f& T_rgb_world,
+                                Image<ColorPoint>& points, Image<float>& gradient_sq) = 0;
     // `points` as a frame with depths `depth` (within the map's range) at T_camera_world sees them: a
     // point outside its view or behind a surface it measured loses its colour (unhiddenFarFieldPoint).
-    virtual void unhiddenFarFieldPoints(const Image<ColorPoint>& points, const Image<float>& depth, const Intrinsics& depth_camera,
-                                        const Mat4f& T_camera_world, Image<ColorPoint>& unhidden) = 0;
+    virtual void unhiddenFarFieldPoints(const Image<ColorPoint>& points, const Image<float>& depth,
+                                        const Intrinsics& depth_camera, const Mat4f& T_camera_world,
+                                        Image<ColorPoint>& unhidden) = 0;
     // The photometric normal equations of every coloured point against `level`.
     virtual NormalEquations<double> accumulate(const Image<ColorPoint>& points, const ColorFrameLevel& level,
-                                               const ColorTermParams& params, RobustKernel kernel, float kernel_scale) = 0;
+                                               const ColorTermParams& params, RobustKernel kernel,
+                                               float kernel_scale) = 0;
     // Points that found an intensity.
     virtual int countColoredPoints(const Image<ColorPoint>& points) = 0;
 };

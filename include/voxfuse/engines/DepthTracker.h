@@ -4,8 +4,9 @@
 // frame pyramid and runs Gauss-Newton on SE(3); the device layers (src/engines/TrackerKernels_Impl.h,
 // run by src/cpu/TrackerKernels_CPU.cpp and cuda/TrackerKernels_CUDA.cu) sum the normal equations of
 // one iteration over the pixels of a level, calling pointToPlaneTerm() from shared/DepthTracker.h
-// (the CPU in double per thread, the GPU in double per block: both in an order fixed by the image). The same host loop runs the "ren" refinement (a robust kernel at full
-// resolution) and "rgbd" (photometric terms from ColorTracker.h added to the system).
+// (the CPU in double per thread, the GPU in double per block: both in an order fixed by the image). The same host loop
+// runs the "ren" refinement (a robust kernel at full resolution) and "rgbd" (photometric terms from ColorTracker.h
+// added to the system).
 
 #include <memory>
 
@@ -32,8 +33,9 @@ public:
     // The point-to-plane normal equations of the vertices of `level` on every pixel_step-th row and
     // column against `model`, each term weighted by robustWeight(kernel, residual, kernel_scale_m);
     // terms of weight 0 are left out.
-    virtual NormalEquations<double> accumulate(const DepthFrameLevel& level, const RenderState& model, const DepthTermParams& params,
-                                               RobustKernel kernel, float kernel_scale_m, int pixel_step) = 0;
+    virtual NormalEquations<double> accumulate(const DepthFrameLevel& level, const RenderState& model,
+                                               const DepthTermParams& params, RobustKernel kernel, float kernel_scale_m,
+                                               int pixel_step) = 0;
 };
 
 namespace cpu {

@@ -53,7 +53,8 @@ std::unique_ptr<IntegrationEngine<TVoxel, TIndex>> makeIntegrationEngine();
 
 template <class TVoxel, class TIndex>
 std::unique_ptr<IntegrationEngine<TVoxel, TIndex>> makeIntegrationEngine(Device device) {
-    return device == Device::CPU ? cpu::makeIntegrationEngine<TVoxel, TIndex>() : cuda::makeIntegrationEngine<TVoxel, TIndex>();
+    return device == Device::CPU ? cpu::makeIntegrationEngine<TVoxel, TIndex>()
+                                 : cuda::makeIntegrationEngine<TVoxel, TIndex>();
 }
 
 }  // namespace voxfuse

@@ -13,7 +13,7 @@
 namespace voxfuse {
 
 struct BilateralFilterParams {
-    int radius_px = 2;            // 5x5 window
+    int radius_px = 2;  // 5x5 window
     float sigma_space_px = 2.5f;
     float sigma_depth_m = 0.03f;  // depth differences well above this are treated as edges
 };
@@ -29,13 +29,15 @@ public:
     // ConvertDepthPixels in shared/LowLevel.h).
     virtual void convertDepthToMetres(const Image<std::uint16_t>& raw, const DisparityCalib& calib, float fx_depth,
                                       float min_m, float max_m, float gap_tolerance, Image<float>& depth_m) = 0;
-    virtual void bilateralFilterDepth(const Image<float>& in, Image<float>& out, const BilateralFilterParams& params) = 0;
+    virtual void bilateralFilterDepth(const Image<float>& in, Image<float>& out,
+                                      const BilateralFilterParams& params) = 0;
     // Half resolution; see downsampleDepthPixel for how holes and edges are handled.
     virtual void downsampleDepth(const Image<float>& in, Image<float>& out, float max_diff_m) = 0;
     virtual void computeVertexMap(const Image<float>& depth, const Intrinsics& intrinsics, Image<Vec4f>& vertices) = 0;
     // With `pixel_step` > 1 only the pixels of every pixel_step-th row and column (those a subsampled
     // tracker level reads) get their normal; the others are not written.
-    virtual void computeNormalMap(const Image<Vec4f>& vertices, Image<Vec4f>& normals, float max_edge_m, int pixel_step = 1) = 0;
+    virtual void computeNormalMap(const Image<Vec4f>& vertices, Image<Vec4f>& normals, float max_edge_m,
+                                  int pixel_step = 1) = 0;
     virtual void copyDepth(const Image<float>& in, Image<float>& out) = 0;
     // In place: depths beyond max_depth_m become 0 (no measurement); infinity keeps them all.
     virtual void dropDepthBeyond(Image<float>& depth, float max_depth_m) = 0;

@@ -32,8 +32,8 @@ namespace voxfuse {
 // is stored in host memory, or in `swap_file`.
 struct SwapSettings {
     bool enabled = false;
-    std::string swap_file;          // "" = the global cache in host memory
-    int blocks_per_frame = 4096;    // blocks moved each way per frame at most (the transfer buffers' size)
+    std::string swap_file;        // "" = the global cache in host memory
+    int blocks_per_frame = 4096;  // blocks moved each way per frame at most (the transfer buffers' size)
 };
 
 // The default hash tables with the block ceiling left to the engine (kAutomaticBlockCount).
@@ -77,7 +77,8 @@ struct MainEngineSettings {
     RelocalisationSettings relocalisation;
 };
 
-VoxelType parseVoxelType(const std::string& name);  // "s", "f", "s_rgb", "f_rgb", "s_label", "s_rgb_label"; ConfigError otherwise
+VoxelType parseVoxelType(
+    const std::string& name);  // "s", "f", "s_rgb", "f_rgb", "s_label", "s_rgb_label"; ConfigError otherwise
 const char* toString(VoxelType type);
 bool voxelTypeHasColor(VoxelType type);
 bool voxelTypeHasLabels(VoxelType type);
@@ -85,8 +86,8 @@ IndexType parseIndexType(const std::string& name);  // "dense" or "hash"; Config
 const char* toString(IndexType type);
 
 struct StageTime {
-    const char* stage;  // "depth", "track", "allocate", "integrate", "raycast", with swapping "swap_in", "swap_out", and
-                        // with relocalisation "relocalise" (a lost frame) and "keyframes" (a well-tracked one)
+    const char* stage;  // "depth", "track", "allocate", "integrate", "raycast", with swapping "swap_in", "swap_out",
+                        // and with relocalisation "relocalise" (a lost frame) and "keyframes" (a well-tracked one)
     double ms;          // wall clock; on the GPU up to the end of the stage's queued work
 };
 
@@ -102,8 +103,8 @@ struct FrameResult {
     bool fused = false;  // the frame was integrated into the map (not when tracking failed)
     TrackingQuality quality = TrackingQuality::Good;
     TrackingStatus status = TrackingStatus::Tracking;
-    bool relocalisation_tried = false;  // the frame was looked up among the keyframes and candidates refined
-    int keyframes = 0;                  // in the relocaliser's database after this frame
+    bool relocalisation_tried = false;         // the frame was looked up among the keyframes and candidates refined
+    int keyframes = 0;                         // in the relocaliser's database after this frame
     Mat4f T_world_camera = Mat4f::identity();  // when lost: the last good pose
     // The tracker's full verdict (inlier ratio, residual, condition), also when the engine found it
     // implausible; on a relocalised frame the accepted candidate's; zero on a frame only relocalisation saw.
@@ -122,7 +123,8 @@ struct FrameResult {
 // 2^16 blocks; 2^18 when the free memory is unknown (0). The array still grows only with the scene.
 // On the GPU a growth reallocates the array and copies it, so both copies must fit at once: there
 // each block counts twice.
-int automaticMaxBlockCount(Device device, std::size_t voxel_bytes, const VoxelBlockHashSettings& hash, double available_bytes);
+int automaticMaxBlockCount(Device device, std::size_t voxel_bytes, const VoxelBlockHashSettings& hash,
+                           double available_bytes);
 
 class MainEngine {
 public:

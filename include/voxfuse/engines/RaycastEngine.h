@@ -16,7 +16,8 @@ namespace voxfuse {
 // Where a raycast's normals come from.
 enum class RaycastNormals {
     SdfGradient,  // central differences of the TSDF at each hit: smooth shading, valid up to silhouettes (renders)
-    FromPoints    // differences of neighbouring hits in the image, as the frame's normals: a fraction of the cost (the tracker's model)
+    FromPoints    // differences of neighbouring hits in the image, as the frame's normals: a fraction of the cost (the
+                  // tracker's model)
 };
 
 template <class TVoxel, class TIndex>
@@ -36,7 +37,8 @@ public:
                         Image<Vec4u8>& image) = 0;
     // The map's colours at the last raycast's hits as intensities in [0, 1], -1 where there is none
     // (RenderIntensityPixel), on the engine's device; all -1 for voxels without colour.
-    virtual void renderIntensity(const Scene<TVoxel, TIndex>& scene, const RenderState& render_state, Image<float>& intensity) = 0;
+    virtual void renderIntensity(const Scene<TVoxel, TIndex>& scene, const RenderState& render_state,
+                                 Image<float>& intensity) = 0;
 };
 
 // Depth (metres along the optical axis of the raycast camera) of each raycast pixel; 0 where nothing was hit.

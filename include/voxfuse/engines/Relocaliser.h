@@ -27,8 +27,9 @@ struct RelocalisationSettings {
     FernSettings ferns;
     int max_keyframes = 1000;
     float keyframe_min_dissimilarity = 0.2f;  // a frame this dissimilar from every keyframe becomes one
-    int keyframe_pause_frames = 10;           // frames after a relocalisation that are not made keyframes (their pose is the least sure)
-    int candidates = 3;                       // keyframes tried per lost frame, nearest codes first (the last good pose is tried too)
+    int keyframe_pause_frames =
+        10;              // frames after a relocalisation that are not made keyframes (their pose is the least sure)
+    int candidates = 3;  // keyframes tried per lost frame, nearest codes first (the last good pose is tried too)
     // A keyframe farther from the last good pose than this speed covers in the time since that frame is
     // not a candidate, nor is a refined pose that far: the camera cannot be there, however alike the
     // views (a corridor's repeating walls, a row of equal desks). 9 m/s is the tracker's own limit
@@ -38,12 +39,12 @@ struct RelocalisationSettings {
 
     // Acceptance (all must hold), measured after a second refinement from the refined pose against the
     // model raycast from there.
-    float min_inlier_ratio = 0.5f;            // the tracker's inliers / valid frame pixels
-    float max_residual_m = 0.006f;            // the tracker's RMS point-to-plane residual
-    float min_overlap = 0.5f;                 // valid frame pixels where the model has depth, of all valid frame pixels
-    float min_agreement = 0.75f;              // of those, the ones whose depths differ by less than agreement_tolerance_m
+    float min_inlier_ratio = 0.5f;  // the tracker's inliers / valid frame pixels
+    float max_residual_m = 0.006f;  // the tracker's RMS point-to-plane residual
+    float min_overlap = 0.5f;       // valid frame pixels where the model has depth, of all valid frame pixels
+    float min_agreement = 0.75f;    // of those, the ones whose depths differ by less than agreement_tolerance_m
     float agreement_tolerance_m = 0.02f;
-    float max_refinement_step_m = 0.01f;      // the second refinement moves the pose less than this: it had converged
+    float max_refinement_step_m = 0.01f;  // the second refinement moves the pose less than this: it had converged
     float max_refinement_step_deg = 1.f;
     // Where the map and the frame have colour: the correlation of the frame's intensities with the
     // model's fused colours, over the pixels whose depths agree (compareColour). Geometry alone takes
@@ -83,22 +84,23 @@ struct ColourAgreement {
     int cells = 0;            // that had their say
     int pixels = 0;           // in them
 };
-ColourAgreement compareColour(const View& view, const Image<float>& model_depth_m, const Image<float>& model_intensity, float tolerance_m,
-                              float voxel_size_m, int min_textured_cells = 8);
+ColourAgreement compareColour(const View& view, const Image<float>& model_depth_m, const Image<float>& model_intensity,
+                              float tolerance_m, float voxel_size_m, int min_textured_cells = 8);
 
 // What acceptance looks at for one candidate.
 struct RelocalisationCheck {
     TrackingState refined;  // the second refinement's verdict and pose
     float step_m = 0.f;     // how far the second refinement moved the pose
     float step_deg = 0.f;
-    DepthAgreement depth;   // at the first refinement's pose, against the raycast from there
-    ColourAgreement colour; // the same, for colour (not compared: no colour test)
+    DepthAgreement depth;    // at the first refinement's pose, against the raycast from there
+    ColourAgreement colour;  // the same, for colour (not compared: no colour test)
 };
 bool acceptRelocalisation(const RelocalisationSettings& settings, const RelocalisationCheck& check);
 
 // Whether a camera at T_world_last `elapsed_s` ago (-1: unknown) may be at T_world_candidate now, at
 // settings.max_speed_m_per_s. Unknown times and a limit of 0 allow every candidate.
-bool withinReach(const RelocalisationSettings& settings, const Mat4f& T_world_last, const Mat4f& T_world_candidate, double elapsed_s);
+bool withinReach(const RelocalisationSettings& settings, const Mat4f& T_world_last, const Mat4f& T_world_candidate,
+                 double elapsed_s);
 
 class Relocaliser {
 public:

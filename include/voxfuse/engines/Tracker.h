@@ -66,11 +66,12 @@ bool hasTrackableSurface(const RenderState& model, LowLevelEngine& low_level);
 struct TrackingMeasures {
     int inliers = 0;
     float inlier_ratio = 0.f;
-    float condition = 0.f;     // see TrackingState::condition
-    float translation_constraint = 1.f / 3.f;  // see TrackingState::translation_constraint (1/3: no depth terms to judge)
-    float depth_rms_m = 0.f;   // RMS point-to-plane residual (0 when the tracker has no depth terms)
-    float color_rms = 0.f;     // RMS intensity residual (0 when colour is not what the tracker minimised)
-    float motion_m = 0.f;      // pose change from the previous pose
+    float condition = 0.f;  // see TrackingState::condition
+    float translation_constraint =
+        1.f / 3.f;            // see TrackingState::translation_constraint (1/3: no depth terms to judge)
+    float depth_rms_m = 0.f;  // RMS point-to-plane residual (0 when the tracker has no depth terms)
+    float color_rms = 0.f;    // RMS intensity residual (0 when colour is not what the tracker minimised)
+    float motion_m = 0.f;     // pose change from the previous pose
     float motion_deg = 0.f;
 };
 // The quality rules every tracker applies (thresholds in TrackerSettings).

@@ -122,10 +122,10 @@ struct TrackerSettings {
     // Quality (see assessTrackingQuality): inlier ratio = inliers / valid pixels at full resolution;
     // condition = smallest / largest eigenvalue of the full-resolution normal matrix scaled to a unit
     // diagonal (free of units; near 0 when some motion is unconstrained).
-    float good_inlier_ratio = 0.25f;    // below this: Poor
-    float failed_inlier_ratio = 0.1f;   // below this: Failed
-    float good_condition = 1e-3f;       // below this: Poor (one direction is weakly constrained)
-    float failed_condition = 1e-6f;     // below this: Failed (a degenerate scene, e.g. one plane)
+    float good_inlier_ratio = 0.25f;   // below this: Poor
+    float failed_inlier_ratio = 0.1f;  // below this: Failed
+    float good_condition = 1e-3f;      // below this: Poor (one direction is weakly constrained)
+    float failed_condition = 1e-6f;    // below this: Failed (a degenerate scene, e.g. one plane)
     // Below this share of the depth terms' weight along the least constrained translation: Poor (see
     // TrackingState::translation_constraint). Depth cannot tell how far the camera moved along that
     // direction, so the pose there is what noise and a few small structures made of it. The condition
@@ -133,11 +133,11 @@ struct TrackerSettings {
     // overlap real views that track well. The share separates them: real views that track well stay
     // several times above this threshold, views of a corridor's walls alone far below it.
     float poor_translation_constraint = 0.02f;
-    float poor_residual_m = 0.01f;      // RMS point-to-plane residual above this: Poor
+    float poor_residual_m = 0.01f;  // RMS point-to-plane residual above this: Poor
     // Colour tracker: an RMS intensity error above this means the images are not aligned (Failed);
     // aligned real frames stay well below it, unaligned ones well above.
     float failed_color_residual = 0.1f;
-    int min_inliers = 100;              // fewer full-resolution inliers: Failed
+    int min_inliers = 100;  // fewer full-resolution inliers: Failed
     // A frame-to-frame motion beyond these is not believed (Failed): hand-held cameras at 30 Hz move far less.
     float max_motion_m = 0.3f;
     float max_motion_deg = 30.f;
@@ -153,11 +153,11 @@ void validateTrackerSettings(const TrackerSettings& settings);
 //   max_distance_m = 0.1 0.05 0.02  per level, coarse to fine (one value: every level)
 //   pixel_step = 1 1 1              per level, coarse to fine (one value: every level)
 //   max_normal_angle_deg, min_rotation_step_rad, min_translation_step_m, max_normal_edge_m, max_tracking_depth_m,
-//   predict_motion, extrapolate_steps and bilateral_filter (true/false/on/off/1/0), robust_kernel (none/huber/tukey), robust_scale_m,
-//   color_point_step, color_kernel, color_kernel_scale, color_weight (auto or a number), color_from_map (true/false),
-//   far_field_keyframes, far_field_spacing_m, far_field_spacing_deg, far_field_point_share,
-//   good_inlier_ratio, failed_inlier_ratio, good_condition, failed_condition, poor_translation_constraint, poor_residual_m,
-//   failed_color_residual, min_inliers, max_motion_m, max_motion_deg
+//   predict_motion, extrapolate_steps and bilateral_filter (true/false/on/off/1/0), robust_kernel (none/huber/tukey),
+//   robust_scale_m, color_point_step, color_kernel, color_kernel_scale, color_weight (auto or a number), color_from_map
+//   (true/false), far_field_keyframes, far_field_spacing_m, far_field_spacing_deg, far_field_point_share,
+//   good_inlier_ratio, failed_inlier_ratio, good_condition, failed_condition, poor_translation_constraint,
+//   poor_residual_m, failed_color_residual, min_inliers, max_motion_m, max_motion_deg
 // Throws IoError when the file cannot be read and ParseError(file, line, reason) for an unknown key,
 // a malformed line, a bad value or a per-level list whose length does not match `levels`.
 TrackerSettings parseTrackerSettingsFile(const std::string& path);
@@ -168,11 +168,11 @@ TrackerSettings parseTrackerSettings(const std::string& text, const std::string&
 // then the settings file, then the single values; all read by the parser above, so every value is
 // checked the same way. Empty fields change nothing.
 struct TrackerOverrides {
-    std::string settings_file;          // "key = value" lines as above
-    std::string kind;                   // icp | color | ren | rgbd
-    std::string levels;                 // e.g. "rbb"
-    std::vector<int> iterations;        // per level, coarse to fine
-    std::vector<float> max_distance_m;  // per level, coarse to fine
+    std::string settings_file;                  // "key = value" lines as above
+    std::string kind;                           // icp | color | ren | rgbd
+    std::string levels;                         // e.g. "rbb"
+    std::vector<int> iterations;                // per level, coarse to fine
+    std::vector<float> max_distance_m;          // per level, coarse to fine
     std::string origin = "the given settings";  // where the single values come from, for error messages
 };
 TrackerSettings trackerSettingsWith(const TrackerOverrides& overrides);

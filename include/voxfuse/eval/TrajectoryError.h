@@ -12,15 +12,16 @@ namespace voxfuse {
 struct TrajectoryErrorOptions {
     double max_time_difference_s = 0.02;  // an estimated pose pairs with the nearest ground-truth pose within this
     double rpe_delta_s = 1.0;             // RPE compares motions over this time step
-    double time_offset_s = 0.0;           // added to the estimated timestamps before pairing (TUM's evaluate_ate --offset)
-    double max_time_offset_s = 0.1;       // the best offset is searched within +-this of time_offset_s (0: no search; at most 1 s)
+    double time_offset_s = 0.0;  // added to the estimated timestamps before pairing (TUM's evaluate_ate --offset)
+    double max_time_offset_s =
+        0.1;  // the best offset is searched within +-this of time_offset_s (0: no search; at most 1 s)
 };
 
 struct TrajectoryError {
     // ATE: estimated positions, moved by the rigid transform (rotation and translation, no scale; Horn /
     // Umeyama) that best fits them to the paired ground-truth positions, against those positions.
-    int pairs = 0;              // estimated poses with a ground-truth partner
-    double ate_rmse_m = 0.0;    // all ATE fields are NaN when fewer than 3 pairs exist
+    int pairs = 0;            // estimated poses with a ground-truth partner
+    double ate_rmse_m = 0.0;  // all ATE fields are NaN when fewer than 3 pairs exist
     double ate_mean_m = 0.0;
     double ate_median_m = 0.0;
     double ate_max_m = 0.0;
@@ -35,7 +36,7 @@ struct TrajectoryError {
     // translation |t_A - t_B| leaves out the rotation error that E = A B^-1 carries into it; the
     // angles agree.
     int rpe_pairs = 0;
-    double rpe_trans_m_per_s = 0.0;   // NaN when rpe_pairs == 0
+    double rpe_trans_m_per_s = 0.0;  // NaN when rpe_pairs == 0
     double rpe_rot_deg_per_s = 0.0;
 
     // The clock offset that fits best: of the offsets (added to the estimated timestamps) within

@@ -36,10 +36,10 @@ public:
 };
 
 struct SourceOptions {
-    std::string calib_path;      // overrides the calibration found with or guessed for the source
-    std::string rgb_pattern;     // printf patterns for PPM/PGM sequences, e.g. "frames/%04i.ppm"
+    std::string calib_path;   // overrides the calibration found with or guessed for the source
+    std::string rgb_pattern;  // printf patterns for PPM/PGM sequences, e.g. "frames/%04i.ppm"
     std::string depth_pattern;
-    int first_index = 0;         // first index substituted into the patterns
+    int first_index = 0;  // first index substituted into the patterns
     // iPhone LiDAR captures (Stray Scanner): depth samples whose confidence (0 low, 1 medium, 2 high)
     // is below this are dropped (set to 0); 0 keeps every sample. Medium and high are kept by default
     // because low-confidence LiDAR depth is mostly wrong at edges and on dark or shiny surfaces.

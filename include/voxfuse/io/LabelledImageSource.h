@@ -97,9 +97,10 @@ private:
     LabelStreamOptions options_;
     LabelStreamOptions::Match match_ = LabelStreamOptions::Match::Index;
     bool is_list_ = false;
-    std::vector<LabelImage> images_;  // Index: one per frame index, from 0 (or per number, from first_number_); Timestamp: sorted by time
-    long long first_number_ = -1;     // Index, a numbered folder: the smallest label number; -1 otherwise
-    int image_count_ = 0;             // entries of images_ with a file
+    std::vector<LabelImage>
+        images_;  // Index: one per frame index, from 0 (or per number, from first_number_); Timestamp: sorted by time
+    long long first_number_ = -1;  // Index, a numbered folder: the smallest label number; -1 otherwise
+    int image_count_ = 0;          // entries of images_ with a file
     int missing_listed_files_ = 0;
     std::atomic<long> with_labels_{0};
     std::atomic<long> without_labels_{0};

@@ -64,7 +64,8 @@ MapFileInfo readMapFileInfo(const std::string& path);
 // scene. A hash with swapped blocks needs its global cache: stored blocks are read from it and copies
 // waiting to be merged are merged on the way (engines/SwappingEngine.h).
 template <class TVoxel, class TIndex>
-void writeMapFile(const std::string& path, const Scene<TVoxel, TIndex>& scene, const MapFileInfo& info, const GlobalCache* cache = nullptr);
+void writeMapFile(const std::string& path, const Scene<TVoxel, TIndex>& scene, const MapFileInfo& info,
+                  const GlobalCache* cache = nullptr);
 
 // Reads the map into `scene` (in host memory, empty, with the file's voxel type, index settings and
 // voxel size: see readMapFileInfo) and returns the header. With a global cache (a hash with swapping),

@@ -21,7 +21,8 @@ public:
     // folder of the depth files is used when it holds exactly as many poses as there are frames,
     // pose i belonging to frame i (its own timestamps are replaced by the frames'); otherwise it is
     // ignored with a warning on stderr. Frame timestamps are file index / 30.
-    PpmPgmSource(std::string rgb_pattern, std::string depth_pattern, const std::string& calib_path, int first_index = 0);
+    PpmPgmSource(std::string rgb_pattern, std::string depth_pattern, const std::string& calib_path,
+                 int first_index = 0);
 
     const RGBDCalib& calib() const override { return calib_; }
     // A present but unreadable file throws IoError naming file and frame; the next call moves on.
@@ -40,10 +41,10 @@ private:
     int first_index_;
     RGBDCalib calib_;
     int frame_count_ = 0;
-    int missing_frames_ = 0;  // indices in the range without their files
-    int position_ = 0;  // 0-based index of the next frame
+    int missing_frames_ = 0;               // indices in the range without their files
+    int position_ = 0;                     // 0-based index of the next frame
     std::vector<TimedPose> ground_truth_;  // empty, or one pose per frame
-    FrameImageBuffers read_;  // the next frame is decoded into these
+    FrameImageBuffers read_;               // the next frame is decoded into these
 };
 
 }  // namespace voxfuse

@@ -13,18 +13,18 @@
 namespace voxfuse {
 
 struct RGBDFrame {
-    int index = -1;                   // 0-based position in the source
-    long long file_number = -1;       // the number in the frame's file names where the source names them
-                                      // so (frame folders, Stray Scanner captures: frame-000015 -> 15;
-                                      // numbers may skip), -1 otherwise
-    double timestamp_s = 0.0;         // source timestamp (frame index / 30 when the source has none)
-    double rgb_timestamp_s = -1.0;    // the colour image's own time where the source pairs images taken
-                                      // apart (TUM: timestamp_s is the depth image's); < 0 otherwise
-    Image<std::uint16_t> depth_raw;   // raw depth samples; 0 = no measurement
-    Image<Vec4u8> rgb;                // RGBA; empty when the source has no colour
+    int index = -1;                  // 0-based position in the source
+    long long file_number = -1;      // the number in the frame's file names where the source names them
+                                     // so (frame folders, Stray Scanner captures: frame-000015 -> 15;
+                                     // numbers may skip), -1 otherwise
+    double timestamp_s = 0.0;        // source timestamp (frame index / 30 when the source has none)
+    double rgb_timestamp_s = -1.0;   // the colour image's own time where the source pairs images taken
+                                     // apart (TUM: timestamp_s is the depth image's); < 0 otherwise
+    Image<std::uint16_t> depth_raw;  // raw depth samples; 0 = no measurement
+    Image<Vec4u8> rgb;               // RGBA; empty when the source has no colour
     bool has_ground_truth = false;
     Mat4f T_world_camera_gt = Mat4f::identity();  // ground-truth pose when has_ground_truth
-    std::string depth_path;           // where the depth came from, for error messages
+    std::string depth_path;                       // where the depth came from, for error messages
     // Semantic labels (io/LabelledImageSource.h): one class id per pixel, kNoLabel where there is none,
     // seen by the colour camera (any resolution of the colour image's aspect ratio); empty when the
     // frame has none.

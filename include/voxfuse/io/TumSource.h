@@ -18,8 +18,8 @@ public:
     // keep depth.txt's order and a depth image without a partner is dropped and counted. Listed
     // images missing on disk are counted; those before the first or after the last image on disk are
     // left out (the benchmark's lists often cover more than a trimmed copy holds), those between take
-    // part, and their frames throw IoError naming them when read. Each frame's timestamp is its depth timestamp; it has ground truth when
-    // groundtruth.txt has a pose within kMaxTimeDifference_s (interpolated between samples).
+    // part, and their frames throw IoError naming them when read. Each frame's timestamp is its depth timestamp; it has
+    // ground truth when groundtruth.txt has a pose within kMaxTimeDifference_s (interpolated between samples).
     //
     // Calibration: calib_path if given, else calib.txt in the folder, else TUM fr1/fr2/fr3 guessed
     // from a "freiburgN" or "frN" in the folder name, else Kinect v1 defaults with the TUM depth

@@ -27,10 +27,10 @@ struct AllocationStats {
     long long blocks_removed_total = 0;
 
     // Swapping (engines/SwappingEngine.h).
-    int blocks_stored = 0;                   // blocks with a copy in the global cache
-    int blocks_activated_this_frame = 0;     // stored blocks the depth needed, given a voxel block again
-    int blocks_swapped_in_this_frame = 0;    // stored copies merged back in
-    int blocks_swapped_out_this_frame = 0;   // active blocks moved to the cache
+    int blocks_stored = 0;                  // blocks with a copy in the global cache
+    int blocks_activated_this_frame = 0;    // stored blocks the depth needed, given a voxel block again
+    int blocks_swapped_in_this_frame = 0;   // stored copies merged back in
+    int blocks_swapped_out_this_frame = 0;  // active blocks moved to the cache
 };
 
 }  // namespace voxfuse

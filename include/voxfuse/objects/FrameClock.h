@@ -15,8 +15,10 @@ struct FrameClock {
 inline double secondsBetween(FrameClock then, FrameClock now) {
     constexpr double kAssumedFramesPerSecond = 30.0;
     double seconds = -1.0;
-    if (then.timestamp_s > 0.0 && now.timestamp_s > 0.0) seconds = now.timestamp_s - then.timestamp_s;
-    else if (then.index >= 0 && now.index >= 0) seconds = double(now.index - then.index) / kAssumedFramesPerSecond;
+    if (then.timestamp_s > 0.0 && now.timestamp_s > 0.0)
+        seconds = now.timestamp_s - then.timestamp_s;
+    else if (then.index >= 0 && now.index >= 0)
+        seconds = double(now.index - then.index) / kAssumedFramesPerSecond;
     return seconds > 0.0 ? seconds : -1.0;
 }
 

@@ -46,8 +46,8 @@ private:
     std::size_t block_bytes_;
     std::string path_;
     int fd_ = -1;
-    int slot_count_ = 0;           // slots ever used
-    std::vector<int> free_slots_;  // reused first, lowest last
+    int slot_count_ = 0;                                    // slots ever used
+    std::vector<int> free_slots_;                           // reused first, lowest last
     std::vector<std::unique_ptr<unsigned char[]>> chunks_;  // host memory: kSlotsPerChunk blocks each
     static constexpr int kSlotsPerChunk = 1024;
 };

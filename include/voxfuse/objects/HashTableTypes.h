@@ -15,7 +15,7 @@
 
 namespace voxfuse {
 
-constexpr int kBlockSide = 8;                                          // voxels along each edge of a block
+constexpr int kBlockSide = 8;                                           // voxels along each edge of a block
 constexpr int kBlockVoxelCount = kBlockSide * kBlockSide * kBlockSide;  // 512, stored x-fastest
 
 // HashEntry::ptr values that are not a voxel block.
@@ -56,7 +56,7 @@ struct VoxelBlockHashSettings {
     int max_block_count = 1 << 18;
     // The voxel block array starts empty and grows by max(blocks_per_growth, a quarter of its size),
     // so a small scene costs little and growth copies each voxel about four times in all.
-    int blocks_per_growth = 4096;      // 4096 blocks = 2M voxels
+    int blocks_per_growth = 4096;  // 4096 blocks = 2M voxels
 };
 
 // What a lookup needs (read-only), on the device where the tables live.
@@ -64,7 +64,7 @@ struct HashTableView {
     const HashEntry* entries;  // ordered entries, then the excess list
     int bucket_count;
     int entries_per_bucket;
-    int ordered_entry_count;   // bucket_count * entries_per_bucket: excess entry i is entries[ordered_entry_count + i]
+    int ordered_entry_count;  // bucket_count * entries_per_bucket: excess entry i is entries[ordered_entry_count + i]
     int excess_entry_count;
 };
 

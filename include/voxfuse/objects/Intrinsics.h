@@ -21,7 +21,8 @@ struct Intrinsics {
     VF_HOST_DEVICE int nearestPixelIndex(Vec2f px) const { return nearestPixelIndexIn(px, width, height); }
     // The same for an image of width x height pixels.
     VF_HOST_DEVICE static int nearestPixelIndexIn(Vec2f px, int width, int height) {
-        const bool inside = (px.x >= -0.5f) & (px.y >= -0.5f) & (px.x < float(width) - 0.5f) & (px.y < float(height) - 0.5f);
+        const bool inside =
+            (px.x >= -0.5f) & (px.y >= -0.5f) & (px.x < float(width) - 0.5f) & (px.y < float(height) - 0.5f);
         const int u = int((inside ? px.x : 0.f) + 0.5f), v = int((inside ? px.y : 0.f) + 0.5f);
         return inside & (u < width) & (v < height) ? u + v * width : -1;
     }

@@ -12,10 +12,11 @@
 namespace voxfuse {
 
 struct Mesh {
-    std::vector<Vec3f> vertices;   // world coordinates (m); no two are equal
-    std::vector<Vec3f> normals;    // one unit normal per vertex pointing to free space, or empty
-    std::vector<Vec3u8> colors;    // one RGB colour per vertex, or empty (voxel types without colour)
-    std::vector<ClassId> labels;   // one semantic class per vertex (kNoLabel: none), or empty (voxel types without labels)
+    std::vector<Vec3f> vertices;  // world coordinates (m); no two are equal
+    std::vector<Vec3f> normals;   // one unit normal per vertex pointing to free space, or empty
+    std::vector<Vec3u8> colors;   // one RGB colour per vertex, or empty (voxel types without colour)
+    std::vector<ClassId>
+        labels;  // one semantic class per vertex (kNoLabel: none), or empty (voxel types without labels)
     std::vector<Vec3i> triangles;  // vertex indices, counter-clockwise seen from free space
 
     bool hasNormals() const { return !normals.empty(); }

@@ -15,7 +15,8 @@ struct PointCloud {
     std::vector<Vec3f> points;   // world coordinates (m)
     std::vector<Vec3f> normals;  // one unit normal per point pointing to free space, or empty
     std::vector<Vec3u8> colors;  // one RGB colour per point, or empty
-    std::vector<ClassId> labels;   // one semantic class per point (kNoLabel: none), or empty (voxel types without labels)
+    std::vector<ClassId>
+        labels;  // one semantic class per point (kNoLabel: none), or empty (voxel types without labels)
 
     std::size_t size() const { return points.size(); }
     bool empty() const { return points.empty(); }

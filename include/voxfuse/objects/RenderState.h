@@ -8,13 +8,13 @@
 namespace voxfuse {
 
 struct RenderState {
-    Intrinsics intrinsics;                    // camera the rays were cast through
-    Mat4f T_world_camera = Mat4f::identity(); // viewpoint of the raycast
-    Image<Vec4f> points_world;   // surface point per pixel, w = 1 where a surface was hit, 0 otherwise
-    Image<Vec4f> normals_world;  // unit normal per pixel (w = 1 when valid)
-    Image<Vec2f> depth_range;    // per-pixel [min, max] search range along z, metres
-    Image<float> intensity;      // the map's colour per pixel as an intensity in [0, 1], -1 where none; made only
-                                 // for the rgbd tracker's model (its colour term's reference), else empty
+    Intrinsics intrinsics;                     // camera the rays were cast through
+    Mat4f T_world_camera = Mat4f::identity();  // viewpoint of the raycast
+    Image<Vec4f> points_world;                 // surface point per pixel, w = 1 where a surface was hit, 0 otherwise
+    Image<Vec4f> normals_world;                // unit normal per pixel (w = 1 when valid)
+    Image<Vec2f> depth_range;                  // per-pixel [min, max] search range along z, metres
+    Image<float> intensity;  // the map's colour per pixel as an intensity in [0, 1], -1 where none; made only
+                             // for the rgbd tracker's model (its colour term's reference), else empty
 
     // Sizes the images for `intr` on `where` (the raycast engine's device). On the GPU, points and
     // normals get pinned host memory for the copies the CPU-side tracker reads every frame.

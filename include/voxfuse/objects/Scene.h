@@ -88,8 +88,10 @@ private:
         : params_(params), index_(std::move(index)), location_(location) {}
 
     TIndex copyIndex(Device where) const {
-        if constexpr (std::is_same<TIndex, VoxelBlockHash>::value) return index_.copyTo(where);
-        else return index_;
+        if constexpr (std::is_same<TIndex, VoxelBlockHash>::value)
+            return index_.copyTo(where);
+        else
+            return index_;
     }
 
     // Reallocates the voxels on location() to `count`, keeping the first min(count, old size) and

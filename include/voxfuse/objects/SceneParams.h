@@ -11,7 +11,7 @@ struct SceneParams {
     int max_weight = 100;             // depth/colour weights stop growing here (lets the map adapt)
     float view_frustum_min_m = 0.2f;  // depth samples outside [min, max] are ignored
     float view_frustum_max_m = 3.0f;
-    bool stop_integrating_at_max_weight = false;  // freeze voxels that reached max_weight
+    bool stop_integrating_at_max_weight = false;            // freeze voxels that reached max_weight
     LabelUpdate label_update = LabelUpdate::Probabilistic;  // semantic voxel types: shared/LabelFusion.h
 };
 

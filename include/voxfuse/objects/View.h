@@ -12,12 +12,12 @@ namespace voxfuse {
 
 struct View {
     RGBDCalib calib;
-    Image<float> depth;           // metres; 0 = no measurement (depth camera resolution)
-    Image<Vec4u8> rgb;            // RGBA, colour camera resolution (may be empty)
-    Image<float> far_depth;       // metres beyond the map's range (SceneParams::view_frustum_max_m), 0 elsewhere;
-                                  // only for rgbd's far field (FarFieldKeyframes), else empty
-    Image<ClassId> labels;        // class per pixel (kNoLabel: none), colour camera geometry at its own
-                                  // resolution; empty when the frame has no labels
+    Image<float> depth;      // metres; 0 = no measurement (depth camera resolution)
+    Image<Vec4u8> rgb;       // RGBA, colour camera resolution (may be empty)
+    Image<float> far_depth;  // metres beyond the map's range (SceneParams::view_frustum_max_m), 0 elsewhere;
+                             // only for rgbd's far field (FarFieldKeyframes), else empty
+    Image<ClassId> labels;   // class per pixel (kNoLabel: none), colour camera geometry at its own
+                             // resolution; empty when the frame has no labels
     int frame_index = -1;
     double timestamp_s = 0.0;
 

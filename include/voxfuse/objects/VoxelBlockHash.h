@@ -52,9 +52,9 @@ public:
     HashTableState state();
     int entryCount() const { return int(entries_.size()); }
 
-    int blockCapacity() const { return block_capacity_; }                 // blocks backed by voxel memory
+    int blockCapacity() const { return block_capacity_; }  // blocks backed by voxel memory
     int blocksInUse() const { return block_capacity_ - free_block_count_; }
-    int freeBlocks() const { return free_block_count_; }                  // within the current capacity
+    int freeBlocks() const { return free_block_count_; }  // within the current capacity
     int freeExcessEntries() const { return free_excess_count_; }
     bool canGrow() const { return block_capacity_ < settings_.max_block_count; }
     // Voxels the scene must store: blockCapacity() blocks of 512.
@@ -66,8 +66,8 @@ public:
     // The same, from the settings alone: what constructing the index will allocate.
     static std::size_t tableBytesFor(const Settings& settings);
     std::size_t tableBytes() const {
-        return entries_.bytes() + free_blocks_.bytes() + free_excess_.bytes() + entry_visibility_.bytes() + stored_slot_.bytes() +
-               visible_entries_.bytes();
+        return entries_.bytes() + free_blocks_.bytes() + free_excess_.bytes() + entry_visibility_.bytes() +
+               stored_slot_.bytes() + visible_entries_.bytes();
     }
     // After a device layer took blocks and excess entries from the tops of the free stacks (negative:
     // pushed back), keeps the stack sizes and the statistics in step.

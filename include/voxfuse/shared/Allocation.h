@@ -24,13 +24,13 @@ namespace voxfuse {
 
 // The per-frame constants of stage 1 (trivially copyable).
 struct DepthSegmentFrame {
-    Mat4f T_grid_camera;       // depth camera coordinates (metres) -> voxel grid coordinates
-    Intrinsics intrinsics;     // of the depth camera
-    const float* depth;        // metres, 0 = invalid
-    float mu_m;                // truncation band
+    Mat4f T_grid_camera;             // depth camera coordinates (metres) -> voxel grid coordinates
+    Intrinsics intrinsics;           // of the depth camera
+    const float* depth;              // metres, 0 = invalid
+    float mu_m;                      // truncation band
     float min_depth_m, max_depth_m;  // depth samples outside are ignored (as integration does)
-    float near_m;              // segments start no closer than this
-    float margin_voxels_per_m; // half a pixel's diagonal footprint per metre of depth, in voxels
+    float near_m;                    // segments start no closer than this
+    float margin_voxels_per_m;       // half a pixel's diagonal footprint per metre of depth, in voxels
 };
 
 // Segments beyond this many voxels from the origin need blocks no entry can store (int16 coordinates).
@@ -68,7 +68,8 @@ VF_HOST_DEVICE inline DepthSegment depthSegmentOfPixel(const DepthSegmentFrame& 
     const Vec3f a = transformPoint(f.T_grid_camera, ray * z0);
     const Vec3f b = transformPoint(f.T_grid_camera, ray * z1);
     bool addressable = true;
-    for (int k = 0; k < 3; ++k) addressable = addressable && fabsf(a[k]) < kAddressableVoxelRange && fabsf(b[k]) < kAddressableVoxelRange;
+    for (int k = 0; k < 3; ++k)
+        addressable = addressable && fabsf(a[k]) < kAddressableVoxelRange && fabsf(b[k]) < kAddressableVoxelRange;
     s.outside = s.valid && !addressable;
     // Half a pixel at the far end is the widest the footprint gets along the segment.
     s.margin = f.margin_voxels_per_m * z1 + kSegmentMarginExtraVoxels;
@@ -155,7 +156,8 @@ struct RecentBlocks {
     }
     // True when `b` was visited already; remembers it otherwise.
     VF_HOST_DEVICE bool checkAndRemember(Vec3i b) {
-        Vec3i& slot = slots[(unsigned(b.x) * 73856093u ^ unsigned(b.y) * 19349669u ^ unsigned(b.z) * 83492791u) & unsigned(Slots - 1)];
+        Vec3i& slot = slots[(unsigned(b.x) * 73856093u ^ unsigned(b.y) * 19349669u ^ unsigned(b.z) * 83492791u) &
+                            unsigned(Slots - 1)];
         if (slot == b) return true;
         slot = b;
         return false;
@@ -198,23 +200,26 @@ struct MarkOrListBlock {
 // up once where a row of pixels looked it up once per row). The GPU runs MarkBlocksForPixelTeams.
 template <int RecentSlots>
 struct MarkBlocksForPixels {
-    DepthSegmentFrame frame;          // depth on the layer's device
+    DepthSegmentFrame frame;  // depth on the layer's device
     HashTableView table;
     std::uint8_t* entry_visibility;
     std::uint64_t* missing;
-    int* missing_count;               // appends attempted (may exceed the capacity; saturates at kMaxCountedAppends)
+    int* missing_count;  // appends attempted (may exceed the capacity; saturates at kMaxCountedAppends)
     int missing_capacity;
-    Vec2i tile;                       // pixels per element along x and y
+    Vec2i tile;                                    // pixels per element along x and y
     int max_counted_appends = kMaxCountedAppends;  // where the count stops (tests set less)
 
     VF_HOST_DEVICE int tilesPerRow() const { return (frame.intrinsics.width + tile.x - 1) / tile.x; }
-    VF_HOST_DEVICE int elementCount() const { return tilesPerRow() * ((frame.intrinsics.height + tile.y - 1) / tile.y); }
+    VF_HOST_DEVICE int elementCount() const {
+        return tilesPerRow() * ((frame.intrinsics.height + tile.y - 1) / tile.y);
+    }
     VF_HOST_DEVICE void operator()(int element) const {
         const int x0 = (element % tilesPerRow()) * tile.x, y0 = (element / tilesPerRow()) * tile.y;
         const int x1 = x0 + tile.x < frame.intrinsics.width ? x0 + tile.x : frame.intrinsics.width;
         const int y1 = y0 + tile.y < frame.intrinsics.height ? y0 + tile.y : frame.intrinsics.height;
         RecentBlocks<RecentSlots> recent;
-        const MarkOrListBlock handle{table, entry_visibility, missing, missing_count, missing_capacity, max_counted_appends};
+        const MarkOrListBlock handle{table,         entry_visibility, missing,
+                                     missing_count, missing_capacity, max_counted_appends};
         auto mark = [&](Vec3i block) {
             if (!recent.checkAndRemember(block)) handle(block);
         };
@@ -227,7 +232,8 @@ struct MarkBlocksForPixels {
         // The segments of up to kSegmentRun pixels of a row first, in one loop over the pixels (which
         // vectorises: the arrays hold them field by field), then their blocks.
         constexpr int kSegmentRun = 32;
-        float ax[kSegmentRun], ay[kSegmentRun], az[kSegmentRun], ix[kSegmentRun], iy[kSegmentRun], iz[kSegmentRun], margin[kSegmentRun];
+        float ax[kSegmentRun], ay[kSegmentRun], az[kSegmentRun], ix[kSegmentRun], iy[kSegmentRun], iz[kSegmentRun],
+            margin[kSegmentRun];
         int fx[kSegmentRun], fy[kSegmentRun], fz[kSegmentRun], lx[kSegmentRun], ly[kSegmentRun], lz[kSegmentRun];
         int valid[kSegmentRun], outside[kSegmentRun];  // ints: one width for every field, or GCC leaves the loop scalar
         for (int y = y0; y < y1; ++y)
@@ -244,8 +250,9 @@ struct MarkBlocksForPixels {
                 }
                 for (int i = 0; i < n; ++i) {
                     if (!valid[i]) continue;
-                    const DepthSegment s{{ax[i], ay[i], az[i]}, {ix[i], iy[i], iz[i]}, margin[i], {fx[i], fy[i], fz[i]},
-                                         {lx[i], ly[i], lz[i]}, true, outside[i] != 0};
+                    const DepthSegment s{{ax[i], ay[i], az[i]}, {ix[i], iy[i], iz[i]}, margin[i],
+                                         {fx[i], fy[i], fz[i]}, {lx[i], ly[i], lz[i]}, true,
+                                         outside[i] != 0};
                     forEachBlockOnSegment(s, mark);
                 }
             }
@@ -259,7 +266,8 @@ struct MarkBlocksForPixels {
 // keys (4 KB). A 16 x 16 pixel tile needs some tens of blocks at 5 mm voxels and not many more than
 // a hundred at 2 mm, so the set stays at most a quarter full.
 constexpr int kTileBlockSetSlots = 512;  // a power of two
-constexpr int kTileBlockSetProbes = 32;   // beyond this many taken slots a block is handled again (a repeat, never a miss)
+constexpr int kTileBlockSetProbes =
+    32;  // beyond this many taken slots a block is handled again (a repeat, never a miss)
 constexpr std::uint64_t kNoBlockKey = std::uint64_t(1) << 63;  // neither a block's key nor kOutOfRangeBlockKey
 struct TileBlockSet {
     std::uint64_t keys[kTileBlockSetSlots];
@@ -293,7 +301,9 @@ struct MarkBlocksForPixelTeams {
     MarkOrListBlock handle;
 
     VF_HOST_DEVICE int tilesPerRow() const { return (frame.intrinsics.width + kMarkTileSide - 1) / kMarkTileSide; }
-    VF_HOST_DEVICE int itemCount() const { return tilesPerRow() * ((frame.intrinsics.height + kMarkTileSide - 1) / kMarkTileSide); }
+    VF_HOST_DEVICE int itemCount() const {
+        return tilesPerRow() * ((frame.intrinsics.height + kMarkTileSide - 1) / kMarkTileSide);
+    }
     VF_HOST_DEVICE void operator()(Team team, int item, TileBlockSet& set) const {
         for (int k = team.rank; k < kTileBlockSetSlots; k += team.size) set.keys[k] = kNoBlockKey;
         team.sync();
@@ -303,7 +313,8 @@ struct MarkBlocksForPixelTeams {
         };
         for (int p = team.rank; p < kMarkTileSide * kMarkTileSide; p += team.size) {
             const int x = x0 + p % kMarkTileSide, y = y0 + p / kMarkTileSide;
-            if (x < frame.intrinsics.width && y < frame.intrinsics.height) forEachBlockOnDepthSegment(frame, x, y, mark);
+            if (x < frame.intrinsics.width && y < frame.intrinsics.height)
+                forEachBlockOnDepthSegment(frame, x, y, mark);
         }
     }
 };
@@ -339,7 +350,9 @@ template <class TVoxel>
 struct ResetVoxelBlocks {
     TVoxel* voxels;
     const int* ptrs;
-    VF_HOST_DEVICE void operator()(int i) const { voxels[(long long)ptrs[i / kBlockVoxelCount] * kBlockVoxelCount + i % kBlockVoxelCount] = TVoxel::initial(); }
+    VF_HOST_DEVICE void operator()(int i) const {
+        voxels[(long long)ptrs[i / kBlockVoxelCount] * kBlockVoxelCount + i % kBlockVoxelCount] = TVoxel::initial();
+    }
 };
 
 // Block removal: a block holds information while one of its voxels has a depth observation.
@@ -360,7 +373,9 @@ struct MarkEmptyBlocks {
     std::uint8_t* remove;
     VF_HOST_DEVICE void operator()(int i) const {
         const int ptr = entries[i].ptr;
-        remove[i] = ptr >= 0 && stored_slot[i] == kNoStoredCopy && blockIsEmpty(voxels + (long long)ptr * kBlockVoxelCount) ? 1 : 0;
+        remove[i] =
+            ptr >= 0 && stored_slot[i] == kNoStoredCopy && blockIsEmpty(voxels + (long long)ptr * kBlockVoxelCount) ? 1
+                                                                                                                    : 0;
     }
 };
 

@@ -21,7 +21,8 @@ struct BlockProjection {
 // box is then the whole image. False when the box lies outside the slab or the image.
 VF_HOST_DEVICE inline bool projectBlockBox(Vec3i block, float margin_voxels, const BlockProjection& P, Vec2f& px_lo,
                                            Vec2f& px_hi, float& z_min, float& z_max) {
-    const Vec3f lo = (toFloat(block) * float(kBlockSide) - Vec3f{margin_voxels, margin_voxels, margin_voxels}) * P.voxel_size_m;
+    const Vec3f lo =
+        (toFloat(block) * float(kBlockSide) - Vec3f{margin_voxels, margin_voxels, margin_voxels}) * P.voxel_size_m;
     const float extent = (float(kBlockSide - 1) + 2.f * margin_voxels) * P.voxel_size_m;
     const Intrinsics& in = P.intrinsics;
     px_lo = Vec2f{1e30f, 1e30f};
@@ -50,7 +51,8 @@ VF_HOST_DEVICE inline bool projectBlockBox(Vec3i block, float margin_voxels, con
         px_hi = Vec2f{float(in.width) - 0.5f, float(in.height) - 0.5f};
         return true;
     }
-    return px_hi.x >= -0.5f && px_hi.y >= -0.5f && px_lo.x <= float(in.width) - 0.5f && px_lo.y <= float(in.height) - 0.5f;
+    return px_hi.x >= -0.5f && px_hi.y >= -0.5f && px_lo.x <= float(in.width) - 0.5f &&
+           px_lo.y <= float(in.height) - 0.5f;
 }
 
 }  // namespace voxfuse

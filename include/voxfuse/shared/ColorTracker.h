@@ -33,7 +33,8 @@ VF_HOST_DEVICE inline float intensityFromRgb(Vec4u8 c) {
 VF_HOST_DEVICE inline float downsampleIntensityPixel(const float* in, Vec2i in_size, int x, int y) {
     const int x0 = 2 * x, y0 = 2 * y;
     const int x1 = x0 + 1 < in_size.x ? x0 + 1 : x0, y1 = y0 + 1 < in_size.y ? y0 + 1 : y0;
-    return 0.25f * (in[x0 + y0 * in_size.x] + in[x1 + y0 * in_size.x] + in[x0 + y1 * in_size.x] + in[x1 + y1 * in_size.x]);
+    return 0.25f *
+           (in[x0 + y0 * in_size.x] + in[x1 + y0 * in_size.x] + in[x0 + y1 * in_size.x] + in[x1 + y1 * in_size.x]);
 }
 
 // Sobel gradient (intensity per pixel); zero on the one-pixel border.
@@ -64,8 +65,8 @@ VF_HOST_DEVICE inline bool insideForSampling(Vec2f px, Vec2i size) {
 }
 
 // Colours a model point with the image of an earlier frame, seen by a colour camera at T_rgb_world.
-VF_HOST_DEVICE inline ColorPoint colorPointFromModel(Vec4f p_world, const float* intensity, Vec2i size, const Mat4f& T_rgb_world,
-                                                     const Intrinsics& rgb) {
+VF_HOST_DEVICE inline ColorPoint colorPointFromModel(Vec4f p_world, const float* intensity, Vec2i size,
+                                                     const Mat4f& T_rgb_world, const Intrinsics& rgb) {
     ColorPoint c{p_world.xyz(), -1.f};
     if (p_world.w <= 0.f) return c;
     const Vec3f p = transformPoint(T_rgb_world, c.p_world);
@@ -79,8 +80,8 @@ VF_HOST_DEVICE inline ColorPoint colorPointFromModel(Vec4f p_world, const float*
 // The photometric term of one model point: r = I(pi(T_rgb_depth * T^-1 * p)) - intensity, and its
 // Jacobian for the update T * exp(x), x = (omega, v) in depth-camera coordinates. With a = R_rgb_depth^T *
 // dI/dp_rgb, a moved point p_d' = p_d - omega x p_d - v gives J = [a x p_d, -a].
-VF_HOST_DEVICE inline bool photometricTerm(const ColorPoint& point, const float* intensity, const Vec2f* gradient, Vec2i size,
-                                           const ColorTermParams& p, float J[6], float& residual) {
+VF_HOST_DEVICE inline bool photometricTerm(const ColorPoint& point, const float* intensity, const Vec2f* gradient,
+                                           Vec2i size, const ColorTermParams& p, float J[6], float& residual) {
     if (point.intensity < 0.f) return false;
     const Vec3f p_d = transformPoint(p.T_camera_world, point.p_world);
     const Vec3f p_c = transformPoint(p.T_rgb_depth, p_d);
@@ -90,7 +91,8 @@ VF_HOST_DEVICE inline bool photometricTerm(const ColorPoint& point, const float*
     residual = sampleBilinear(intensity, size.x, px.x, px.y) - point.intensity;
     const Vec2f g = sampleBilinear(gradient, size.x, px.x, px.y);
     const float inv_z = 1.f / p_c.z;
-    const Vec3f g_c{g.x * p.rgb.fx * inv_z, g.y * p.rgb.fy * inv_z, -(g.x * p.rgb.fx * p_c.x + g.y * p.rgb.fy * p_c.y) * inv_z * inv_z};
+    const Vec3f g_c{g.x * p.rgb.fx * inv_z, g.y * p.rgb.fy * inv_z,
+                    -(g.x * p.rgb.fx * p_c.x + g.y * p.rgb.fy * p_c.y) * inv_z * inv_z};
     const Vec3f a = rotateInverse(p.T_rgb_depth, g_c);
     const Vec3f axp = cross(a, p_d);
     J[0] = axp.x;
@@ -107,8 +109,9 @@ VF_HOST_DEVICE inline bool photometricTerm(const ColorPoint& point, const float*
 // colour image (`intensity`, `gradient` of `size`, taken by `rgb` at T_rgb_world). Its squared
 // intensity gradient there goes to `gradient_sq` (the keyframe keeps its best textured points); -1
 // for a point without colour.
-VF_HOST_DEVICE inline ColorPoint farFieldPoint(float depth_m, int x, int y, const Intrinsics& depth_camera, const Mat4f& T_world_camera,
-                                               const float* intensity, const Vec2f* gradient, Vec2i size, const Mat4f& T_rgb_world,
+VF_HOST_DEVICE inline ColorPoint farFieldPoint(float depth_m, int x, int y, const Intrinsics& depth_camera,
+                                               const Mat4f& T_world_camera, const float* intensity,
+                                               const Vec2f* gradient, Vec2i size, const Mat4f& T_rgb_world,
                                                const Intrinsics& rgb, float& gradient_sq) {
     gradient_sq = -1.f;
     ColorPoint c{Vec3f{0.f, 0.f, 0.f}, -1.f};
@@ -125,8 +128,8 @@ VF_HOST_DEVICE inline ColorPoint farFieldPoint(float depth_m, int x, int y, cons
 // A far-field point as the current frame sees it: without colour (-1) where it falls outside the
 // depth image or where the frame measured depth within the map's range at its pixel, a surface in
 // front of it (`depth` holds only those).
-VF_HOST_DEVICE inline ColorPoint unhiddenFarFieldPoint(const ColorPoint& point, const float* depth, Vec2i size, const Mat4f& T_camera_world,
-                                                       const Intrinsics& depth_camera) {
+VF_HOST_DEVICE inline ColorPoint unhiddenFarFieldPoint(const ColorPoint& point, const float* depth, Vec2i size,
+                                                       const Mat4f& T_camera_world, const Intrinsics& depth_camera) {
     ColorPoint c = point;
     if (c.intensity < 0.f) return c;
     const Vec3f p = transformPoint(T_camera_world, c.p_world);
@@ -155,14 +158,18 @@ struct DownsampleIntensityPixels {
     Vec2i in_size;
     int out_width;
     float* out;
-    VF_HOST_DEVICE void operator()(int i) const { out[i] = downsampleIntensityPixel(in, in_size, i % out_width, i / out_width); }
+    VF_HOST_DEVICE void operator()(int i) const {
+        out[i] = downsampleIntensityPixel(in, in_size, i % out_width, i / out_width);
+    }
 };
 
 struct SobelPixels {
     const float* intensity;
     Vec2i size;
     Vec2f* gradient;
-    VF_HOST_DEVICE void operator()(int i) const { gradient[i] = sobelGradientPixel(intensity, size, i % size.x, i / size.x); }
+    VF_HOST_DEVICE void operator()(int i) const {
+        gradient[i] = sobelGradientPixel(intensity, size, i % size.x, i / size.x);
+    }
 };
 
 // Element i: model point i of the (model / step) grid, coloured from the intensity image.
@@ -178,7 +185,8 @@ struct ColorModelPoints {
     ColorPoint* points;
     VF_HOST_DEVICE void operator()(int i) const {
         const int x = i % out_width, y = i / out_width;
-        points[i] = colorPointFromModel(model_points[x * step + y * step * model_width], intensity, size, T_rgb_world, rgb);
+        points[i] =
+            colorPointFromModel(model_points[x * step + y * step * model_width], intensity, size, T_rgb_world, rgb);
     }
 };
 
@@ -200,8 +208,8 @@ struct FarFieldPoints {
     float* gradient_sq;
     VF_HOST_DEVICE void operator()(int i) const {
         const int x = (i % out_width) * step, y = (i / out_width) * step;
-        points[i] = farFieldPoint(far_depth[x + y * depth_size.x], x, y, depth_camera, T_world_camera, intensity, gradient, size, T_rgb_world,
-                                  rgb, gradient_sq[i]);
+        points[i] = farFieldPoint(far_depth[x + y * depth_size.x], x, y, depth_camera, T_world_camera, intensity,
+                                  gradient, size, T_rgb_world, rgb, gradient_sq[i]);
     }
 };
 
@@ -212,7 +220,9 @@ struct UnhiddenFarFieldPoints {
     Mat4f T_camera_world;
     Intrinsics depth_camera;
     ColorPoint* out;
-    VF_HOST_DEVICE void operator()(int i) const { out[i] = unhiddenFarFieldPoint(points[i], depth, size, T_camera_world, depth_camera); }
+    VF_HOST_DEVICE void operator()(int i) const {
+        out[i] = unhiddenFarFieldPoint(points[i], depth, size, T_camera_world, depth_camera);
+    }
 };
 
 // The terms for the launchers' sumNormalEquations: element i is point i.

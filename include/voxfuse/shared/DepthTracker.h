@@ -12,11 +12,11 @@ namespace voxfuse {
 
 // What every pixel of one ICP iteration shares.
 struct DepthTermParams {
-    Mat4f T_world_camera;      // the pose estimate being refined (current depth camera to world)
-    Mat4f T_model_world;       // world to the camera the model was raycast from
-    Intrinsics model;          // that camera (the raycast images are model.width x model.height)
-    float max_distance_m;      // pairs farther apart (Euclidean) are outliers
-    float min_normal_cos;      // pairs whose normals make a larger angle are outliers; < -1 disables the test
+    Mat4f T_world_camera;  // the pose estimate being refined (current depth camera to world)
+    Mat4f T_model_world;   // world to the camera the model was raycast from
+    Intrinsics model;      // that camera (the raycast images are model.width x model.height)
+    float max_distance_m;  // pairs farther apart (Euclidean) are outliers
+    float min_normal_cos;  // pairs whose normals make a larger angle are outliers; < -1 disables the test
 };
 
 // R^T d for the rotation R of a rigid transform: a world direction in camera coordinates.
@@ -37,8 +37,9 @@ VF_HOST_DEVICE inline int modelPixelIndex(const Intrinsics& model, Vec3f p_model
 // r = n_model . (T * vertex - p_model) in metres and its Jacobian J = dr/dx for the update
 // T * exp(x), x = (omega, v) in camera coordinates: J = [vertex x n_c, n_c] with n_c = R^T n_model.
 // Returns false when the vertex has no acceptable model correspondence.
-VF_HOST_DEVICE inline bool pointToPlaneTerm(Vec4f vertex, Vec4f normal, const Vec4f* model_points, const Vec4f* model_normals,
-                                            const DepthTermParams& p, float J[6], float& residual) {
+VF_HOST_DEVICE inline bool pointToPlaneTerm(Vec4f vertex, Vec4f normal, const Vec4f* model_points,
+                                            const Vec4f* model_normals, const DepthTermParams& p, float J[6],
+                                            float& residual) {
     if (vertex.w <= 0.f) return false;
     const Vec3f v = vertex.xyz();
     const Vec3f q = transformPoint(p.T_world_camera, v);

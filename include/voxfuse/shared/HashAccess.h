@@ -14,7 +14,8 @@ VF_HOST_DEVICE inline int voxelIndexInBlock(Vec3i p) { return (p.x & 7) + (p.y &
 // The InfiniTAM report's hash: ((x * 73856093) ^ (y * 19349669) ^ (z * 83492791)) mod bucket_count, in unsigned
 // arithmetic (signed overflow would be undefined); a mask when bucket_count is a power of two.
 VF_HOST_DEVICE inline int hashBucket(Vec3i block, int bucket_count) {
-    const unsigned h = (unsigned(block.x) * 73856093u) ^ (unsigned(block.y) * 19349669u) ^ (unsigned(block.z) * 83492791u);
+    const unsigned h =
+        (unsigned(block.x) * 73856093u) ^ (unsigned(block.y) * 19349669u) ^ (unsigned(block.z) * 83492791u);
     const unsigned n = unsigned(bucket_count);
     return int((n & (n - 1u)) == 0u ? (h & (n - 1u)) : (h % n));
 }

@@ -46,27 +46,27 @@ enum InsertOutcome : std::uint8_t { kInsertPending = 0, kInserted, kInsertFailed
 
 // Totals of a round, accumulated with atomics by InsertGranted (one struct in device memory).
 struct InsertRoundCounts {
-    int inserted;      // blocks inserted this round
-    int excess_used;   // excess entries taken this round
-    int failed_hash;   // blocks that failed for lack of an excess entry this round
-    int failed_blocks; // blocks that failed for lack of a voxel block this round
-    int pending;       // blocks left for the next round
+    int inserted;       // blocks inserted this round
+    int excess_used;    // excess entries taken this round
+    int failed_hash;    // blocks that failed for lack of an excess entry this round
+    int failed_blocks;  // blocks that failed for lack of a voxel block this round
+    int pending;        // blocks left for the next round
 };
 
 // The per-block arrays of the rounds and the free-stack sizes at the start of the round.
 struct InsertRound {
     HashTableState table;
-    const std::uint64_t* keys;  // the distinct missing blocks, sorted
-    int* target;                // insertion target per block while it takes part in a round, else -1
-    int* claim;                 // per entry: the smallest block index that targets it (INT_MAX = none)
-    std::uint8_t* outcome;      // InsertOutcome per block
-    std::uint8_t* needs_excess; // per block: its target is a chain tail (a new excess entry is linked after it)
-    int* excess_wanted;         // per block: 1 for a winner that needs an excess entry
-    int* excess_rank;           // exclusive scan of excess_wanted
-    int* block_wanted;          // per block: 1 for a winner that may take a voxel block
-    int* block_rank;            // exclusive scan of block_wanted
+    const std::uint64_t* keys;   // the distinct missing blocks, sorted
+    int* target;                 // insertion target per block while it takes part in a round, else -1
+    int* claim;                  // per entry: the smallest block index that targets it (INT_MAX = none)
+    std::uint8_t* outcome;       // InsertOutcome per block
+    std::uint8_t* needs_excess;  // per block: its target is a chain tail (a new excess entry is linked after it)
+    int* excess_wanted;          // per block: 1 for a winner that needs an excess entry
+    int* excess_rank;            // exclusive scan of excess_wanted
+    int* block_wanted;           // per block: 1 for a winner that may take a voxel block
+    int* block_rank;             // exclusive scan of block_wanted
     InsertRoundCounts* counts;
-    int free_block_count;       // sizes of the free stacks at the start of the round
+    int free_block_count;  // sizes of the free stacks at the start of the round
     int free_excess_count;
 };
 
@@ -76,7 +76,8 @@ struct ClaimInsertTarget {
     VF_HOST_DEVICE void operator()(int i) const {
         if (r.outcome[i] != kInsertPending) return;
         int target;
-        findHashEntry(r.table.view(), blockFromKey(r.keys[i]), target);  // absent: the block was missing and is distinct
+        findHashEntry(r.table.view(), blockFromKey(r.keys[i]),
+                      target);  // absent: the block was missing and is distinct
         r.target[i] = target;
         const HashEntry& t = r.table.entries[target];
         r.needs_excess[i] = !(target < r.table.ordered_entry_count && t.ptr == kEntryFree);
@@ -173,9 +174,9 @@ struct ReleaseInsertClaims {
 struct BucketRemoval {
     HashTableState table;
     const std::uint8_t* remove;
-    int* freed_blocks;          // per bucket: voxel blocks it frees (counting pass) / offset (removing pass)
-    int* freed_excess;          // per bucket: excess entries it frees / offset
-    int free_block_count;       // stack sizes before the pass: freed ids go above them
+    int* freed_blocks;     // per bucket: voxel blocks it frees (counting pass) / offset (removing pass)
+    int* freed_excess;     // per bucket: excess entries it frees / offset
+    int free_block_count;  // stack sizes before the pass: freed ids go above them
     int free_excess_count;
 };
 
@@ -187,9 +188,12 @@ struct CountBucketRemovals {
         const int first = bucket * t.entries_per_bucket, last = first + t.entries_per_bucket - 1;
         int removed_ordered = 0, removed_chain = 0, kept_chain = 0;
         for (int k = first; k <= last; ++k) removed_ordered += r.remove[k] ? 1 : 0;
-        for (int next = t.entries[last].next; next != kEndOfChain; next = t.entries[t.ordered_entry_count + next].next) {
-            if (r.remove[t.ordered_entry_count + next]) ++removed_chain;
-            else ++kept_chain;
+        for (int next = t.entries[last].next; next != kEndOfChain;
+             next = t.entries[t.ordered_entry_count + next].next) {
+            if (r.remove[t.ordered_entry_count + next])
+                ++removed_chain;
+            else
+                ++kept_chain;
         }
         const int moved = removed_ordered < kept_chain ? removed_ordered : kept_chain;  // chain heads moved up
         r.freed_blocks[bucket] = removed_ordered + removed_chain;

@@ -13,17 +13,17 @@ namespace voxfuse {
 
 // Everything a voxel update needs from the current frame (trivially copyable: passed to kernels by value).
 struct IntegrationFrame {
-    Mat4f T_depth_world;      // world -> depth camera
+    Mat4f T_depth_world;  // world -> depth camera
     Intrinsics depth_intrinsics;
-    const float* depth;       // metres, 0 = invalid
-    Mat4f T_rgb_world;        // world -> colour camera
+    const float* depth;  // metres, 0 = invalid
+    Mat4f T_rgb_world;   // world -> colour camera
     Intrinsics rgb_intrinsics;
-    const Vec4u8* rgb;        // nullptr when there is no colour
-    const ClassId* labels;    // class per pixel of the label image; nullptr when none
+    const Vec4u8* rgb;            // nullptr when there is no colour
+    const ClassId* labels;        // class per pixel of the label image; nullptr when none
     Mat4f T_label_world;          // world -> the camera that saw the labels (colour, or depth without colour)
     Intrinsics label_intrinsics;  // that camera at the label image's resolution
     LabelUpdate label_update;
-    std::uint32_t label_seed;     // differs per frame: see labelRandom()
+    std::uint32_t label_seed;  // differs per frame: see labelRandom()
     float voxel_size_m;
     float mu_m;
     int max_weight;
@@ -45,7 +45,8 @@ VF_HOST_DEVICE inline Vec3f blockCornerInDepthCamera(const IntegrationFrame& f, 
 VF_HOST_DEVICE inline Vec3f blockRowOffset(const IntegrationFrame& f, int y, int z) {
     return f.voxel_step_y * float(y) + f.voxel_step_z * float(z);
 }
-VF_HOST_DEVICE inline Vec3f blockVoxelInDepthCamera(const IntegrationFrame& f, Vec3f corner_cam, Vec3f row_offset, int x) {
+VF_HOST_DEVICE inline Vec3f blockVoxelInDepthCamera(const IntegrationFrame& f, Vec3f corner_cam, Vec3f row_offset,
+                                                    int x) {
     return corner_cam + (f.voxel_step_x * float(x) + row_offset);
 }
 
@@ -55,7 +56,8 @@ VF_HOST_DEVICE inline bool sampleColorBilinear(const Vec4u8* rgb, Vec2i size, Ve
     const int x0 = int(px.x), y0 = int(px.y);
     const int x1 = x0 + 1 < size.x ? x0 + 1 : x0, y1 = y0 + 1 < size.y ? y0 + 1 : y0;
     const float fx = px.x - float(x0), fy = px.y - float(y0);
-    const Vec4u8 a = rgb[x0 + y0 * size.x], b = rgb[x1 + y0 * size.x], c = rgb[x0 + y1 * size.x], d = rgb[x1 + y1 * size.x];
+    const Vec4u8 a = rgb[x0 + y0 * size.x], b = rgb[x1 + y0 * size.x], c = rgb[x0 + y1 * size.x],
+                 d = rgb[x1 + y1 * size.x];
     for (int ch = 0; ch < 3; ++ch)
         out[ch] = (1.f - fy) * ((1.f - fx) * a[ch] + fx * b[ch]) + fy * ((1.f - fx) * c[ch] + fx * d[ch]);
     return true;
@@ -70,17 +72,26 @@ VF_HOST_DEVICE inline bool frustumRowRange(const IntegrationFrame& f, Vec3f row_
     const Vec3f b = transformDirection(f.T_depth_world, step_world);
     const Intrinsics& in = f.depth_intrinsics;
     // Constraints c0 + c1 * x >= 0.
-    const float c0[6] = {a.z - near_m, far_m - a.z,
-                         in.fx * a.x + (in.cx + 0.5f) * a.z, -(in.fx * a.x + (in.cx - float(in.width) + 0.5f) * a.z),
-                         in.fy * a.y + (in.cy + 0.5f) * a.z, -(in.fy * a.y + (in.cy - float(in.height) + 0.5f) * a.z)};
-    const float c1[6] = {b.z, -b.z,
-                         in.fx * b.x + (in.cx + 0.5f) * b.z, -(in.fx * b.x + (in.cx - float(in.width) + 0.5f) * b.z),
-                         in.fy * b.y + (in.cy + 0.5f) * b.z, -(in.fy * b.y + (in.cy - float(in.height) + 0.5f) * b.z)};
+    const float c0[6] = {a.z - near_m,
+                         far_m - a.z,
+                         in.fx * a.x + (in.cx + 0.5f) * a.z,
+                         -(in.fx * a.x + (in.cx - float(in.width) + 0.5f) * a.z),
+                         in.fy * a.y + (in.cy + 0.5f) * a.z,
+                         -(in.fy * a.y + (in.cy - float(in.height) + 0.5f) * a.z)};
+    const float c1[6] = {b.z,
+                         -b.z,
+                         in.fx * b.x + (in.cx + 0.5f) * b.z,
+                         -(in.fx * b.x + (in.cx - float(in.width) + 0.5f) * b.z),
+                         in.fy * b.y + (in.cy + 0.5f) * b.z,
+                         -(in.fy * b.y + (in.cy - float(in.height) + 0.5f) * b.z)};
     float lo = float(x_begin), hi = float(x_end);
     for (int k = 0; k < 6; ++k) {
-        if (c1[k] > 0.f) lo = fmaxf(lo, -c0[k] / c1[k] - 1.f);
-        else if (c1[k] < 0.f) hi = fminf(hi, -c0[k] / c1[k] + 2.f);
-        else if (c0[k] < 0.f) return false;
+        if (c1[k] > 0.f)
+            lo = fmaxf(lo, -c0[k] / c1[k] - 1.f);
+        else if (c1[k] < 0.f)
+            hi = fminf(hi, -c0[k] / c1[k] + 2.f);
+        else if (c0[k] < 0.f)
+            return false;
     }
     if (!(lo < hi)) return false;
     x_begin = int(floorf(lo));
@@ -101,7 +112,8 @@ VF_HOST_DEVICE inline int depthPixelOfVoxel(Vec3f p_cam, const IntegrationFrame&
 // Returns eta, the measured depth minus the voxel's depth along the optical axis, or a large negative
 // number when the voxel gets no update.
 template <class TVoxel>
-VF_HOST_DEVICE inline float integrateVoxelAtPixel(TVoxel& voxel, Vec3i pos, Vec3f p_cam, int depth_pixel, const IntegrationFrame& f) {
+VF_HOST_DEVICE inline float integrateVoxelAtPixel(TVoxel& voxel, Vec3i pos, Vec3f p_cam, int depth_pixel,
+                                                  const IntegrationFrame& f) {
     const float kNoUpdate = -1e30f;
     if (depth_pixel < 0) return kNoUpdate;
 
@@ -126,7 +138,8 @@ VF_HOST_DEVICE inline float integrateVoxelAtPixel(TVoxel& voxel, Vec3i pos, Vec3
         if (f.rgb != nullptr && near_surface) {
             const Vec3f p_rgb = transformPoint(f.T_rgb_world, p_world);
             Vec3f c;
-            if (p_rgb.z > 0.f && sampleColorBilinear(f.rgb, f.rgb_intrinsics.size(), f.rgb_intrinsics.project(p_rgb), c)) {
+            if (p_rgb.z > 0.f &&
+                sampleColorBilinear(f.rgb, f.rgb_intrinsics.size(), f.rgb_intrinsics.project(p_rgb), c)) {
                 const int old_wc = voxel.w_color;
                 // Channel by channel without operator[]: GCC reads (&x)[i] on a byte vector as out of bounds.
                 auto blend = [old_wc](unsigned char old, float seen) {
@@ -141,10 +154,12 @@ VF_HOST_DEVICE inline float integrateVoxelAtPixel(TVoxel& voxel, Vec3i pos, Vec3
         // The class is the label image's pixel nearest to the voxel (ids are never interpolated).
         if (f.labels != nullptr && near_surface) {
             const Vec3f p_label = transformPoint(f.T_label_world, p_world);
-            const int label_pixel = p_label.z > 0.f ? f.label_intrinsics.nearestPixelIndex(f.label_intrinsics.project(p_label)) : -1;
+            const int label_pixel =
+                p_label.z > 0.f ? f.label_intrinsics.nearestPixelIndex(f.label_intrinsics.project(p_label)) : -1;
             const ClassId observed = label_pixel >= 0 ? f.labels[label_pixel] : kNoLabel;
             if (observed != kNoLabel)
-                fuseLabel(voxel.label, voxel.w_label, observed, f.label_update, f.max_weight, labelRandom(pos, f.label_seed));
+                fuseLabel(voxel.label, voxel.w_label, observed, f.label_update, f.max_weight,
+                          labelRandom(pos, f.label_seed));
         }
     }
     return eta;
@@ -161,7 +176,8 @@ template <class TVoxel>
 VF_HOST_DEVICE inline float integrateVoxel(TVoxel& voxel, Vec3i pos, const IntegrationFrame& f) {
     const Vec3i in_block{pos.x & (kBlockSide - 1), pos.y & (kBlockSide - 1), pos.z & (kBlockSide - 1)};
     const Vec3f corner_cam = blockCornerInDepthCamera(f, pos - in_block);
-    return integrateVoxelAt(voxel, pos, blockVoxelInDepthCamera(f, corner_cam, blockRowOffset(f, in_block.y, in_block.z), in_block.x), f);
+    return integrateVoxelAt(
+        voxel, pos, blockVoxelInDepthCamera(f, corner_cam, blockRowOffset(f, in_block.y, in_block.z), in_block.x), f);
 }
 
 // ---- Loop bodies of the device layers ----
@@ -170,7 +186,9 @@ VF_HOST_DEVICE inline float integrateVoxel(TVoxel& voxel, Vec3i pos, const Integ
 struct UsableDepth {
     const float* depth;
     float min_depth_m, max_depth_m;
-    VF_HOST_DEVICE float operator()(int i) const { return depth[i] >= min_depth_m && depth[i] <= max_depth_m ? depth[i] : 0.f; }
+    VF_HOST_DEVICE float operator()(int i) const {
+        return depth[i] >= min_depth_m && depth[i] <= max_depth_m ? depth[i] : 0.f;
+    }
 };
 
 // The voxel block hash: element i updates `VoxelsPerElement` consecutive voxels (a divisor of 512) of
@@ -201,9 +219,10 @@ struct IntegrateHashVoxels {
             // would reload every frame constant after each voxel of the block.
             const IntegrationFrame f = frame;
             if (i + 2 < block_count) VF_PREFETCH_FOR_READ(&entries[visible_entries[i + 2]]);
-            const char* next_block = i + 1 < block_count
-                                         ? reinterpret_cast<const char*>(voxels + (long long)entries[visible_entries[i + 1]].ptr * kBlockVoxelCount)
-                                         : nullptr;
+            const char* next_block =
+                i + 1 < block_count ? reinterpret_cast<const char*>(
+                                          voxels + (long long)entries[visible_entries[i + 1]].ptr * kBlockVoxelCount)
+                                    : nullptr;
             constexpr int kRowBytes = kBlockSide * int(sizeof(TVoxel));
             for (int z = 0; z < kBlockSide; ++z)
                 for (int y = 0; y < kBlockSide; ++y) {
@@ -225,14 +244,16 @@ struct IntegrateHashVoxels {
                         pixel[x] = depthPixelOfVoxel(p, f);
                     }
                     for (int x = 0; x < kBlockSide; ++x)
-                        integrateVoxelAtPixel(line[x], corner + Vec3i{x, y, z}, Vec3f{px[x], py[x], pz[x]}, pixel[x], f);
+                        integrateVoxelAtPixel(line[x], corner + Vec3i{x, y, z}, Vec3f{px[x], py[x], pz[x]}, pixel[x],
+                                              f);
                 }
         } else {
             const IntegrationFrame& f = frame;
             const int first = (i % kElementsPerBlock) * VoxelsPerElement;
             for (int v = first; v < first + VoxelsPerElement; ++v) {
                 const int x = v & 7, y = (v >> 3) & 7, z = v >> 6;
-                integrateVoxelAt(block[v], corner + Vec3i{x, y, z}, blockVoxelInDepthCamera(f, corner_cam, blockRowOffset(f, y, z), x), f);
+                integrateVoxelAt(block[v], corner + Vec3i{x, y, z},
+                                 blockVoxelInDepthCamera(f, corner_cam, blockRowOffset(f, y, z), x), f);
             }
         }
     }
@@ -256,7 +277,8 @@ struct DepthMaxTiles {
     float* tile_max;
     VF_HOST_DEVICE void operator()(int t) const {
         const int x0 = (t % tiles_x) * kDepthTile, y0 = (t / tiles_x) * kDepthTile;
-        const int x1 = x0 + kDepthTile < size.x ? x0 + kDepthTile : size.x, y1 = y0 + kDepthTile < size.y ? y0 + kDepthTile : size.y;
+        const int x1 = x0 + kDepthTile < size.x ? x0 + kDepthTile : size.x,
+                  y1 = y0 + kDepthTile < size.y ? y0 + kDepthTile : size.y;
         float m = 0.f;
         for (int y = y0; y < y1; ++y)
             for (int x = x0; x < x1; ++x) {
@@ -322,7 +344,8 @@ struct IntegrateDenseVoxel {
     IntegrationFrame frame;
     VF_HOST_DEVICE void operator()(int i) const {
         const int x = lo.x + i % box.x, y = lo.y + (i / box.x) % box.y, z = lo.z + z_first + i / (box.x * box.y);
-        integrateVoxel(voxels[x + (long long)index.size.x * (y + (long long)index.size.y * z)], Vec3i{x, y, z} + index.offset, frame);
+        integrateVoxel(voxels[x + (long long)index.size.x * (y + (long long)index.size.y * z)],
+                       Vec3i{x, y, z} + index.offset, frame);
     }
 };
 
@@ -340,7 +363,9 @@ struct IntegrateDenseRow {
         TVoxel* line = voxels + (long long)index.size.x * (y + (long long)index.size.y * z);
         int x_begin = lo.x, x_end = hi.x;
         const Vec3f row_origin = toFloat(Vec3i{0, y, z} + index.offset) * frame.voxel_size_m;
-        if (!frustumRowRange(frame, row_origin, Vec3f{frame.voxel_size_m, 0.f, 0.f}, frame.near_m, far_m, x_begin, x_end)) return;
+        if (!frustumRowRange(frame, row_origin, Vec3f{frame.voxel_size_m, 0.f, 0.f}, frame.near_m, far_m, x_begin,
+                             x_end))
+            return;
         x_begin = x_begin > lo.x ? x_begin : lo.x;
         x_end = x_end < hi.x ? x_end : hi.x;
         for (int x = x_begin; x < x_end; ++x) integrateVoxel(line[x], Vec3i{x, y, z} + index.offset, frame);

@@ -45,8 +45,8 @@ VF_HOST_DEVICE inline float labelRandom(Vec3i voxel, std::uint32_t seed) {
 
 // Updates (label, weight) with one observation of class `observed` (not kNoLabel). `random` is
 // uniform in [0, 1) and used by the probabilistic rule only.
-VF_HOST_DEVICE inline void fuseLabel(ClassId& label, std::uint8_t& weight, ClassId observed, LabelUpdate rule, int max_weight,
-                                     float random) {
+VF_HOST_DEVICE inline void fuseLabel(ClassId& label, std::uint8_t& weight, ClassId observed, LabelUpdate rule,
+                                     int max_weight, float random) {
     if (weight == 0) {
         label = observed;
         weight = 1;

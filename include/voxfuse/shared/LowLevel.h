@@ -16,14 +16,15 @@ constexpr int kMaxBilateralRadius = 7;
 // What every pixel of one bilateral filter pass shares: the spatial weight is separable, so one
 // factor per pixel offset, e^(-k^2 / 2 sigma_space^2), made once per pass.
 struct BilateralWeights {
-    int radius_px;                               // <= kMaxBilateralRadius
-    float spatial[kMaxBilateralRadius + 1];      // by |dx| and |dy|
-    float inv_2_sigma_depth_sq;                  // 1 / (2 sigma_depth^2), 1/m^2
+    int radius_px;                           // <= kMaxBilateralRadius
+    float spatial[kMaxBilateralRadius + 1];  // by |dx| and |dy|
+    float inv_2_sigma_depth_sq;              // 1 / (2 sigma_depth^2), 1/m^2
 };
 
 // Edge-preserving smoothing of one depth pixel (KinectFusion's bilateral filter). Invalid (0) pixels
 // stay invalid and never contribute.
-VF_HOST_DEVICE inline float bilateralFilterDepthPixel(const float* depth, Vec2i size, int x, int y, const BilateralWeights& w) {
+VF_HOST_DEVICE inline float bilateralFilterDepthPixel(const float* depth, Vec2i size, int x, int y,
+                                                      const BilateralWeights& w) {
     const float centre = depth[x + y * size.x];
     if (!(centre > 0.f)) return 0.f;
     const int r = w.radius_px;
@@ -37,7 +38,8 @@ VF_HOST_DEVICE inline float bilateralFilterDepthPixel(const float* depth, Vec2i 
             const float d = row[xx];
             if (!(d > 0.f)) continue;
             const float diff = d - centre;
-            const float weight = wy * w.spatial[xx > x ? xx - x : x - xx] * expOfNegative(diff * diff * w.inv_2_sigma_depth_sq);
+            const float weight =
+                wy * w.spatial[xx > x ? xx - x : x - xx] * expOfNegative(diff * diff * w.inv_2_sigma_depth_sq);
             sum += weight * d;
             weight_sum += weight;
         }
@@ -82,7 +84,7 @@ VF_HOST_DEVICE inline int normalNeighbour(const Vec4f* vertices, Vec2i size, int
         const int xx = x + k * sx, yy = y + k * sy;
         if (xx < 0 || yy < 0 || xx >= size.x || yy >= size.y) return 0;
         const Vec4f p = vertices[xx + yy * size.x];
-        if (p.w <= 0.f) continue;  // a hole: look one pixel further
+        if (p.w <= 0.f) continue;                                        // a hole: look one pixel further
         if (length(p.xyz() - centre) > max_step_m * float(k)) return 0;  // a depth edge
         out = p.xyz();
         return k;
@@ -123,9 +125,13 @@ struct PixelGrid {
     int grid_width;  // (width + step - 1) / step
     VF_HOST_DEVICE int index(int i) const { return (i % grid_width) * step + (i / grid_width) * step * width; }
 };
-inline PixelGrid pixelGridOf(Vec2i image_size, int step) { return {image_size.x, step, (image_size.x + step - 1) / step}; }
+inline PixelGrid pixelGridOf(Vec2i image_size, int step) {
+    return {image_size.x, step, (image_size.x + step - 1) / step};
+}
 // The number of elements of that grid.
-inline int gridSize(Vec2i image_size, int step) { return ((image_size.x + step - 1) / step) * ((image_size.y + step - 1) / step); }
+inline int gridSize(Vec2i image_size, int step) {
+    return ((image_size.x + step - 1) / step) * ((image_size.y + step - 1) / step);
+}
 
 // ---- Loop bodies of the device layers: element i is pixel i of the output image ----
 
@@ -164,7 +170,8 @@ struct ConvertDepthPixels {
         }
         const int x = i % size.x, y = i / size.x;
         float filled = 0.f;
-        if (!(x > 0 && x + 1 < size.x && bridge(i - 1, i + 1, filled)) && y > 0 && y + 1 < size.y) bridge(i - size.x, i + size.x, filled);
+        if (!(x > 0 && x + 1 < size.x && bridge(i - 1, i + 1, filled)) && y > 0 && y + 1 < size.y)
+            bridge(i - size.x, i + size.x, filled);
         depth_m[i] = filled;
     }
 };
@@ -174,7 +181,9 @@ struct BilateralFilterPixels {
     Vec2i size;
     BilateralWeights weights;
     float* out;
-    VF_HOST_DEVICE void operator()(int i) const { out[i] = bilateralFilterDepthPixel(in, size, i % size.x, i / size.x, weights); }
+    VF_HOST_DEVICE void operator()(int i) const {
+        out[i] = bilateralFilterDepthPixel(in, size, i % size.x, i / size.x, weights);
+    }
 };
 
 // The CPU's launch shape of the same filter: element e is a strip of up to kBilateralStripWidth
@@ -207,14 +216,16 @@ struct BilateralFilterStrips {
         return fit < kBilateralStripWidth ? (fit > 1 ? fit : 1) : kBilateralStripWidth;
     }
     VF_HOST_DEVICE int stripsPerRow() const { return (size.x + stripWidth() - 1) / stripWidth(); }
-    VF_HOST_DEVICE int elementCount() const { return stripsPerRow() * ((size.y + kBilateralStripRows - 1) / kBilateralStripRows); }
+    VF_HOST_DEVICE int elementCount() const {
+        return stripsPerRow() * ((size.y + kBilateralStripRows - 1) / kBilateralStripRows);
+    }
 
     VF_HOST_DEVICE void operator()(int e) const {
         const int r = weights.radius_px, width = stripWidth(), ahead = aheadCount();
         const int x0 = (e % stripsPerRow()) * width, row0 = (e / stripsPerRow()) * kBilateralStripRows;
         const int n = size.x - x0 < width ? size.x - x0 : width;
         const int row1 = size.y - row0 < kBilateralStripRows ? size.y : row0 + kBilateralStripRows;
-        const int columns = n + 2 * r;  // the ring's columns: x0 - r .. x0 + n + r - 1
+        const int columns = n + 2 * r;      // the ring's columns: x0 - r .. x0 + n + r - 1
         float pairs[kBilateralPairBuffer];  // [row % (r + 1)][ahead tap][column]
         auto pairRow = [&](int y, int tap) { return pairs + ((y % (r + 1)) * ahead + tap) * columns; };
         // Row y's pairs with its taps ahead, for the columns whose pair lies inside the image.
@@ -282,14 +293,18 @@ struct DownsampleDepthPixels {
     int out_width;
     float max_diff_m;
     float* out;
-    VF_HOST_DEVICE void operator()(int i) const { out[i] = downsampleDepthPixel(in, in_size, i % out_width, i / out_width, max_diff_m); }
+    VF_HOST_DEVICE void operator()(int i) const {
+        out[i] = downsampleDepthPixel(in, in_size, i % out_width, i / out_width, max_diff_m);
+    }
 };
 
 struct VertexPixels {
     const float* depth;
     Intrinsics intrinsics;
     Vec4f* vertices;
-    VF_HOST_DEVICE void operator()(int i) const { vertices[i] = vertexFromDepthPixel(depth, intrinsics, i % intrinsics.width, i / intrinsics.width); }
+    VF_HOST_DEVICE void operator()(int i) const {
+        vertices[i] = vertexFromDepthPixel(depth, intrinsics, i % intrinsics.width, i / intrinsics.width);
+    }
 };
 
 // Element i is pixel grid.index(i) (every pixel with a grid of step 1).
@@ -388,7 +403,8 @@ struct CellRowAverages {
             // As many whole cells as the chunk holds (at least one; a wider cell goes column by column).
             const int x0 = firstPixelOfCell(cx, cells.x, frame.x);
             int cx_end = cx + 1;
-            while (cx_end < cells.x && firstPixelOfCell(cx_end + 1, cells.x, frame.x) - x0 <= kCellColumnChunk) ++cx_end;
+            while (cx_end < cells.x && firstPixelOfCell(cx_end + 1, cells.x, frame.x) - x0 <= kCellColumnChunk)
+                ++cx_end;
             const int x1 = firstPixelOfCell(cx_end, cells.x, frame.x);
             if (x1 - x0 > kCellColumnChunk) {
                 CellAverages<Sample>{sample, frame, cells, mean_and_count}(cx + cy * cells.x);
@@ -405,7 +421,8 @@ struct CellRowAverages {
                 }
             for (; cx < cx_end; ++cx) {
                 float sum = 0.f, count = 0.f;
-                for (int x = firstPixelOfCell(cx, cells.x, frame.x); x < firstPixelOfCell(cx + 1, cells.x, frame.x); ++x) {
+                for (int x = firstPixelOfCell(cx, cells.x, frame.x); x < firstPixelOfCell(cx + 1, cells.x, frame.x);
+                     ++x) {
                     sum += column_sum[x - x0];
                     count += column_count[x - x0];
                 }

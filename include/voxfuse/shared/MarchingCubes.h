@@ -24,7 +24,9 @@ constexpr int kCubeEdges = 12;
 // The most triangles one case produces (a case needing more would stop the compile-time generation).
 constexpr int kMaxCellTriangles = 5;
 
-VF_HOST_DEVICE constexpr Vec3i cubeCornerOffset(int corner) { return {corner & 1, (corner >> 1) & 1, (corner >> 2) & 1}; }
+VF_HOST_DEVICE constexpr Vec3i cubeCornerOffset(int corner) {
+    return {corner & 1, (corner >> 1) & 1, (corner >> 2) & 1};
+}
 VF_HOST_DEVICE constexpr int cubeEdgeAxis(int edge) { return edge >> 2; }
 // The corner where the edge starts (its axis coordinate is 0).
 VF_HOST_DEVICE constexpr int cubeEdgeStartCorner(int edge) {
@@ -32,7 +34,9 @@ VF_HOST_DEVICE constexpr int cubeEdgeStartCorner(int edge) {
     // The two other axes in increasing order carry u and v.
     return axis == 0 ? (u << 1) | (v << 2) : axis == 1 ? u | (v << 2) : u | (v << 1);
 }
-VF_HOST_DEVICE constexpr int cubeEdgeEndCorner(int edge) { return cubeEdgeStartCorner(edge) | (1 << cubeEdgeAxis(edge)); }
+VF_HOST_DEVICE constexpr int cubeEdgeEndCorner(int edge) {
+    return cubeEdgeStartCorner(edge) | (1 << cubeEdgeAxis(edge));
+}
 // The edge joining two corners that differ in exactly one coordinate.
 VF_HOST_DEVICE constexpr int cubeEdgeBetween(int corner_a, int corner_b) {
     const int axis = (corner_a ^ corner_b) == 1 ? 0 : (corner_a ^ corner_b) == 2 ? 1 : 2;
@@ -174,7 +178,8 @@ VF_HOST_DEVICE inline float edgeCrossing(float sdf_start, float sdf_end) {
 
 // One component of the SDF gradient at a grid point from its two neighbours along an axis: central
 // difference where both were observed, one-sided where only one was, 0 where neither was.
-VF_HOST_DEVICE inline float sdfDifference(float minus, bool minus_observed, float centre, float plus, bool plus_observed) {
+VF_HOST_DEVICE inline float sdfDifference(float minus, bool minus_observed, float centre, float plus,
+                                          bool plus_observed) {
     if (minus_observed && plus_observed) return 0.5f * (plus - minus);
     if (plus_observed) return plus - centre;
     if (minus_observed) return centre - minus;

@@ -24,7 +24,8 @@ namespace voxfuse::meshing {
 // coordinates are within +-32767): bit 3b + a of the code is bit b of axis a.
 VF_HOST_DEVICE inline std::uint64_t mortonCode(Vec3i block) {
     std::uint64_t code = 0;
-    const std::uint32_t c[3] = {std::uint32_t(block.x + 0x8000), std::uint32_t(block.y + 0x8000), std::uint32_t(block.z + 0x8000)};
+    const std::uint32_t c[3] = {std::uint32_t(block.x + 0x8000), std::uint32_t(block.y + 0x8000),
+                                std::uint32_t(block.z + 0x8000)};
     for (int bit = 0; bit < 17; ++bit)
         for (int a = 0; a < 3; ++a) code |= std::uint64_t((c[a] >> bit) & 1u) << (3 * bit + a);
     return code;
@@ -112,7 +113,9 @@ struct DenseMeshBlocks {
         return {index, voxels, first, last - first + Vec3i{1, 1, 1}};
     }
     VF_HOST_DEVICE int count() const { return counts.x * counts.y * counts.z; }
-    VF_HOST_DEVICE Vec3i position(int i) const { return first + Vec3i{i % counts.x, (i / counts.x) % counts.y, i / (counts.x * counts.y)}; }
+    VF_HOST_DEVICE Vec3i position(int i) const {
+        return first + Vec3i{i % counts.x, (i / counts.x) % counts.y, i / (counts.x * counts.y)};
+    }
     VF_HOST_DEVICE int find(Vec3i block) const {
         const Vec3i b = block - first;
         if (b.x < 0 || b.y < 0 || b.z < 0 || b.x >= counts.x || b.y >= counts.y || b.z >= counts.z) return -1;

@@ -71,9 +71,9 @@ VF_HOST_DEVICE inline int bitCount(unsigned mask) {
 // The signs of a block's neighbourhood as bit masks per row along x: whole rows of cells and edges are
 // tested at once, and only the few on the surface are visited one by one.
 struct BlockSigns {
-    int neighbours[27];                       // list places of the blocks at offsets -1 .. 1 (x fastest), -1: none
-    std::uint16_t observed_rows[kLocalRows];  // weight > 0
-    std::uint16_t negative_rows[kLocalRows];  // observed and SDF < 0
+    int neighbours[27];                           // list places of the blocks at offsets -1 .. 1 (x fastest), -1: none
+    std::uint16_t observed_rows[kLocalRows];      // weight > 0
+    std::uint16_t negative_rows[kLocalRows];      // observed and SDF < 0
     std::uint16_t complete_cell_rows[kCellRows];  // all eight corners observed
     std::uint16_t surface_cell_rows[kCellRows];   // complete, with both signs
 };
@@ -99,7 +99,8 @@ struct BlockVoxels {
 
 // Row (y, z) of the neighbourhood, y and z in -1 .. 9: its voxels and sign masks. s.neighbours must be set.
 template <class TVoxel, class TBlocks>
-VF_HOST_DEVICE void unpackRow(const TBlocks& blocks, Vec3i block, int y, int z, BlockSigns& s, BlockVoxels<TVoxel>& voxels) {
+VF_HOST_DEVICE void unpackRow(const TBlocks& blocks, Vec3i block, int y, int z, BlockSigns& s,
+                              BlockVoxels<TVoxel>& voxels) {
     // (c + 8) >> 3 is 0, 1 or 2 for c = -1 .. 9: the neighbour below, this block, the one above.
     const int ny = (y + 8) >> 3, nz = (z + 8) >> 3;
     unsigned observed_bits = 0, negative_bits = 0;
@@ -107,7 +108,8 @@ VF_HOST_DEVICE void unpackRow(const TBlocks& blocks, Vec3i block, int y, int z, 
     for (int x = -kMarginBelow; x < kBlockSide + kMarginAbove; ++x, ++i) {
         const int nx = (x + 8) >> 3;
         const int n = s.neighbours[nx + 3 * ny + 9 * nz];
-        const TVoxel* v = n >= 0 ? blocks.voxel(block + Vec3i{nx - 1, ny - 1, nz - 1}, n, Vec3i{x & 7, y & 7, z & 7}) : nullptr;
+        const TVoxel* v =
+            n >= 0 ? blocks.voxel(block + Vec3i{nx - 1, ny - 1, nz - 1}, n, Vec3i{x & 7, y & 7, z & 7}) : nullptr;
         const bool observed = v && v->w_depth > 0;
         const float sdf = observed ? TVoxel::sdfToFloat(v->sdf) : 1.f;
         observed_bits |= unsigned(observed) << (x + 1);
@@ -149,9 +151,12 @@ VF_HOST_DEVICE inline void gatherSignRow(const RowSigns* row_signs, int y, int z
 // bit x + 1 is that of A & (A >> 1).
 VF_HOST_DEVICE inline void classifyCellRow(int y, int z, BlockSigns& s) {
     const int r[4] = {rowIndex(y, z), rowIndex(y + 1, z), rowIndex(y, z + 1), rowIndex(y + 1, z + 1)};
-    const unsigned all_observed = s.observed_rows[r[0]] & s.observed_rows[r[1]] & s.observed_rows[r[2]] & s.observed_rows[r[3]];
-    const unsigned any_negative = s.negative_rows[r[0]] | s.negative_rows[r[1]] | s.negative_rows[r[2]] | s.negative_rows[r[3]];
-    const unsigned all_negative = s.negative_rows[r[0]] & s.negative_rows[r[1]] & s.negative_rows[r[2]] & s.negative_rows[r[3]];
+    const unsigned all_observed =
+        s.observed_rows[r[0]] & s.observed_rows[r[1]] & s.observed_rows[r[2]] & s.observed_rows[r[3]];
+    const unsigned any_negative =
+        s.negative_rows[r[0]] | s.negative_rows[r[1]] | s.negative_rows[r[2]] | s.negative_rows[r[3]];
+    const unsigned all_negative =
+        s.negative_rows[r[0]] & s.negative_rows[r[1]] & s.negative_rows[r[2]] & s.negative_rows[r[3]];
     const unsigned complete = all_observed & (all_observed >> 1) & 0x1FFu;
     const unsigned mixed = (any_negative | (any_negative >> 1)) & ~(all_negative & (all_negative >> 1));
     s.complete_cell_rows[cellRowIndex(y, z)] = std::uint16_t(complete);
@@ -159,12 +164,14 @@ VF_HOST_DEVICE inline void classifyCellRow(int y, int z, BlockSigns& s) {
 }
 
 VF_HOST_DEVICE inline void classifyCells(const Team& team, BlockSigns& s) {
-    for (int r = team.rank; r < kCellRows; r += team.size) classifyCellRow(r % kCellRowSide - 1, r / kCellRowSide - 1, s);
+    for (int r = team.rank; r < kCellRows; r += team.size)
+        classifyCellRow(r % kCellRowSide - 1, r / kCellRowSide - 1, s);
 }
 
 // The neighbourhood's voxels, signs and cells; the team waits at the end. s.neighbours must be set.
 template <class TVoxel, class TBlocks>
-VF_HOST_DEVICE void unpackNeighbourhood(const Team& team, const TBlocks& blocks, Vec3i block, BlockSigns& s, BlockVoxels<TVoxel>& voxels) {
+VF_HOST_DEVICE void unpackNeighbourhood(const Team& team, const TBlocks& blocks, Vec3i block, BlockSigns& s,
+                                        BlockVoxels<TVoxel>& voxels) {
     for (int r = team.rank; r < kLocalRows; r += team.size)
         unpackRow<TVoxel>(blocks, block, r % kLocalSide - kMarginBelow, r / kLocalSide - kMarginBelow, s, voxels);
     team.sync();
@@ -192,7 +199,8 @@ VF_HOST_DEVICE inline unsigned rowVertexEdges(const BlockSigns& s, int y, int z)
     const unsigned o_y = s.observed_rows[rowIndex(y + 1, z)], n_y = s.negative_rows[rowIndex(y + 1, z)];
     const unsigned o_z = s.observed_rows[rowIndex(y, z + 1)], n_z = s.negative_rows[rowIndex(y, z + 1)];
     const unsigned near_y = complete(y, z) | complete(y, z - 1), near_z = complete(y, z) | complete(y - 1, z);
-    const unsigned along_x = o & (o >> 1) & (n ^ (n >> 1)) & (complete(y, z) | complete(y - 1, z) | complete(y, z - 1) | complete(y - 1, z - 1));
+    const unsigned along_x = o & (o >> 1) & (n ^ (n >> 1)) &
+                             (complete(y, z) | complete(y - 1, z) | complete(y, z - 1) | complete(y - 1, z - 1));
     const unsigned along_y = o & o_y & (n ^ n_y) & (near_y | (near_y << 1));  // cells x - 1 sit one bit lower
     const unsigned along_z = o & o_z & (n ^ n_z) & (near_z | (near_z << 1));
     return ((along_x & kBlockBits) >> 1) | (((along_y & kBlockBits) >> 1) << 8) | (((along_z & kBlockBits) >> 1) << 16);
@@ -202,7 +210,8 @@ VF_HOST_DEVICE inline unsigned rowVertexEdges(const BlockSigns& s, int y, int z)
 // smaller axes.
 VF_HOST_DEVICE inline int rankInRow(unsigned row_edges, int x, int axis) {
     const unsigned below = (1u << x) - 1u;
-    const unsigned before = below | (below << 8) | (below << 16) | (axis > 0 ? 1u << x : 0u) | (axis > 1 ? 1u << (x + 8) : 0u);
+    const unsigned before =
+        below | (below << 8) | (below << 16) | (axis > 0 ? 1u << x : 0u) | (axis > 1 ? 1u << (x + 8) : 0u);
     return bitCount(row_edges & before);
 }
 
@@ -229,12 +238,12 @@ VF_HOST_DEVICE inline int rowTriangleCount(const BlockSigns& s, int y, int z) {
 
 // What pass 1 keeps per meshed block (slot) for pass 2.
 struct MeshedBlockRows {
-    int* neighbours;                     // 27 per slot: BlockSigns::neighbours, found once
-    unsigned* row_edges;                 // kBlockRows per slot: rowVertexEdges()
-    std::uint16_t* row_first_vertex;     // kBlockRows per slot: vertices of the block's rows before this one
-    std::uint16_t* row_first_triangle;   // kBlockRows per slot
-    long long* vertex_count;             // per slot (long long: the scan over the slots must not overflow)
-    long long* triangle_count;           // per slot
+    int* neighbours;                    // 27 per slot: BlockSigns::neighbours, found once
+    unsigned* row_edges;                // kBlockRows per slot: rowVertexEdges()
+    std::uint16_t* row_first_vertex;    // kBlockRows per slot: vertices of the block's rows before this one
+    std::uint16_t* row_first_triangle;  // kBlockRows per slot
+    long long* vertex_count;            // per slot (long long: the scan over the slots must not overflow)
+    long long* triangle_count;          // per slot
 };
 
 struct CountShared {
@@ -264,7 +273,8 @@ struct CountBlockSurface {
             const unsigned edges = rowVertexEdges(shared.signs, r % kBlockSide, r / kBlockSide);
             rows.row_edges[slot * kBlockRows + r] = edges;
             shared.row_vertices[r] = bitCount(edges);
-            shared.row_triangles[r] = with_triangles ? rowTriangleCount(shared.signs, r % kBlockSide, r / kBlockSide) : 0;
+            shared.row_triangles[r] =
+                with_triangles ? rowTriangleCount(shared.signs, r % kBlockSide, r / kBlockSide) : 0;
         }
         team.sync();
         if (team.rank != 0) return;
@@ -314,9 +324,12 @@ template <class TVoxel>
 VF_HOST_DEVICE Vec3u8 edgeColor(const BlockVoxels<TVoxel>& v, int start, int end, float t) {
     auto toFloat3 = [](Vec3u8 c) { return Vec3f{float(c.x), float(c.y), float(c.z)}; };
     Vec3f c{0.f, 0.f, 0.f};
-    if (v.colored[start] && v.colored[end]) c = lerp(toFloat3(v.color[start]), toFloat3(v.color[end]), t);
-    else if (v.colored[start]) c = toFloat3(v.color[start]);
-    else if (v.colored[end]) c = toFloat3(v.color[end]);
+    if (v.colored[start] && v.colored[end])
+        c = lerp(toFloat3(v.color[start]), toFloat3(v.color[end]), t);
+    else if (v.colored[start])
+        c = toFloat3(v.color[start]);
+    else if (v.colored[end])
+        c = toFloat3(v.color[end]);
     return Vec3u8{std::uint8_t(c.x + 0.5f), std::uint8_t(c.y + 0.5f), std::uint8_t(c.z + 0.5f)};
 }
 
@@ -360,7 +373,8 @@ struct EmitBlockSurface {
     }
 
 private:
-    VF_HOST_DEVICE void emitRowVertices(const BlockVoxels<TVoxel>& v, Vec3i block, int y, int z, unsigned edges, int index) const {
+    VF_HOST_DEVICE void emitRowVertices(const BlockVoxels<TVoxel>& v, Vec3i block, int y, int z, unsigned edges,
+                                        int index) const {
         const Vec3i block_origin = block * kBlockSide;
         for (int x = 0; x < kBlockSide; ++x) {
             if (!((edges >> x) & 0x10101u)) continue;
@@ -383,7 +397,8 @@ private:
     // Marching cubes over the row's complete cells that have both signs (the others have no triangles).
     VF_HOST_DEVICE void emitRowTriangles(const EmitShared<TVoxel>& shared, int y, int z, long long index) const {
         const MarchingCubesTable& table = marchingCubesTable();
-        for (unsigned cells = shared.signs.surface_cell_rows[cellRowIndex(y, z)] & kBlockBits; cells; cells &= cells - 1) {
+        for (unsigned cells = shared.signs.surface_cell_rows[cellRowIndex(y, z)] & kBlockBits; cells;
+             cells &= cells - 1) {
             const int x = lowestBit(cells) - 1;
             const int cube = cellCase(shared.signs, x, y, z);
             const int corners = 3 * table.triangle_count[cube];

@@ -12,11 +12,11 @@ namespace voxfuse {
 
 template <typename T>
 struct NormalEquations {
-    T hessian[21];      // J^T W J, upper triangle row by row: (0,0) (0,1) .. (0,5) (1,1) .. (5,5)
-    T gradient[6];      // J^T W r
-    T weighted_cost;    // sum of w r^2
-    T squared_sum;      // sum of r^2 (unweighted), for the RMS residual
-    int count;          // number of terms (inliers)
+    T hessian[21];    // J^T W J, upper triangle row by row: (0,0) (0,1) .. (0,5) (1,1) .. (5,5)
+    T gradient[6];    // J^T W r
+    T weighted_cost;  // sum of w r^2
+    T squared_sum;    // sum of r^2 (unweighted), for the RMS residual
+    int count;        // number of terms (inliers)
 
     VF_HOST_DEVICE static NormalEquations zero() {
         NormalEquations e;

@@ -21,7 +21,11 @@ VF_HOST_DEVICE inline bool clipRayToBox(Vec3f origin, Vec3f dir, Vec3f lo, Vec3f
             continue;
         }
         float t0 = (lo[a] - origin[a]) / dir[a], t1 = (hi[a] - origin[a]) / dir[a];
-        if (t0 > t1) { const float s = t0; t0 = t1; t1 = s; }
+        if (t0 > t1) {
+            const float s = t0;
+            t0 = t1;
+            t1 = s;
+        }
         t_min = t0 > t_min ? t0 : t_min;
         t_max = t1 < t_max ? t1 : t_max;
     }
@@ -31,8 +35,8 @@ VF_HOST_DEVICE inline bool clipRayToBox(Vec3f origin, Vec3f dir, Vec3f lo, Vec3f
 // The surface point near a crossing found at t (sdf <= 0 there): two SDF-sized corrections, the first
 // of which goes back. Both indexes' marches end with it.
 template <class TVoxel, class TIndexData>
-VF_HOST_DEVICE inline Vec3f refineSurfaceCrossing(const TVoxel* voxels, const TIndexData& index, Vec3f origin, Vec3f dir, float t, float sdf,
-                                                  float step_scale) {
+VF_HOST_DEVICE inline Vec3f refineSurfaceCrossing(const TVoxel* voxels, const TIndexData& index, Vec3f origin,
+                                                  Vec3f dir, float t, float sdf, float step_scale) {
     bool observed;
     t += sdf * step_scale;
     sdf = readSdfInterpolated(voxels, index, origin + dir * t, observed);
@@ -44,8 +48,8 @@ VF_HOST_DEVICE inline Vec3f refineSurfaceCrossing(const TVoxel* voxels, const TI
 // `step_scale` is mu in voxels: an SDF value s (normalised to [-1, 1]) lets us step s * step_scale.
 // On success writes the surface point (grid units) and returns true.
 template <class TVoxel, class TIndexData>
-VF_HOST_DEVICE inline bool castRay(Vec3f& hit_grid, const TVoxel* voxels, const TIndexData& index, Vec3f origin, Vec3f dir,
-                                   float t_min, float t_max, float step_scale) {
+VF_HOST_DEVICE inline bool castRay(Vec3f& hit_grid, const TVoxel* voxels, const TIndexData& index, Vec3f origin,
+                                   Vec3f dir, float t_min, float t_max, float step_scale) {
     float t = t_min;
     float sdf = 1.f;
     bool seen_front = false;  // a positive (free-space) observation on this ray
@@ -102,7 +106,8 @@ VF_HOST_DEVICE inline float rayBlockExit(Vec3f origin, Vec3f dir, Vec3i block) {
     float t_exit = 1e30f;
     for (int a = 0; a < 3; ++a) {
         if (fabsf(dir[a]) < 1e-12f) continue;
-        const float face = dir[a] > 0.f ? float(block[a] * kBlockSide) + float(kBlockSide) - 0.5f : float(block[a] * kBlockSide) - 0.5f;
+        const float face = dir[a] > 0.f ? float(block[a] * kBlockSide) + float(kBlockSide) - 0.5f
+                                        : float(block[a] * kBlockSide) - 0.5f;
         const float t = (face - origin[a]) / dir[a];
         t_exit = t < t_exit ? t : t_exit;
     }
@@ -126,9 +131,14 @@ struct HashRayMarch {
     RayState state = RayState::SearchBlockCoarse;
     bool last_observed = false;
 
-    VF_HOST_DEVICE HashRayMarch() : origin{0.f, 0.f, 0.f}, dir{0.f, 0.f, 0.f}, t(0.f), t_max(0.f), step_scale(1.f) {}  // no ray: not marching
-    VF_HOST_DEVICE HashRayMarch(Vec3f origin_grid, Vec3f dir_unit, float t_anchor, float t_min, float t_max_, float step_scale_)
-        : origin(origin_grid), dir(dir_unit), t(t_anchor + ceilf((t_min - t_anchor) / step_scale_) * step_scale_), t_max(t_max_),
+    VF_HOST_DEVICE HashRayMarch()
+        : origin{0.f, 0.f, 0.f}, dir{0.f, 0.f, 0.f}, t(0.f), t_max(0.f), step_scale(1.f) {}  // no ray: not marching
+    VF_HOST_DEVICE HashRayMarch(Vec3f origin_grid, Vec3f dir_unit, float t_anchor, float t_min, float t_max_,
+                                float step_scale_)
+        : origin(origin_grid),
+          dir(dir_unit),
+          t(t_anchor + ceilf((t_min - t_anchor) / step_scale_) * step_scale_),
+          t_max(t_max_),
           step_scale(step_scale_) {}
 
     VF_HOST_DEVICE bool marching() const { return state != RayState::BehindSurface && t < t_max; }
@@ -194,8 +204,9 @@ struct HashRayMarch {
 // `sdf_normal`, the SDF gradient normal (w = 1, or all zero where the gradient vanishes); without it
 // the normal is left to NormalsFromRaycastPoints.
 template <class TVoxel, class TIndexData>
-VF_HOST_DEVICE inline void raycastHitOutputs(const TVoxel* voxels, const TIndexData& index, Vec3f hit_grid, float voxel_size_m,
-                                             bool sdf_normal, Vec4f& point_world, Vec4f& normal_world) {
+VF_HOST_DEVICE inline void raycastHitOutputs(const TVoxel* voxels, const TIndexData& index, Vec3f hit_grid,
+                                             float voxel_size_m, bool sdf_normal, Vec4f& point_world,
+                                             Vec4f& normal_world) {
     const Vec3f p = hit_grid * voxel_size_m;
     point_world = Vec4f{p.x, p.y, p.z, 1.f};
     if (!sdf_normal) return;
@@ -233,7 +244,8 @@ struct RaycastCamera {
     // Pixel (x, y)'s ray in world grid units (unit direction) and the ray parameter per metre of depth.
     VF_HOST_DEVICE Vec3f rayThroughPixel(int x, int y, float& t_per_depth) const {
         float distance_per_depth;
-        const Vec3f dir = transformDirection(T_world_camera, pixelRayDirection(intrinsics, float(x), float(y), distance_per_depth));
+        const Vec3f dir =
+            transformDirection(T_world_camera, pixelRayDirection(intrinsics, float(x), float(y), distance_per_depth));
         t_per_depth = distance_per_depth * inv_voxel_size;
         return dir;
     }
@@ -284,7 +296,8 @@ struct RaycastDensePixel {
         depth_range[i] = Vec2f{camera.min_depth_m, camera.max_depth_m};
         float t_per_depth;
         const Vec3f dir = camera.rayThroughPixel(x, y, t_per_depth);
-        float t_min = fmaxf(camera.min_depth_m, hint.searchStart(x, y)) * t_per_depth, t_max = camera.max_depth_m * t_per_depth;
+        float t_min = fmaxf(camera.min_depth_m, hint.searchStart(x, y)) * t_per_depth,
+              t_max = camera.max_depth_m * t_per_depth;
         // The array spans voxel centres offset .. offset + size - 1.
         const Vec3f box_lo = toFloat(index.offset), box_hi = toFloat(index.offset + index.size) - Vec3f{1.f, 1.f, 1.f};
         if (!clipRayToBox(camera.origin_grid, dir, box_lo, box_hi, t_min, t_max)) return;
@@ -302,11 +315,14 @@ constexpr int kRayTile = 8;
 struct TiledPixels {
     int width, height;
     VF_HOST_DEVICE int tilesX() const { return (width + kRayTile - 1) / kRayTile; }
-    VF_HOST_DEVICE int elementCount() const { return tilesX() * ((height + kRayTile - 1) / kRayTile) * kRayTile * kRayTile; }
+    VF_HOST_DEVICE int elementCount() const {
+        return tilesX() * ((height + kRayTile - 1) / kRayTile) * kRayTile * kRayTile;
+    }
     // Element e's pixel index, or -1 for the elements of edge tiles beyond the image.
     VF_HOST_DEVICE int pixelOf(int e) const {
         const int tile = e / (kRayTile * kRayTile), within = e % (kRayTile * kRayTile);
-        const int x = (tile % tilesX()) * kRayTile + within % kRayTile, y = (tile / tilesX()) * kRayTile + within / kRayTile;
+        const int x = (tile % tilesX()) * kRayTile + within % kRayTile,
+                  y = (tile / tilesX()) * kRayTile + within / kRayTile;
         return x < width && y < height ? x + y * width : -1;
     }
 };
@@ -353,7 +369,8 @@ struct RaycastHashPixel {
         for (int k = 0; k < RaysPerElement; ++k) {
             Vec3f hit;
             if (march[k].finish(voxels, view[k], hit))
-                raycastHitOutputs(voxels, view[k], hit, camera.voxel_size_m, sdf_normals, points_world[pixel[k]], normals_world[pixel[k]]);
+                raycastHitOutputs(voxels, view[k], hit, camera.voxel_size_m, sdf_normals, points_world[pixel[k]],
+                                  normals_world[pixel[k]]);
         }
     }
 
@@ -368,8 +385,8 @@ private:
         if (!(z_max > z_min)) return HashRayMarch();
         float t_per_depth;
         const Vec3f dir = camera.rayThroughPixel(x, y, t_per_depth);
-        return HashRayMarch(camera.origin_grid, dir, camera.min_depth_m * t_per_depth, z_min * t_per_depth, z_max * t_per_depth,
-                            camera.step_scale);
+        return HashRayMarch(camera.origin_grid, dir, camera.min_depth_m * t_per_depth, z_min * t_per_depth,
+                            z_max * t_per_depth, camera.step_scale);
     }
 };
 
@@ -435,7 +452,8 @@ struct ProjectBlockToTiles {
         const int px0 = int(ceilf(fmaxf(lo.x, 0.f))), px1 = int(floorf(fminf(hi.x, float(in.width - 1))));
         const int py0 = int(ceilf(fmaxf(lo.y, 0.f))), py1 = int(floorf(fminf(hi.y, float(in.height - 1))));
         if (px0 > px1 || py0 > py1) return;
-        r = BlockTileRect{px0 / kRangeTile, py0 / kRangeTile, px1 / kRangeTile, py1 / kRangeTile, z_lo - near_pad_m, z_hi + far_pad_m};
+        r = BlockTileRect{px0 / kRangeTile, py0 / kRangeTile,  px1 / kRangeTile,
+                          py1 / kRangeTile, z_lo - near_pad_m, z_hi + far_pad_m};
         rects[k] = r;
         fragment_counts[k] = ((r.x1 - r.x0) / kRangeFragment + 1) * ((r.y1 - r.y0) / kRangeFragment + 1);
     }
@@ -453,8 +471,10 @@ struct FillRangeFragment {
         int lo = 0, hi = block_count - 1;  // the last block whose offset is <= f
         while (lo < hi) {
             const int mid = (lo + hi + 1) / 2;
-            if (fragment_offsets[mid] <= f) lo = mid;
-            else hi = mid - 1;
+            if (fragment_offsets[mid] <= f)
+                lo = mid;
+            else
+                hi = mid - 1;
         }
         const BlockTileRect& r = rects[lo];
         const int index = f - fragment_offsets[lo], per_row = (r.x1 - r.x0) / kRangeFragment + 1;

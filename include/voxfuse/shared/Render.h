@@ -24,7 +24,8 @@ VF_HOST_DEVICE inline Vec4u8 renderShaded(Vec3f normal, Vec3f to_camera_unit) {
 }
 
 VF_HOST_DEVICE inline Vec4u8 renderNormal(Vec3f n) {
-    return {(unsigned char)(127.5f * (n.x + 1.f)), (unsigned char)(127.5f * (n.y + 1.f)), (unsigned char)(127.5f * (n.z + 1.f)), 255};
+    return {(unsigned char)(127.5f * (n.x + 1.f)), (unsigned char)(127.5f * (n.y + 1.f)),
+            (unsigned char)(127.5f * (n.z + 1.f)), 255};
 }
 
 VF_HOST_DEVICE inline Vec4u8 renderColor(Vec3f rgb) {
@@ -39,7 +40,8 @@ VF_HOST_DEVICE inline Vec4u8 renderColor(Vec3f rgb) {
 VF_HOST_DEVICE inline Vec3f classColor(ClassId id) {
     if (id == kNoLabel) return {150.f, 150.f, 150.f};
     constexpr unsigned char kFirstHues[12] = {0, 6, 2, 8, 4, 10, 1, 7, 3, 9, 5, 11};  // in 30-degree steps
-    const float turns = id < 12 ? float(kFirstHues[id]) / 12.f : float(id) * 0.61803398875f - floorf(float(id) * 0.61803398875f);
+    const float turns =
+        id < 12 ? float(kFirstHues[id]) / 12.f : float(id) * 0.61803398875f - floorf(float(id) * 0.61803398875f);
     const float h = 6.f * turns;
     const bool pale = id < 12 ? id >= 6 : (id & 1) != 0;
     const float s = pale ? 0.5f : 0.85f, v = pale ? 0.85f : 0.95f;
@@ -47,12 +49,24 @@ VF_HOST_DEVICE inline Vec3f classColor(ClassId id) {
     const float f = h - float(sector), p = v * (1.f - s), q = v * (1.f - s * f), t = v * (1.f - s * (1.f - f));
     Vec3f rgb;
     switch (sector % 6) {
-        case 0: rgb = {v, t, p}; break;
-        case 1: rgb = {q, v, p}; break;
-        case 2: rgb = {p, v, t}; break;
-        case 3: rgb = {p, q, v}; break;
-        case 4: rgb = {t, p, v}; break;
-        default: rgb = {v, p, q}; break;
+        case 0:
+            rgb = {v, t, p};
+            break;
+        case 1:
+            rgb = {q, v, p};
+            break;
+        case 2:
+            rgb = {p, v, t};
+            break;
+        case 3:
+            rgb = {p, q, v};
+            break;
+        case 4:
+            rgb = {t, p, v};
+            break;
+        default:
+            rgb = {v, p, q};
+            break;
     }
     return rgb * 255.f;
 }
@@ -80,8 +94,8 @@ struct RenderRaycastPixel {
     TIndexData index;
     RenderMode mode;
     float inv_voxel_size;
-    float max_depth_m;          // of the depth colour map
-    Vec3f camera_world;         // where the light is
+    float max_depth_m;   // of the depth colour map
+    Vec3f camera_world;  // where the light is
     Mat4f T_camera_world;
     const Vec4f* points_world;
     const Vec4f* normals_world;
@@ -94,9 +108,15 @@ struct RenderRaycastPixel {
         }
         const Vec3f p = points_world[i].xyz(), n = normals_world[i].xyz();
         switch (mode) {
-            case RenderMode::Shaded: image[i] = renderShaded(n, normalize(camera_world - p)); break;
-            case RenderMode::Normals: image[i] = renderNormal(n); break;
-            case RenderMode::Depth: image[i] = renderDepth(transformPoint(T_camera_world, p).z, max_depth_m); break;
+            case RenderMode::Shaded:
+                image[i] = renderShaded(n, normalize(camera_world - p));
+                break;
+            case RenderMode::Normals:
+                image[i] = renderNormal(n);
+                break;
+            case RenderMode::Depth:
+                image[i] = renderDepth(transformPoint(T_camera_world, p).z, max_depth_m);
+                break;
             case RenderMode::Color:
                 if constexpr (TVoxel::hasColor)
                     image[i] = renderColor(readColorInterpolated(voxels, index, p * inv_voxel_size));
@@ -105,7 +125,8 @@ struct RenderRaycastPixel {
                 break;
             case RenderMode::Class:
                 if constexpr (TVoxel::hasLabel)
-                    image[i] = renderClass(readLabelNearest(voxels, index, p * inv_voxel_size), n, normalize(camera_world - p));
+                    image[i] = renderClass(readLabelNearest(voxels, index, p * inv_voxel_size), n,
+                                           normalize(camera_world - p));
                 else
                     image[i] = renderShaded(n, normalize(camera_world - p));
                 break;

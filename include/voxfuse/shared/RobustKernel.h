@@ -17,13 +17,15 @@ enum class RobustKernel : int {
 VF_HOST_DEVICE inline float robustWeight(RobustKernel kernel, float r, float scale) {
     const float a = fabsf(r);
     switch (kernel) {
-        case RobustKernel::Huber: return a <= scale ? 1.f : scale / a;
+        case RobustKernel::Huber:
+            return a <= scale ? 1.f : scale / a;
         case RobustKernel::Tukey: {
             if (a >= scale) return 0.f;
             const float u = 1.f - (r / scale) * (r / scale);
             return u * u;
         }
-        case RobustKernel::None: break;
+        case RobustKernel::None:
+            break;
     }
     return 1.f;
 }

@@ -23,7 +23,8 @@ VF_HOST_DEVICE inline void mergeStoredVoxel(TVoxel& active, const TVoxel& stored
         return;
     }
     if (ws > 0) {
-        const float fused = (TVoxel::sdfToFloat(active.sdf) * float(wa) + TVoxel::sdfToFloat(stored.sdf) * float(ws)) / float(wa + ws);
+        const float fused =
+            (TVoxel::sdfToFloat(active.sdf) * float(wa) + TVoxel::sdfToFloat(stored.sdf) * float(ws)) / float(wa + ws);
         active.sdf = TVoxel::sdfFromFloat(fused);
         active.w_depth = (unsigned char)(wa + ws < max_weight ? wa + ws : max_weight);
     }
@@ -36,7 +37,8 @@ VF_HOST_DEVICE inline void mergeStoredVoxel(TVoxel& active, const TVoxel& stored
             auto blend = [ca, cs](unsigned char a, unsigned char s) {
                 return (unsigned char)((float(a) * float(ca) + float(s) * float(cs)) / float(ca + cs) + 0.5f);
             };
-            active.clr = Vec3u8{blend(active.clr.x, stored.clr.x), blend(active.clr.y, stored.clr.y), blend(active.clr.z, stored.clr.z)};
+            active.clr = Vec3u8{blend(active.clr.x, stored.clr.x), blend(active.clr.y, stored.clr.y),
+                                blend(active.clr.z, stored.clr.z)};
             active.w_color = (unsigned char)(ca + cs < max_weight ? ca + cs : max_weight);
         }
     }
@@ -62,7 +64,9 @@ VF_HOST_DEVICE inline void mergeStoredVoxel(TVoxel& active, const TVoxel& stored
 struct EntryNeedsActivation {
     const HashEntry* entries;
     const std::uint8_t* entry_visibility;
-    VF_HOST_DEVICE bool operator()(int i) const { return entry_visibility[i] == kEntrySeenThisFrame && entries[i].ptr == kEntrySwappedOut; }
+    VF_HOST_DEVICE bool operator()(int i) const {
+        return entry_visibility[i] == kEntrySeenThisFrame && entries[i].ptr == kEntrySwappedOut;
+    }
 };
 
 // Blocks back in the voxel array whose stored copy waits to be merged in. The slot (4 bytes an entry)
@@ -99,8 +103,10 @@ struct ActivateStoredBlocks {
     int free_block_count;
     VF_HOST_DEVICE void operator()(int k) const {
         const int entry = listed[k];
-        if (k < free_block_count) table.entries[entry].ptr = table.free_blocks[free_block_count - 1 - k];
-        else table.entry_visibility[entry] = kEntryNotVisible;
+        if (k < free_block_count)
+            table.entries[entry].ptr = table.free_blocks[free_block_count - 1 - k];
+        else
+            table.entry_visibility[entry] = kEntryNotVisible;
     }
 };
 
@@ -123,7 +129,8 @@ struct MergeStoredBlocks {
     int max_weight;
     VF_HOST_DEVICE void operator()(int i) const {
         const int k = i / kBlockVoxelCount, v = i % kBlockVoxelCount;
-        mergeStoredVoxel(voxels[(long long)entries[listed[k]].ptr * kBlockVoxelCount + v], transfer[(long long)k * kBlockVoxelCount + v], max_weight);
+        mergeStoredVoxel(voxels[(long long)entries[listed[k]].ptr * kBlockVoxelCount + v],
+                         transfer[(long long)k * kBlockVoxelCount + v], max_weight);
     }
 };
 
@@ -143,7 +150,8 @@ struct GatherBlockVoxels {
     TVoxel* transfer;
     VF_HOST_DEVICE void operator()(int i) const {
         const int k = i / kBlockVoxelCount, v = i % kBlockVoxelCount;
-        transfer[(long long)k * kBlockVoxelCount + v] = voxels[(long long)entries[listed[k]].ptr * kBlockVoxelCount + v];
+        transfer[(long long)k * kBlockVoxelCount + v] =
+            voxels[(long long)entries[listed[k]].ptr * kBlockVoxelCount + v];
     }
 };
 

@@ -29,7 +29,8 @@ VF_HOST_DEVICE inline TVoxel readVoxel(const TVoxel* voxels, const PlainVoxelArr
 template <class TVoxel, class TIndexData>
 VF_HOST_DEVICE inline float readSdfNearest(const TVoxel* voxels, const TIndexData& index, Vec3f p, bool& observed) {
     bool found;
-    const TVoxel v = readVoxel(voxels, index, Vec3i{int(floorf(p.x + 0.5f)), int(floorf(p.y + 0.5f)), int(floorf(p.z + 0.5f))}, found);
+    const TVoxel v = readVoxel(voxels, index,
+                               Vec3i{int(floorf(p.x + 0.5f)), int(floorf(p.y + 0.5f)), int(floorf(p.z + 0.5f))}, found);
     observed = found && v.w_depth > 0;
     return TVoxel::sdfToFloat(v.sdf);
 }
@@ -37,8 +38,10 @@ VF_HOST_DEVICE inline float readSdfNearest(const TVoxel* voxels, const TIndexDat
 // The eight voxels of the cell whose lowest corner is `base`: corner k at base + (k & 1, (k >> 1) & 1,
 // k >> 2), found[k] false where no voxel is stored.
 template <class TVoxel, class TIndexData>
-VF_HOST_DEVICE inline void readCellVoxels(const TVoxel* voxels, const TIndexData& index, Vec3i base, TVoxel v[8], bool found[8]) {
-    for (int k = 0; k < 8; ++k) v[k] = readVoxel(voxels, index, base + Vec3i{k & 1, (k >> 1) & 1, (k >> 2) & 1}, found[k]);
+VF_HOST_DEVICE inline void readCellVoxels(const TVoxel* voxels, const TIndexData& index, Vec3i base, TVoxel v[8],
+                                          bool found[8]) {
+    for (int k = 0; k < 8; ++k)
+        v[k] = readVoxel(voxels, index, base + Vec3i{k & 1, (k >> 1) & 1, (k >> 2) & 1}, found[k]);
 }
 
 // The same through a cached hash view: each block the cell touches is looked up once (a cell mostly
@@ -46,7 +49,8 @@ VF_HOST_DEVICE inline void readCellVoxels(const TVoxel* voxels, const TIndexData
 // where it straddles them). The cell's own block is looked up last, so the cache keeps it for the
 // next read along a ray.
 template <class TVoxel>
-VF_HOST_DEVICE inline void readCellVoxels(const TVoxel* voxels, const CachedHashView& view, Vec3i base, TVoxel v[8], bool found[8]) {
+VF_HOST_DEVICE inline void readCellVoxels(const TVoxel* voxels, const CachedHashView& view, Vec3i base, TVoxel v[8],
+                                          bool found[8]) {
     const Vec3i block = blockOfVoxel(base);
     // Bit a set: the cell's upper corners along axis a lie in the next block.
     const int crossing = ((base.x & 7) == 7 ? 1 : 0) | ((base.y & 7) == 7 ? 2 : 0) | ((base.z & 7) == 7 ? 4 : 0);
@@ -56,7 +60,9 @@ VF_HOST_DEVICE inline void readCellVoxels(const TVoxel* voxels, const CachedHash
     for (int k = 0; k < 8; ++k) {
         const int p = ptr[k & crossing];
         found[k] = p >= 0;
-        v[k] = found[k] ? voxels[p * kBlockVoxelCount + voxelIndexInBlock(base + Vec3i{k & 1, (k >> 1) & 1, (k >> 2) & 1})] : TVoxel::initial();
+        v[k] = found[k]
+                   ? voxels[p * kBlockVoxelCount + voxelIndexInBlock(base + Vec3i{k & 1, (k >> 1) & 1, (k >> 2) & 1})]
+                   : TVoxel::initial();
     }
 }
 
@@ -72,7 +78,8 @@ constexpr float kMinObservedWeight = 0.25f;
 // turned their normals by tens of degrees.) Returns +1 and `observed` = false when the observed corners
 // carry less than kMinObservedWeight.
 template <class TVoxel, class TIndexData>
-VF_HOST_DEVICE inline float readSdfInterpolated(const TVoxel* voxels, const TIndexData& index, Vec3f p, bool& observed) {
+VF_HOST_DEVICE inline float readSdfInterpolated(const TVoxel* voxels, const TIndexData& index, Vec3f p,
+                                                bool& observed) {
     const Vec3i base = floorToInt(p);
     const Vec3f c = p - toFloat(base);
     TVoxel v[8];
@@ -95,7 +102,8 @@ VF_HOST_DEVICE inline float readSdfInterpolated(const TVoxel* voxels, const TInd
 // Trilinear interpolation of colour (0..255 per channel) over the corners that have colour;
 // `coloured` false (and black) where none has.
 template <class TVoxel, class TIndexData>
-VF_HOST_DEVICE inline Vec3f readColorInterpolated(const TVoxel* voxels, const TIndexData& index, Vec3f p, bool& coloured) {
+VF_HOST_DEVICE inline Vec3f readColorInterpolated(const TVoxel* voxels, const TIndexData& index, Vec3f p,
+                                                  bool& coloured) {
     const Vec3i base = floorToInt(p);
     const Vec3f c = p - toFloat(base);
     Vec3f sum{0.f, 0.f, 0.f};
@@ -145,9 +153,12 @@ template <class TVoxel, class TIndexData>
 VF_HOST_DEVICE inline Vec3f sdfGradientNormal(const TVoxel* voxels, const TIndexData& index, Vec3f p) {
     bool o;
     Vec3f g;
-    g.x = readSdfInterpolated(voxels, index, Vec3f{p.x + 1.f, p.y, p.z}, o) - readSdfInterpolated(voxels, index, Vec3f{p.x - 1.f, p.y, p.z}, o);
-    g.y = readSdfInterpolated(voxels, index, Vec3f{p.x, p.y + 1.f, p.z}, o) - readSdfInterpolated(voxels, index, Vec3f{p.x, p.y - 1.f, p.z}, o);
-    g.z = readSdfInterpolated(voxels, index, Vec3f{p.x, p.y, p.z + 1.f}, o) - readSdfInterpolated(voxels, index, Vec3f{p.x, p.y, p.z - 1.f}, o);
+    g.x = readSdfInterpolated(voxels, index, Vec3f{p.x + 1.f, p.y, p.z}, o) -
+          readSdfInterpolated(voxels, index, Vec3f{p.x - 1.f, p.y, p.z}, o);
+    g.y = readSdfInterpolated(voxels, index, Vec3f{p.x, p.y + 1.f, p.z}, o) -
+          readSdfInterpolated(voxels, index, Vec3f{p.x, p.y - 1.f, p.z}, o);
+    g.z = readSdfInterpolated(voxels, index, Vec3f{p.x, p.y, p.z + 1.f}, o) -
+          readSdfInterpolated(voxels, index, Vec3f{p.x, p.y, p.z - 1.f}, o);
     return normalize(g);
 }
 
