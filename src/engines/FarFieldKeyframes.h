@@ -9,7 +9,7 @@
 // the world, coloured by that frame (the best textured share of them); the points of the last few
 // keyframes then join the photometric terms of later frames, where nothing nearer hides them. They
 // hold still while the estimate drifts, as the map does, until newer keyframes replace them.
-// Per-point code: farFieldPoint, unhiddenFarFieldPoint (shared/ColorTracker.h), run by
+// Per-point code: farFieldPoint, unhiddenFarFieldPoint (shared/ColorTrackerTerms.h), run by
 // ColorTrackerKernels on either device.
 
 #include <deque>

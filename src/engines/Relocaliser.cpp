@@ -5,7 +5,7 @@
 #include <vector>
 
 #include "voxfuse/core/Error.h"
-#include "voxfuse/shared/ColorTracker.h"  // intensityFromRgb
+#include "voxfuse/shared/ColorTrackerTerms.h"  // intensityFromRgb
 
 namespace voxfuse {
 

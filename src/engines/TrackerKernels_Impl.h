@@ -3,7 +3,7 @@
 // Gauss-Newton iteration (DepthTrackerKernels, ColorTrackerKernels) as templates on the device type,
 // instantiated by src/cpu/TrackerKernels_CPU.cpp and cuda/TrackerKernels_CUDA.cu. The host side of the
 // trackers (src/engines/DepthTracker.cpp, ColorTracker.cpp) is device-agnostic: it solves the 6x6
-// system each sum returns. Per-pixel terms: shared/DepthTracker.h and shared/ColorTracker.h.
+// system each sum returns. Per-pixel terms: shared/DepthTrackerTerms.h and shared/ColorTrackerTerms.h.
 
 #include <memory>
 

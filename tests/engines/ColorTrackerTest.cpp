@@ -6,7 +6,7 @@
 #include "DeviceTestSupport.h"
 #include "TrackingTestSupport.h"
 #include "voxfuse/engines/Tracker.h"
-#include "voxfuse/shared/ColorTracker.h"
+#include "voxfuse/shared/ColorTrackerTerms.h"
 
 namespace voxfuse {
 namespace {

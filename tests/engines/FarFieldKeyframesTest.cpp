@@ -9,7 +9,7 @@
 #include "DeviceTestSupport.h"
 #include "TrackingTestSupport.h"
 #include "engines/FarFieldKeyframes.h"
-#include "voxfuse/shared/ColorTracker.h"
+#include "voxfuse/shared/ColorTrackerTerms.h"
 
 namespace voxfuse {
 namespace {

@@ -9,7 +9,7 @@
 
 #include "voxfuse/core/Error.h"
 #include "voxfuse/engines/Relocaliser.h"
-#include "voxfuse/shared/ColorTracker.h"  // intensityFromRgb
+#include "voxfuse/shared/ColorTrackerTerms.h"  // intensityFromRgb
 
 namespace voxfuse {
 namespace {

@@ -11,13 +11,13 @@
 //
 // Host side: src/engines/ColorTracker.cpp (LM loop) and PhotometricFrames (pyramids, model colours);
 // device layers: src/engines/TrackerKernels_Impl.h, run by src/cpu/TrackerKernels_CPU.cpp and
-// cuda/TrackerKernels_CUDA.cu; per-point terms: shared/ColorTracker.h.
+// cuda/TrackerKernels_CUDA.cu; per-point terms: shared/ColorTrackerTerms.h.
 
 #include <memory>
 
 #include "voxfuse/core/Image.h"
 #include "voxfuse/engines/Tracker.h"
-#include "voxfuse/shared/ColorTracker.h"
+#include "voxfuse/shared/ColorTrackerTerms.h"
 #include "voxfuse/shared/NormalEquations.h"
 #include "voxfuse/shared/RobustKernel.h"
 

@@ -3,7 +3,7 @@
 // against the model raycast, coarse to fine. The host side (src/engines/DepthTracker.cpp) builds the
 // frame pyramid and runs Gauss-Newton on SE(3); the device layers (src/engines/TrackerKernels_Impl.h,
 // run by src/cpu/TrackerKernels_CPU.cpp and cuda/TrackerKernels_CUDA.cu) sum the normal equations of
-// one iteration over the pixels of a level, calling pointToPlaneTerm() from shared/DepthTracker.h
+// one iteration over the pixels of a level, calling pointToPlaneTerm() from shared/DepthTrackerTerms.h
 // (the CPU in double per thread, the GPU in double per block: both in an order fixed by the image). The same host loop
 // runs the "ren" refinement (a robust kernel at full resolution) and "rgbd" (photometric terms from ColorTracker.h
 // added to the system).
@@ -13,7 +13,7 @@
 #include "voxfuse/core/DeviceMemory.h"
 #include "voxfuse/core/Image.h"
 #include "voxfuse/engines/Tracker.h"
-#include "voxfuse/shared/DepthTracker.h"
+#include "voxfuse/shared/DepthTrackerTerms.h"
 #include "voxfuse/shared/NormalEquations.h"
 #include "voxfuse/shared/RobustKernel.h"
 

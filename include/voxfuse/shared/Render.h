@@ -3,7 +3,7 @@
 
 #include "voxfuse/core/Math.h"
 #include "voxfuse/objects/ClassLabel.h"
-#include "voxfuse/shared/ColorTracker.h"  // intensityFromRgb
+#include "voxfuse/shared/ColorTrackerTerms.h"  // intensityFromRgb
 #include "voxfuse/shared/Raycast.h"
 
 namespace voxfuse {

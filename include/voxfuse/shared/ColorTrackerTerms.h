@@ -6,7 +6,7 @@
 
 #include "voxfuse/core/Math.h"
 #include "voxfuse/objects/Intrinsics.h"
-#include "voxfuse/shared/DepthTracker.h"
+#include "voxfuse/shared/DepthTrackerTerms.h"
 
 namespace voxfuse {
 
