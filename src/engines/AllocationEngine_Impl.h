@@ -69,7 +69,13 @@ public:
                 break;
             }
         }
-        stats.blocks_activated_this_frame = hash.storedBlocks() > 0 ? activateStoredBlocks(scene, stats) : 0;
+        if (hash.storedBlocks() > 0) {
+            const RaycastReach reach = raycastReach(scene.params(), view.calib.depth, T_world_camera);
+            stats.blocks_activated_this_frame = activateStoredBlocks(scene, reach, false, stats);
+            stats.blocks_activated_this_frame += activateStoredBlocks(scene, reach, true, stats);
+        } else {
+            stats.blocks_activated_this_frame = 0;
+        }
         buildVisibleList(hash, scene.params(), view, T_world_camera);
 
         stats.allocation_failures_this_frame +=
@@ -210,23 +216,29 @@ private:
         return inserted;
     }
 
-    // Swapping: stored blocks the depth needs get voxel blocks again (merge pending), in entry order,
-    // while the voxel array has blocks; the others stay stored and out of view (counted as blocks full).
-    // Returns how many were activated.
-    int activateStoredBlocks(Scene<TVoxel, VoxelBlockHash>& scene, AllocationStats& stats) {
+    // Swapping: stored blocks the depth needs (or, reach_only, that the raycast can read) get voxel blocks
+    // again (merge pending), in entry order, while the voxel array has blocks; the others stay stored and
+    // out of view (those the depth needs counted as blocks full). Returns how many were activated.
+    int activateStoredBlocks(Scene<TVoxel, VoxelBlockHash>& scene, const RaycastReach& reach, bool reach_only,
+                             AllocationStats& stats) {
         VoxelBlockHash& hash = scene.index();
         grow(activation_, std::size_t(hash.entryCount()));
         const HashTableState before = hash.state();
-        const int count =
-            TDevice::selectIndices(hash.entryCount(), EntryNeedsActivation{before.entries, before.entry_visibility},
-                                   on(activation_), scratch_);
+        const int count = TDevice::selectIndices(
+            hash.entryCount(), EntryNeedsActivation{before.entries, before.entry_visibility, reach, reach_only},
+            on(activation_), scratch_);
         if (count == 0) return 0;
-        if (count > hash.freeBlocks()) scene.reserveVoxelBlocks(hash.blocksInUse() + count);
-        const int free = hash.freeBlocks();
-        TDevice::parallelFor(count, ActivateStoredBlocks{hash.state(), on(activation_), free});
-        const int activated = std::min(count, free);
+        // Blocks only in the raycast's reach take no more than the room beyond the view's reserve
+        // (the last visible list's size: this frame's is not made yet).
+        const int wanted = reach_only
+                               ? std::min(count, std::max(0, hash.settings().max_block_count - hash.blocksInUse() -
+                                                                 reachReserveBlocks(hash.visibleCount())))
+                               : count;
+        if (wanted > hash.freeBlocks()) scene.reserveVoxelBlocks(hash.blocksInUse() + wanted);
+        const int activated = std::min(hash.freeBlocks(), wanted);
+        TDevice::parallelFor(count, ActivateStoredBlocks{hash.state(), on(activation_), hash.freeBlocks(), activated});
         hash.popFreeStacks(activated, 0);
-        stats.failures_blocks_full_this_frame += count - activated;
+        if (!reach_only) stats.failures_blocks_full_this_frame += count - activated;
         resetBlocks(scene, hash.state().free_blocks + hash.freeBlocks(), activated);
         return activated;
     }

@@ -45,12 +45,34 @@ public:
         requireSceneOn(kDevice, scene, "the swapping engine");
         VoxelBlockHash& hash = scene.index();
         if (max_blocks <= 0) return 0;
+        Mat4f T_world_camera;
+        Intrinsics intrinsics;
+        RaycastReach reach;
+        if (hash.visibleListViewpoint(T_world_camera, intrinsics))
+            reach = raycastReach(scene.params(), intrinsics, T_world_camera);
+        int moved = moveOut(scene, cache, reach, false, max_blocks, max_blocks);
+        // Blocks in the raycast's reach stay only while the array keeps room for the view beyond them;
+        // past that the room's shortfall of them goes too.
+        const int room = hash.settings().max_block_count - hash.blocksInUse();
+        const int shortfall = reachReserveBlocks(hash.visibleCount()) - room;
+        if (shortfall > 0 && moved < max_blocks)
+            moved += moveOut(scene, cache, reach, true, std::min(shortfall, max_blocks - moved), max_blocks);
+        return moved;
+    }
+
+private:
+    // Moves up to max_blocks of the blocks EntryCanSwapOut{reach, in_reach} selects to the cache, through
+    // transfer buffers of transfer_blocks (the call's bound, so that they keep their size).
+    int moveOut(Scene<TVoxel, VoxelBlockHash>& scene, GlobalCache& cache, const RaycastReach& reach, bool in_reach,
+                int max_blocks, int transfer_blocks) {
+        VoxelBlockHash& hash = scene.index();
         const HashTableState table = hash.state();
-        const int count = select(
-            hash, EntryCanSwapOut<TVoxel>{table.entries, table.entry_visibility, table.stored_slot, scene.voxelData()},
-            max_blocks);
+        const int count = select(hash,
+                                 EntryCanSwapOut<TVoxel>{table.entries, table.entry_visibility, table.stored_slot,
+                                                         scene.voxelData(), reach, in_reach},
+                                 max_blocks);
         if (count == 0) return 0;
-        prepareTransfer(cache, max_blocks);
+        prepareTransfer(cache, transfer_blocks);
         TDevice::parallelFor(count * kBlockVoxelCount,
                              GatherBlockVoxels<TVoxel>{scene.voxelData(), table.entries, listed_.data(kDevice),
                                                        transfer_.data(kDevice)});
@@ -67,7 +89,6 @@ public:
         return count;
     }
 
-private:
     // The first `max_blocks` entries (in entry order) that `pred` selects, into listed_; how many.
     template <class Pred>
     int select(const VoxelBlockHash& hash, const Pred& pred, int max_blocks) {

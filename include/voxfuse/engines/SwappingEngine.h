@@ -6,16 +6,22 @@
 // the cache's storage is.
 //
 // Per frame, in the main engine's order:
-//   allocation   blocks the depth needs that are stored get a voxel block again (merge pending: their
-//                stored copy still waits in the cache) and fuse this frame's data from now on;
+//   allocation   stored blocks the depth needs get a voxel block again (merge pending: their stored copy
+//                still waits in the cache) and fuse this frame's data from now on; then the stored blocks
+//                the raycast from this pose can read (shared/BlockProjection.h, RaycastReach), which fuse
+//                nothing, in the room the array has beyond a reserve for the view (reachReserveBlocks);
 //   swapIn       merges up to `max_blocks` waiting stored copies into their blocks, lowest entry first
 //                (the InfiniTAM report's secondary integration: never overwriting what was fused meanwhile);
 //   integration, raycast;
-//   swapOut      moves up to `max_blocks` active blocks that are not in the visible list (and wait for
-//                nothing) to the cache, lowest entry first, and frees their voxel blocks.
-// When every waiting copy arrives in the frame that needs it, the map is bit for bit the map of a
-// run without swapping. Stages: src/engines/SwappingEngine_Impl.h, run by src/cpu/SwappingEngine_CPU.cpp
-// and cuda/SwappingEngine_CUDA.cu; per-element work in shared/Swapping.h.
+//   swapOut      moves up to `max_blocks` active blocks that are neither in the visible list nor in the
+//                raycast's reach (and wait for nothing) to the cache, lowest entry first, and frees their
+//                voxel blocks; then, while the array has less room than the reserve, blocks in the reach.
+// The active part of the map is thus what the report calls the part "inside or close to the current view
+// frustum". When every waiting copy arrives in the frame that needs it and the array holds the raycast's
+// reach beside the reserve, the map and the raycasts from the tracked poses (so the poses too) are bit for bit those of
+// a run without swapping; raycasts from elsewhere (relocalisation's candidates, free-view renders) read only what is
+// active. Stages: src/engines/SwappingEngine_Impl.h, run by src/cpu/SwappingEngine_CPU.cpp and
+// cuda/SwappingEngine_CUDA.cu; per-element work in shared/Swapping.h.
 
 #include <memory>
 

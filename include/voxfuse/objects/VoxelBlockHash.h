@@ -110,6 +110,12 @@ public:
     // the same intrinsics, or these are the list's downsampled by an integer factor (the tracking
     // raycast at half resolution), whose frustum lies inside the list's.
     bool visibleListCovers(const Mat4f& T_world_camera, const Intrinsics& intrinsics) const;
+    // The viewpoint the visible list was built for; false before the first list.
+    bool visibleListViewpoint(Mat4f& T_world_camera, Intrinsics& intrinsics) const {
+        T_world_camera = visible_T_world_camera_;
+        intrinsics = visible_intrinsics_;
+        return visible_valid_;
+    }
 
     AllocationStats& stats() { return stats_; }
     const AllocationStats& stats() const { return stats_; }

@@ -5,6 +5,7 @@
 #include "voxfuse/core/Math.h"
 #include "voxfuse/objects/Intrinsics.h"
 #include "voxfuse/objects/HashTableTypes.h"
+#include "voxfuse/objects/SceneParams.h"
 
 namespace voxfuse {
 
@@ -53,6 +54,30 @@ VF_HOST_DEVICE inline bool projectBlockBox(Vec3i block, float margin_voxels, con
     }
     return px_hi.x >= -0.5f && px_hi.y >= -0.5f && px_lo.x <= float(in.width) - 0.5f &&
            px_lo.y <= float(in.height) - 0.5f;
+}
+
+// The blocks a raycast from one viewpoint can read: rays march through the image within the depths of
+// their ranges ([view_frustum_min_m - a voxel, view_frustum_max_m + mu], the pads the raycast gives its
+// ranges), and trilinear reads and SDF-gradient normals reach two voxels around a sample. Swapping keeps
+// these blocks in the voxel array, so that its raycast reads what a run without swapping reads.
+struct RaycastReach {
+    static constexpr float kMarginVoxels = 2.f;
+    BlockProjection projection;
+    bool any = false;  // no viewpoint: nothing is in reach
+
+    VF_HOST_DEVICE bool contains(Vec3i block) const {
+        if (!any) return false;
+        Vec2f lo, hi;
+        float z_min, z_max;
+        return projectBlockBox(block, kMarginVoxels, projection, lo, hi, z_min, z_max);
+    }
+};
+
+inline RaycastReach raycastReach(const SceneParams& params, const Intrinsics& intrinsics, const Mat4f& T_world_camera) {
+    const float near_m = params.view_frustum_min_m - params.voxel_size_m;
+    return RaycastReach{BlockProjection{rigidInverse(T_world_camera), intrinsics, params.voxel_size_m,
+                                        near_m > 1e-3f ? near_m : 1e-3f, params.view_frustum_max_m + params.mu_m},
+                        true};
 }
 
 }  // namespace voxfuse

@@ -8,6 +8,7 @@
 #include "voxfuse/core/Math.h"
 #include "voxfuse/objects/HashTableTypes.h"
 #include "voxfuse/shared/Allocation.h"  // blockIsEmpty
+#include "voxfuse/shared/BlockProjection.h"
 
 namespace voxfuse {
 
@@ -58,14 +59,25 @@ VF_HOST_DEVICE inline void mergeStoredVoxel(TVoxel& active, const TVoxel& stored
     }
 }
 
+// The room the voxel array keeps for the view: blocks in the raycast's reach but out of the view stay in
+// it, or come back to it, only beyond this many free blocks. The next frame's view needs about as many
+// blocks as this frame's.
+inline int reachReserveBlocks(int visible_blocks) { return visible_blocks; }
+
 // ---- Selections (for the launchers' selectIndices) ----
 
-// Stored blocks the depth needs this frame: seen by allocation stage 1 and in the global cache only.
+// Stored blocks this frame needs, in two passes: first those allocation stage 1 saw in the depth (they
+// fuse it), then (reach_only) the others the raycast from this viewpoint can read (RaycastReach).
 struct EntryNeedsActivation {
     const HashEntry* entries;
     const std::uint8_t* entry_visibility;
+    RaycastReach reach;
+    bool reach_only;
     VF_HOST_DEVICE bool operator()(int i) const {
-        return entry_visibility[i] == kEntrySeenThisFrame && entries[i].ptr == kEntrySwappedOut;
+        const HashEntry& e = entries[i];
+        if (e.ptr != kEntrySwappedOut) return false;
+        if (entry_visibility[i] == kEntrySeenThisFrame) return !reach_only;
+        return reach_only && reach.contains({e.pos.x, e.pos.y, e.pos.z});
     }
 };
 
@@ -77,33 +89,38 @@ struct EntryMergePending {
     VF_HOST_DEVICE bool operator()(int i) const { return stored_slot[i] != kNoStoredCopy && entries[i].ptr >= 0; }
 };
 
-// Active blocks out of the view (not in the visible list) with nothing waiting to be merged. Empty
-// blocks stay: block removal frees them, as it would without swapping.
+// Active blocks out of the view (not in the visible list) with nothing waiting to be merged, out of the
+// raycast's reach or (in_reach) in it. Empty blocks stay: block removal frees them, as it would without
+// swapping.
 template <class TVoxel>
 struct EntryCanSwapOut {
     const HashEntry* entries;
     const std::uint8_t* entry_visibility;
     const int* stored_slot;
     const TVoxel* voxels;
+    RaycastReach reach;
+    bool in_reach;
     VF_HOST_DEVICE bool operator()(int i) const {
-        const int ptr = entries[i].ptr;
-        return ptr >= 0 && entry_visibility[i] != kEntryVisible && stored_slot[i] == kNoStoredCopy &&
-               !blockIsEmpty(voxels + (long long)ptr * kBlockVoxelCount);
+        const HashEntry& e = entries[i];
+        return e.ptr >= 0 && entry_visibility[i] != kEntryVisible && stored_slot[i] == kNoStoredCopy &&
+               reach.contains({e.pos.x, e.pos.y, e.pos.z}) == in_reach &&
+               !blockIsEmpty(voxels + (long long)e.ptr * kBlockVoxelCount);
     }
 };
 
 // ---- Loop bodies ----
 
 // Allocation, per listed entry k (EntryNeedsActivation): the voxel block of rank k from the top of the
-// free stack, while there are `free_block_count`; the stored copy stays, to be merged in. Entries
-// beyond the free blocks stay stored and out of this frame's view.
+// free stack (`free_block_count` high), for the first `granted` (at most free_block_count); the stored
+// copy stays, to be merged in. The entries beyond stay stored and out of this frame's view.
 struct ActivateStoredBlocks {
     HashTableState table;
     const int* listed;
     int free_block_count;
+    int granted;
     VF_HOST_DEVICE void operator()(int k) const {
         const int entry = listed[k];
-        if (k < free_block_count)
+        if (k < granted)
             table.entries[entry].ptr = table.free_blocks[free_block_count - 1 - k];
         else
             table.entry_visibility[entry] = kEntryNotVisible;
