@@ -32,6 +32,8 @@ RGBDCalib pinhole(int width, int height, float fx, float fy, float cx, float cy,
     c.depth = {width, height, fx, fy, cx, cy};
     c.rgb = c.depth;
     c.disparity = DisparityCalib::affine(depth_scale);
+    for (const std::string& problem : {focalLengthProblem(c.depth), depthConversionProblem(c.disparity, fx)})
+        if (!problem.empty()) throw ConfigError(problem);
     return c;
 }
 

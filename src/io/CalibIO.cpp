@@ -6,6 +6,7 @@
 #include <cmath>
 #include <fstream>
 #include <initializer_list>
+#include <iostream>
 #include <utility>
 #include <vector>
 
@@ -128,7 +129,7 @@ Mat4f readExtrinsics(CalibLineReader& reader) {
     return T;
 }
 
-DisparityCalib readDisparity(CalibLineReader& reader) {
+DisparityCalib readDisparity(CalibLineReader& reader, float fx_depth) {
     const std::string what = "disparity calibration: 'kinect k1 k2', 'affine a b' or 'k1 k2'";
     auto tokens = reader.next(what);
     std::string keyword = "kinect";  // the bare two-number form is InfiniTAM's Kinect disparity
@@ -151,12 +152,15 @@ DisparityCalib readDisparity(CalibLineReader& reader) {
     if (!text::finiteAsFloat(v[0]) || !text::finiteAsFloat(v[1]))
         reader.fail("non-finite value in the disparity calibration (numbers are stored as floats): " +
                     text::excerpt(reader.line()));
-    if (keyword == "affine") {
-        if (!(float(v[0]) > 0.f)) reader.fail("affine depth scale must be positive, got " + std::string(tokens[0]));
-        return DisparityCalib::affine(float(v[0]), float(v[1]));
-    }
-    if (!(float(v[1]) > 0.f)) reader.fail("kinect disparity k2 must be positive, got " + std::string(tokens[1]));
-    return DisparityCalib::kinect(float(v[0]), float(v[1]));
+    if (keyword == "affine" && !(float(v[0]) > 0.f))
+        reader.fail("affine depth scale must be positive, got " + std::string(tokens[0]));
+    if (keyword != "affine" && !(float(v[1]) > 0.f))
+        reader.fail("kinect disparity k2 must be positive, got " + std::string(tokens[1]));
+    const DisparityCalib d = keyword == "affine" ? DisparityCalib::affine(float(v[0]), float(v[1]))
+                                                 : DisparityCalib::kinect(float(v[0]), float(v[1]));
+    const std::string problem = depthConversionProblem(d, fx_depth);
+    if (!problem.empty()) reader.fail(problem);
+    return d;
 }
 
 // The optional lines after the disparity calibration: "distortion_rgb k1 k2 p1 p2 k3" and
@@ -187,6 +191,8 @@ void readDistortionLines(CalibLineReader& reader, RGBDCalib& calib) {
                 reader.fail("non-finite value in " + keyword + " (numbers are stored as floats)");
         LensDistortion& d = is_rgb ? calib.rgb_distortion : calib.depth_distortion;
         d = LensDistortion{float(v[0]), float(v[1]), float(v[2]), float(v[3]), float(v[4])};
+        const std::string problem = distortionProblem(d, is_rgb ? calib.rgb : calib.depth);
+        if (!problem.empty()) reader.fail(keyword + ": " + problem);
     }
 }
 
@@ -203,26 +209,16 @@ std::string cameraBlock(const Intrinsics& k) {
 
 }  // namespace
 
-std::string focalLengthProblem(const Intrinsics& k) {
-    // A side of s pixels seen at focal length f spans 2 atan(s / 2f): 170 degrees at f = 0.0437 s,
-    // 1 degree at f = 57.3 s.
-    const auto implausible = [](float f, int side) {
-        return !(f >= 0.0437f * float(side) && f <= 57.3f * float(side));
-    };
-    if (!implausible(k.fx, k.width) && !implausible(k.fy, k.height)) return "";
-    return "focal lengths (" + text::formatFloat(k.fx) + ", " + text::formatFloat(k.fy) +
-           " pixels) give no field of view between 1 and " + "170 degrees across the " + std::to_string(k.width) + "x" +
-           std::to_string(k.height) + " image (a typo, or units other than pixels?)";
-}
-
 RGBDCalib readCalib(const std::string& path) {
     CalibLineReader reader(path);
     RGBDCalib calib;
     calib.rgb = readCamera(reader, "RGB camera");
     calib.depth = readCamera(reader, "depth camera");
     calib.T_depth_rgb = readExtrinsics(reader);
-    calib.disparity = readDisparity(reader);
+    calib.disparity = readDisparity(reader, calib.depth.fx);
     readDistortionLines(reader, calib);
+    for (const std::string& warning : calibrationWarnings(calib))
+        std::cerr << "voxfuse: warning: " << path << ": " << warning << "\n";
     return calib;
 }
 

@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <string>
 
@@ -227,6 +228,62 @@ TEST(CalibIO, ValuesAreCheckedInTheTypeTheyAreUsedIn) {
         {"control bytes are shown escaped", replaceLine(good, 13, "\x1b[2Jaffine 0.001 0"), 13, "'\\x1b[2Jaffine'"},
     };
     expectParseErrors(cases);
+}
+
+// Values a file can hold but no depth camera has are refused with the reason, on their line.
+TEST(CalibIO, ValuesOfNoRealCameraAreRefused) {
+    const std::string good = calibText("affine 0.001 0");
+    const std::vector<MalformedCase> cases = {
+        {"metres per unit given as 1 (millimetres read as metres)", replaceLine(good, 13, "affine 1 0"), 13,
+         "coarser than any depth camera"},
+        {"a scale that reaches no depth camera's range", replaceLine(good, 13, "affine 1e-9 0"), 13,
+         "no depth camera's range"},
+        {"an offset of metres", replaceLine(good, 13, "affine 0.001 5"), 13, "depth offset 5 m"},
+        {"a Kinect baseline in millimetres", replaceLine(good, 13, "kinect 1135.09 81.9"), 13, "Kinect baseline"},
+        {"a Kinect offset that leaves every sample behind the camera", replaceLine(good, 13, "kinect -5 0.08"), 13,
+         "no sample a positive depth"},
+        {"a radial factor that reaches zero", good + "distortion_depth -5 0 0 0 0\n", 14, "folds the image"},
+        {"a radial model that folds the image", good + "distortion_rgb -3 0 0 0 0\n", 14, "folds the image"},
+        {"a tangential term that moves corners by more than their radius", good + "distortion_rgb 0 0 2 0 0\n", 14,
+         "moves an image corner"},
+    };
+    expectParseErrors(cases);
+}
+
+// Real cameras' values pass without a word; unusual ones pass with a warning that names them.
+TEST(CalibIO, UnusualValuesPassWithAWarning) {
+    ScratchDir dir;
+    const auto warnings = [&](const std::string& text) {
+        testing::internal::CaptureStderr();
+        readCalibText(dir, text);
+        return testing::internal::GetCapturedStderr();
+    };
+    // TUM fr1's colour lens (Kinect v1), a RealSense's 0.1 mm depth units, the Kinect's own disparity form.
+    EXPECT_EQ(warnings(calibText("affine 0.001 0") + "distortion_rgb 0.262383 -0.953104 -0.005358 0.002628 1.163314\n"),
+              "");
+    EXPECT_EQ(warnings(calibText("affine 0.0001 0")), "");
+    EXPECT_EQ(warnings(calibText("1135.09 0.0819141")), "");
+    const std::string coarse = warnings(calibText("affine 0.01 0"));
+    EXPECT_NE(coarse.find("warning"), std::string::npos);
+    EXPECT_NE(coarse.find("10 mm apart at 1 m"), std::string::npos) << coarse;
+    EXPECT_NE(warnings(calibText("affine 0.001 0.3")).find("depth offset 0.3 m"), std::string::npos);
+    EXPECT_NE(
+        warnings(replaceLine(calibText("affine 0.001 0"), 9, "0.999749 0.00518867 0.0217975 24.3073")).find("m apart"),
+        std::string::npos);
+    EXPECT_NE(warnings(calibText("affine 0.001 0") + "distortion_depth -0.55 0 0 0 0\n").find("distortion_depth"),
+              std::string::npos);
+    EXPECT_NE(warnings(calibText("affine 0.001 0") + "distortion_rgb -0.8 0 0 0 0\n").find("folds the image"),
+              std::string::npos);
+}
+
+// Samples the conversion maps to no depth cannot come from the calibrated camera; 0 is no measurement.
+TEST(CalibIO, SamplesTheConversionGivesNoDepthAreCounted) {
+    Image<std::uint16_t> raw(Vec2i{4, 1});
+    const std::uint16_t values[4] = {0, 500, 1000, 2000};
+    std::copy(values, values + 4, raw.host());
+    EXPECT_EQ(depthSamplesWithoutDepth(raw, DisparityCalib::kinect(1000.f, 0.075f), 580.f), 2u);
+    EXPECT_EQ(depthSamplesWithoutDepth(raw, DisparityCalib::affine(0.001f), 580.f), 0u);
+    EXPECT_EQ(depthSamplesWithoutDepth(raw, DisparityCalib::affine(0.001f, -0.8f), 580.f), 1u);
 }
 
 TEST(CalibIO, AFolderGivenForTheFileSaysSo) {

@@ -8,6 +8,7 @@
 
 #include <string>
 
+#include "voxfuse/io/CalibPlausibility.h"  // what is checked, and why
 #include "voxfuse/objects/RGBDCalib.h"
 
 namespace voxfuse {
@@ -17,11 +18,6 @@ namespace voxfuse {
 // disparity keyword, trailing garbage).
 RGBDCalib readCalib(const std::string& path);
 void writeCalib(const std::string& path, const RGBDCalib& calib);
-
-// Why a pinhole camera's focal lengths cannot be a real camera's, or "" when they can: each must give
-// a field of view of 1 to 170 degrees across its image side (fx 0.044 to 57 times the width). A typo
-// such as 1e-20 otherwise yields an empty map and a run that "succeeds".
-std::string focalLengthProblem(const Intrinsics& camera);
 
 // Well-known calibrations (the same values as the files in calib/).
 RGBDCalib kinectV1DefaultCalib();  // 640x480, f 525, c (319.5, 239.5), millimetre depth
