@@ -253,6 +253,12 @@ def cases():
     skipped_frame("an empty PGM", "0001.pgm", b"", "too short")
     skipped_frame("a colour frame missing in the middle", "0001.ppm", None, "missing")
     skipped_frame("a depth frame missing in the middle", "0001.pgm", None, "missing")
+    def over_maxval(result, case_dir):
+        s = json.load(open(os.path.join(case_dir, "out", "summary.json")))
+        return s["depth_samples_out_of_range"] == 64 * 48 and s["frames_with_depth_out_of_range"] == 1
+    seq("a PGM whose samples exceed its maxval", [], ["0001.pgm", "frame 1", "exceed the maximum the file declares"],
+        setup=lambda d: write(os.path.join(d, "ppm", "0001.pgm"), b"P5\n64 48\n1000\n" + b"\x07\xd0" * 3072),
+        ok_exit=True, check=over_maxval)
     seq("a folder where a depth frame should be", [], ["0001.pgm", "frame 1"], ok_exit=True,
         setup=lambda d: (os.remove(os.path.join(d, "ppm", "0001.pgm")), os.makedirs(os.path.join(d, "ppm", "0001.pgm"))))
 
@@ -281,6 +287,20 @@ def cases():
     calib("a depth scale that is zero as a float", calib_with(13, "affine 1e-50 0"), ":13:", "depth scale must be positive")
     calib("a depth offset infinite as a float", calib_with(13, "affine 0.0002 1e39"), ":13:", "non-finite")
     calib("a negative Kinect k2", calib_with(13, "kinect 1135 -0.08"), ":13:", "k2 must be positive")
+    calib("a depth scale in metres given for millimetres", calib_with(13, "affine 1 0"), ":13:", "coarser than any depth camera")
+    calib("a depth scale that reaches no camera's range", calib_with(13, "affine 1e-9 0"), ":13:", "no depth camera's range")
+    calib("a depth offset of metres", calib_with(13, "affine 0.0002 5"), ":13:", "depth offset 5 m")
+    calib("a Kinect baseline in millimetres", calib_with(13, "kinect 1135 81.9"), ":13:", "Kinect baseline")
+    calib("a Kinect offset that puts every sample behind the camera", calib_with(13, "kinect -5 0.08"), ":13:",
+          "no sample a positive depth")
+    calib("lens distortion that folds the image", GOOD_CALIB + "distortion_rgb -5 0 0 0 0\n", ":14:", "folds the image")
+    calib("a tangential distortion of no lens", GOOD_CALIB + "distortion_depth 0 0 3 0 0\n", ":14:", "moves an image corner")
+    # Legal but unusual: accepted with a warning; here every depth then falls short of the view frustum, so
+    # the run fuses nothing and says so with exit status 4 (its outputs written).
+    seq("a depth scale whose depths all fall short of the frustum", [], ["warning", "calib.txt", "was fused",
+        "depth scale"], setup=lambda d: write(os.path.join(d, "calib.txt"), calib_with(13, "affine 0.000001 0")),
+        calib="{case}/calib.txt", category="calib",
+        check=None)
     calib("NaN lens distortion", GOOD_CALIB + "distortion_rgb 0.1 nan 0 0 0\n", ":14:", "non-finite")
     calib("lens distortion infinite as a float", GOOD_CALIB + "distortion_depth 1e39 0 0 0 0\n", ":14:", "non-finite")
     calib("lens distortion given twice", GOOD_CALIB + "distortion_rgb 0 0 0 0 0\ndistortion_rgb 0 0 0 0 0\n", ":15:", "given twice")

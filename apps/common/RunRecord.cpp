@@ -39,6 +39,38 @@ int countQuality(const RunRecord& run, TrackingQuality quality) {
     return n;
 }
 
+namespace {
+std::string metres(float v) {
+    std::ostringstream s;
+    s << v;
+    return s.str();
+}
+}  // namespace
+
+int countFused(const RunRecord& run) {
+    int n = 0;
+    for (const auto& f : run.frames) n += f.result.fused ? 1 : 0;
+    return n;
+}
+
+std::string nothingFusedReason(const RunRecord& run) {
+    if (run.interrupted || run.frames.empty()) return "";
+    const std::string frames = std::to_string(run.frames.size()) + (run.frames.size() == 1 ? " frame" : " frames");
+    if (countFused(run) == 0)
+        return "none of the " + frames + " processed was fused (" +
+               std::to_string(countQuality(run, TrackingQuality::Failed)) + " failed to track, " +
+               std::to_string(countStatus(run, TrackingStatus::Lost)) + " without a pose): the map holds nothing of " +
+               run.source + "; is the calibration's depth scale right, and does the depth reach " +
+               metres(run.settings.scene.view_frustum_min_m) + " to " + metres(run.settings.scene.view_frustum_max_m) +
+               " m?";
+    const AllocationStats& a = run.allocation;
+    if (run.settings.index_type == IndexType::Hash && a.blocks_allocated + a.blocks_stored == 0)
+        return "the map is empty after " + frames + ": no depth sample lay between " +
+               metres(run.settings.scene.view_frustum_min_m) + " and " + metres(run.settings.scene.view_frustum_max_m) +
+               " m (the view frustum) once converted; is the calibration's depth scale right?";
+    return "";
+}
+
 int countStatus(const RunRecord& run, TrackingStatus status) {
     int n = 0;
     for (const auto& f : run.frames) n += f.result.status == status ? 1 : 0;
@@ -98,13 +130,14 @@ void writeTimingsJson(const std::string& path, const RunRecord& run) {
 }
 
 void writeSummaryJson(const std::string& path, const RunRecord& run) {
-    int fused = 0;
-    for (const auto& f : run.frames) fused += f.result.fused ? 1 : 0;
+    const int fused = countFused(run);
     Json j;
     j["source"] = run.source;
     j["interrupted"] = run.interrupted;
     j["frames"] = int(run.frames.size());
     j["frames_fused"] = fused;
+    j["depth_samples_out_of_range"] = run.depth_samples_out_of_range;
+    j["frames_with_depth_out_of_range"] = run.frames_with_depth_out_of_range;
     j["frames_without_pose"] = run.frames_without_pose;
     j["frames_unreadable"] = run.frames_unreadable;
     j["frames_dropped"] = run.frames_dropped;
@@ -190,8 +223,7 @@ void writeSummaryJson(const std::string& path, const RunRecord& run) {
 
 std::string summaryText(const RunRecord& run, const std::string& out_dir) {
     std::ostringstream s;
-    int fused = 0;
-    for (const auto& f : run.frames) fused += f.result.fused ? 1 : 0;
+    const int fused = countFused(run);
     char line[256];
     s << (run.interrupted ? "VoxFuse run (interrupted: the outputs hold the frames done)\n" : "VoxFuse run\n");
     s << "  source       " << run.source << "\n";

@@ -24,8 +24,12 @@ struct RunRecord {
     int frames_without_pose = 0;  // skipped: --poses groundtruth but no ground truth for the frame
     int frames_unreadable = 0;    // skipped: the source could not read them
     int frames_dropped = 0;       // live input: dropped by the reader thread while the engine lagged
-    bool has_labels = false;      // a label image stream was attached
-    int frames_with_labels = 0;   // frames a label image was found for
+    // Depth samples above the maximum their file declares or that the calibration maps to no depth (read
+    // as no measurement), and the frames with any.
+    long long depth_samples_out_of_range = 0;
+    int frames_with_depth_out_of_range = 0;
+    bool has_labels = false;     // a label image stream was attached
+    int frames_with_labels = 0;  // frames a label image was found for
     double wall_s = 0.0;
     double peak_rss_mb = 0.0;
     double scene_mb = 0.0;
@@ -44,6 +48,12 @@ int countQuality(const RunRecord& run, TrackingQuality quality);
 // Frames that were tracking / lost / relocalised, and those on which relocalisation was tried.
 int countStatus(const RunRecord& run, TrackingStatus status);
 int countRelocalisationAttempts(const RunRecord& run);
+
+int countFused(const RunRecord& run);
+// Why the run added nothing to the map, or "" when it did: no frame was fused, or (a hash map) the frames
+// fused left it without a block, so no depth sample lay in the view frustum. Interrupted runs and runs
+// without frames (a map written out alone) are not judged.
+std::string nothingFusedReason(const RunRecord& run);
 
 double medianTotalMs(const RunRecord& run);
 double framesPerSecond(const RunRecord& run);

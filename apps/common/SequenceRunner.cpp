@@ -3,6 +3,7 @@
 #include <iostream>
 
 #include "voxfuse/core/Error.h"
+#include "voxfuse/io/CalibPlausibility.h"
 
 namespace voxfuse::app {
 
@@ -42,6 +43,7 @@ SequenceRunner::Step SequenceRunner::step() {
         std::cerr << "\n" << program_ << ": skipping unreadable frame: " << e.what() << "\n";
         return Step::Skipped;
     }
+    reportDepthOutOfRange();
     Mat4f pose;
     const Mat4f* given = nullptr;
     if (poses_ == PoseSource::GroundTruth) {
@@ -70,6 +72,28 @@ SequenceRunner::Step SequenceRunner::step() {
     if (fr.result.status != TrackingStatus::Lost)
         record_.trajectory.push_back({frame_.timestamp_s, fr.result.T_world_camera});
     return Step::Processed;
+}
+
+// Samples above the maximum their file declares, or that the calibration maps to no depth, are invalid:
+// read as no measurement, counted, and said per frame (the first few frames; then the count in the summary).
+void SequenceRunner::reportDepthOutOfRange() {
+    const RGBDCalib& calib = source_.calib();  // the engine's (view() would copy the view back from a GPU)
+    const std::size_t above_maxval = frame_.depth_samples_out_of_range;
+    const std::size_t without_depth = depthSamplesWithoutDepth(frame_.depth_raw, calib.disparity, calib.depth.fx);
+    if (above_maxval + without_depth == 0) return;
+    record_.depth_samples_out_of_range += (long long)(above_maxval + without_depth);
+    constexpr int kFramesSaid = 10;
+    if (++record_.frames_with_depth_out_of_range > kFramesSaid) return;
+    std::cerr << "\n" << program_ << ": warning: frame " << frame_.index << ": " << frame_.depth_path << ": ";
+    if (above_maxval > 0) std::cerr << above_maxval << " depth samples exceed the maximum the file declares";
+    if (above_maxval > 0 && without_depth > 0) std::cerr << " and ";
+    if (without_depth > 0)
+        std::cerr << without_depth << " depth samples lie where the calibration's depth conversion gives no depth";
+    std::cerr << "; they are read as no measurement"
+              << (record_.frames_with_depth_out_of_range == kFramesSaid
+                      ? " (said for the first " + std::to_string(kFramesSaid) + " such frames; summary.json counts all)"
+                      : std::string())
+              << "\n";
 }
 
 // The colour tracker has nothing to go on in a frame without colour: said once, with the remedy,

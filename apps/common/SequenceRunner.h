@@ -41,6 +41,7 @@ public:
 
 private:
     void reportNoColourToTrack();
+    void reportDepthOutOfRange();
     void reportFullMap(const FrameResult& result);
 
     ImageSource& source_;

@@ -39,6 +39,9 @@ using namespace voxfuse;
 
 namespace {
 
+// Exit status of a run that wrote its outputs but added nothing to the map (2: an error refused the run).
+constexpr int kExitNothingFused = 4;
+
 struct CliOptions {
     app::PipelineOptions pipeline;  // the source, the map and the tracker (shared with the viewer)
     std::string out_dir = "voxfuse_out";
@@ -320,6 +323,12 @@ int run(CliOptions& o) {
     }
     writeRunFiles(record, out, true);
     std::cout << app::summaryText(record, o.out_dir);
+    // The outputs stay, but a script must notice a run that added nothing to the map.
+    const std::string nothing = app::nothingFusedReason(record);
+    if (!nothing.empty()) {
+        std::cerr << "voxfuse: error: " << nothing << "\n";
+        return kExitNothingFused;
+    }
     return app::interrupt::exitStatus();
 }
 
@@ -331,7 +340,9 @@ int main(int argc, char** argv) {
         "VoxFuse: dense 3D reconstruction from RGB-D sequences.\n"
         "With no SOURCE, runs on the bundled synthetic sequence.\n"
         "Ctrl-C (or SIGTERM) stops after the current frame and writes the outputs of the frames done; a second one "
-        "quits at once."};
+        "quits at once.\n"
+        "Exit status: 0 done, 2 refused (the error says why), 3 an unexpected error, 4 ran but fused nothing "
+        "into the map, 128+N stopped by signal N."};
     CliOptions o;
     app::addSourceOptions(cli, o.pipeline);
     cli.add_option("--out", o.out_dir,

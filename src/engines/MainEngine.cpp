@@ -177,6 +177,7 @@ public:
 
         integration_->integrate(scene_, view_, tracking_.T_world_camera);
         result.fused = true;
+        map_started_ = true;
         clock_.stageDone("integrate");
 
         raycastModel(&view_.depth);
@@ -267,6 +268,7 @@ public:
         forgetKeyframes();
         tracking_ = TrackingState();
         tracking_.T_world_camera = info.T_world_camera;
+        map_started_ = true;
         has_source_origin_ = info.has_origin;
         T_source_world_ = info.T_source_world;
         raycastModel(nullptr);
@@ -284,6 +286,7 @@ public:
 
     void reset() override {
         resetScene();
+        map_started_ = false;
         tracker_->reset();
         forgetKeyframes();
         tracking_ = TrackingState();
@@ -373,14 +376,17 @@ private:
             }
         }
         // A frame with less depth than the tracker needs (a covered lens) is not worth the candidates.
-        if (!found && relocaliser_ && low_level_->countValidDepth(view_.depth) >= settings_.tracker.min_inliers) {
+        if (!found && map_started_ && relocaliser_ &&
+            low_level_->countValidDepth(view_.depth) >= settings_.tracker.min_inliers) {
             result.relocalisation_tried = true;
             found = relocalise();
             if (!found) tracker_->forgetLastPose();  // every try's pose was rejected
             clock_.stageDone("relocalise");
             if (found) result.status = TrackingStatus::Relocalised;
         }
-        lost_ = !found;
+        // Before the map has started (the first frames without depth) a failed frame is not lost: the next
+        // one with depth starts the map, as the first frame would have.
+        lost_ = !found && map_started_;
         if (lost_) result.status = TrackingStatus::Lost;
         result.keyframes = relocaliser_ ? relocaliser_->database().size() : 0;
     }
@@ -593,6 +599,7 @@ private:
     Mat4f T_source_world_ = Mat4f::identity();
     std::unique_ptr<Relocaliser> relocaliser_;  // with RelocalisationSettings::enabled
     bool lost_ = false;                         // the last frame had no pose; tracking_ holds the last good one
+    bool map_started_ = false;                  // a frame was fused, or a map loaded
     FrameClock last_pose_clock_;  // when the frame of that pose was taken (unknown after a reset or a loaded map)
     int frames_since_relocalisation_ = INT_MAX / 2;
     RenderState candidate_coarse_model_;  // the model raycast from a relocalisation candidate, as tracking sees it

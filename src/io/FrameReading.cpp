@@ -82,9 +82,16 @@ std::vector<ListedImage> readTimestampedImageList(const std::string& list_path, 
     return images;
 }
 
-void readDepth(const std::string& path, int frame, const Intrinsics& depth_camera, Image<std::uint16_t>& depth) {
-    withFrame(frame, [&] { endsWith(path, ".pgm") ? readPGM16(path, depth) : readDepthPNG(path, depth); });
+std::size_t readDepth(const std::string& path, int frame, const Intrinsics& depth_camera, Image<std::uint16_t>& depth) {
+    std::size_t out_of_range = 0;
+    withFrame(frame, [&] {
+        if (endsWith(path, ".pgm"))
+            out_of_range = readPGM16(path, depth);
+        else
+            readDepthPNG(path, depth);
+    });
     requireSize(path, frame, depth.size(), depth_camera, "depth");
+    return out_of_range;
 }
 
 void readColour(const std::string& path, int frame, const Intrinsics& rgb_camera, Image<Vec4u8>& rgb) {
@@ -92,25 +99,28 @@ void readColour(const std::string& path, int frame, const Intrinsics& rgb_camera
     requireSize(path, frame, rgb.size(), rgb_camera, "rgb");
 }
 
-void readDepthAndColour(const std::string& depth_path, const std::string& colour_path, int frame,
-                        const Intrinsics& depth_camera, const Intrinsics& rgb_camera, Image<std::uint16_t>& depth,
-                        Image<Vec4u8>& rgb) {
+std::size_t readDepthAndColour(const std::string& depth_path, const std::string& colour_path, int frame,
+                               const Intrinsics& depth_camera, const Intrinsics& rgb_camera,
+                               Image<std::uint16_t>& depth, Image<Vec4u8>& rgb) {
     if (colour_path.empty()) return readDepth(depth_path, frame, depth_camera, depth);
     std::future<void> colour;
     try {
         colour = std::async(std::launch::async, [&] { readColour(colour_path, frame, rgb_camera, rgb); });
     } catch (const std::system_error&) {
         // No thread to be had (a process limit): one after the other.
-        readDepth(depth_path, frame, depth_camera, depth);
-        return readColour(colour_path, frame, rgb_camera, rgb);
+        const std::size_t out_of_range = readDepth(depth_path, frame, depth_camera, depth);
+        readColour(colour_path, frame, rgb_camera, rgb);
+        return out_of_range;
     }
+    std::size_t out_of_range = 0;
     try {
-        readDepth(depth_path, frame, depth_camera, depth);
+        out_of_range = readDepth(depth_path, frame, depth_camera, depth);
     } catch (...) {
         colour.wait();  // it writes into `rgb`, which the caller owns
         throw;
     }
     colour.get();
+    return out_of_range;
 }
 
 }  // namespace frame_reading

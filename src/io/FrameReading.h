@@ -32,8 +32,9 @@ std::vector<ListedImage> readTimestampedImageList(const std::string& list_path, 
 
 // .pgm -> 16-bit big-endian PGM, anything else -> 16-bit single-channel PNG (or any format OpenCV
 // reads as such). The image must have the calibrated depth camera's size.
-// Decoded into `depth`, whose memory is reused when it has the size (io/ImageIO.h).
-void readDepth(const std::string& path, int frame, const Intrinsics& depth_camera, Image<std::uint16_t>& depth);
+// Decoded into `depth`, whose memory is reused when it has the size (io/ImageIO.h). Returns the samples
+// above the maximum the file declares (a PGM's maxval), which are read as no measurement.
+std::size_t readDepth(const std::string& path, int frame, const Intrinsics& depth_camera, Image<std::uint16_t>& depth);
 
 // Any colour image (PPM by hand, the rest through OpenCV), converted to RGBA. The image must have
 // the calibrated RGB camera's size.
@@ -42,10 +43,10 @@ void readColour(const std::string& path, int frame, const Intrinsics& rgb_camera
 // Both images of one frame (the colour only when `colour_path` is not empty), decoded at the same
 // time, the colour on a second thread: they do not depend on each other, and decoding them one after
 // the other is a noticeable part of a frame's time. One after the other when no thread can be had. Both are waited for;
-// when both fail, the depth's error is the one thrown.
-void readDepthAndColour(const std::string& depth_path, const std::string& colour_path, int frame,
-                        const Intrinsics& depth_camera, const Intrinsics& rgb_camera, Image<std::uint16_t>& depth,
-                        Image<Vec4u8>& rgb);
+// when both fail, the depth's error is the one thrown. Returns readDepth's count.
+std::size_t readDepthAndColour(const std::string& depth_path, const std::string& colour_path, int frame,
+                               const Intrinsics& depth_camera, const Intrinsics& rgb_camera,
+                               Image<std::uint16_t>& depth, Image<Vec4u8>& rgb);
 
 }  // namespace frame_reading
 }  // namespace voxfuse

@@ -318,7 +318,7 @@ Image<Vec4u8> readPPM(const std::string& path) {
     return image;
 }
 
-void readPGM16(const std::string& path, Image<std::uint16_t>& image) {
+std::size_t readPGM16(const std::string& path, Image<std::uint16_t>& image) {
     requireImageFile(path);
     std::vector<unsigned char>& bytes = decodeScratch().bytes;
     readWholeFile(path, bytes);
@@ -333,7 +333,14 @@ void readPGM16(const std::string& path, Image<std::uint16_t>& image) {
     const unsigned char* src = bytes.data() + h.data_offset;
     std::uint16_t* dst = image.host();
     // Raw samples are kept as they are (not rescaled by maxval): they are depth units, not intensities.
-    for (std::size_t i = 0; i < image.pixelCount(); ++i, src += 2) dst[i] = std::uint16_t((src[0] << 8) | src[1]);
+    const unsigned maxval = unsigned(h.maxval);
+    std::size_t over_maxval = 0;
+    for (std::size_t i = 0; i < image.pixelCount(); ++i, src += 2) {
+        const unsigned v = unsigned(src[0] << 8) | src[1];
+        over_maxval += v > maxval;
+        dst[i] = std::uint16_t(v > maxval ? 0u : v);
+    }
+    return over_maxval;
 }
 
 Image<std::uint16_t> readPGM16(const std::string& path) {

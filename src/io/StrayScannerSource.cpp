@@ -191,13 +191,14 @@ bool StrayScannerSource::next(RGBDFrame& frame) {
     if (position_ >= frames_.size()) return false;
     const int index = int(position_);
     const FrameFiles& f = frames_[position_++];  // moves on even if this frame throws
-    frame_reading::readDepth(f.depth_path, index, calib_.depth, read_.depth_raw);
+    const std::size_t out_of_range = frame_reading::readDepth(f.depth_path, index, calib_.depth, read_.depth_raw);
     dropLowConfidence(read_.depth_raw, f, index);
     if (!video_->read(f.number, read_.rgb, calib_.rgb.size()))
         throw IoError(video_path_,
                       "the video ends before frame " + std::to_string(f.number) + " (depth map " + f.depth_path + ")",
                       index);
     read_.handOver(frame, true);
+    frame.depth_samples_out_of_range = out_of_range;
     frame.index = index;
     frame.file_number = f.number;
     frame.timestamp_s = f.timestamp_s;

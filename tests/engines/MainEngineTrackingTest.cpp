@@ -71,5 +71,27 @@ TEST(MainEngineTrackingTest, NoiseFrameFailsAndDoesNotCorruptTheMap) {
     EXPECT_LT(noisy.error.ate_rmse_m, 0.005);
 }
 
+// A camera's first frames often hold no depth yet: they fail, but are not "lost" (there is no map to be
+// lost in), and the first frame with depth starts the map, as the first frame would have.
+TEST(MainEngineTrackingTest, FramesWithoutDepthBeforeTheMapStartsAreNotLost) {
+    auto source = openImageSource(std::string(VOXFUSE_SOURCE_DIR) + "/data/synthetic_room");
+    auto engine = MainEngine::create(MainEngineSettings(), source->calib());
+    RGBDFrame frame;
+    std::vector<FrameResult> results;
+    while (results.size() < 6 && source->next(frame)) {
+        if (frame.index < 2) frame.depth_raw.memory().fill(0);
+        results.push_back(engine->processFrame(frame, nullptr));
+    }
+    ASSERT_EQ(results.size(), 6u);
+    for (int k = 0; k < 2; ++k) {
+        EXPECT_FALSE(results[k].fused) << "frame " << k;
+        EXPECT_NE(results[k].status, TrackingStatus::Lost) << "frame " << k;
+    }
+    for (int k = 2; k < 6; ++k) {
+        EXPECT_TRUE(results[k].fused) << "frame " << k;
+        EXPECT_EQ(results[k].status, TrackingStatus::Tracking) << "frame " << k;
+    }
+}
+
 }  // namespace
 }  // namespace voxfuse

@@ -77,6 +77,19 @@ TEST(ImageIO, Pgm16IsBigEndian) {
     EXPECT_EQ(readBytes(written), header + pixels);
 }
 
+// Samples above the maxval the header declares are no measurement: read as 0, and counted.
+TEST(ImageIO, Pgm16SamplesAboveMaxvalReadAsNoMeasurement) {
+    ScratchDir dir;
+    const std::string path = dir.file("over.pgm");
+    writeBytes(path, "P5\n2 2\n1000\n" + bytesOf({0x01, 0xF4, 0x03, 0xE8, 0x03, 0xE9, 0xFF, 0xFF}));
+    Image<std::uint16_t> depth;
+    EXPECT_EQ(readPGM16(path, depth), 2u);
+    EXPECT_EQ(depth.at(0, 0), 500);
+    EXPECT_EQ(depth.at(1, 0), 1000);  // maxval itself is valid
+    EXPECT_EQ(depth.at(0, 1), 0);
+    EXPECT_EQ(depth.at(1, 1), 0);
+}
+
 TEST(ImageIO, Pgm16RoundTrip) {
     ScratchDir dir;
     const Image<std::uint16_t> depth = makeDepth({7, 4}, 40);  // values above 255 exercise both bytes

@@ -21,7 +21,9 @@ struct RGBDFrame {
     double rgb_timestamp_s = -1.0;   // the colour image's own time where the source pairs images taken
                                      // apart (TUM: timestamp_s is the depth image's); < 0 otherwise
     Image<std::uint16_t> depth_raw;  // raw depth samples; 0 = no measurement
-    Image<Vec4u8> rgb;               // RGBA; empty when the source has no colour
+    // Samples above the maximum the depth file declares (a PGM's maxval): invalid, so read as 0.
+    std::size_t depth_samples_out_of_range = 0;
+    Image<Vec4u8> rgb;  // RGBA; empty when the source has no colour
     bool has_ground_truth = false;
     Mat4f T_world_camera_gt = Mat4f::identity();  // ground-truth pose when has_ground_truth
     std::string depth_path;                       // where the depth came from, for error messages
