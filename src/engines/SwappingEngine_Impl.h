@@ -24,21 +24,10 @@ public:
         requireSceneOn(kDevice, scene, "the swapping engine");
         VoxelBlockHash& hash = scene.index();
         if (hash.storedBlocks() == 0 || max_blocks <= 0) return 0;
-        const HashTableState table = hash.state();
-        const int count = select(hash, EntryMergePending{table.entries, table.stored_slot}, max_blocks);
-        if (count == 0) return 0;
-        prepareTransfer(cache, max_blocks);
-        TDevice::parallelFor(count, GatherStoredSlots{listed_.data(kDevice), table.stored_slot, slots_.data(kDevice)});
-        slots_.readRange(kDevice, 0, slots_host_.data(), std::size_t(count));
-        cache.take(slots_host_.data(), count, transfer_.host());
-        if (kDevice == Device::CUDA)
-            transfer_.writeRange(kDevice, 0, transfer_.host(), std::size_t(count) * kBlockVoxelCount);
-        TDevice::parallelFor(count * kBlockVoxelCount,
-                             MergeStoredBlocks<TVoxel>{scene.voxelData(), table.entries, listed_.data(kDevice),
-                                                       transfer_.data(kDevice), scene.params().max_weight});
-        TDevice::parallelFor(count, ClearStoredSlots{listed_.data(kDevice), table.stored_slot});
-        hash.addStoredBlocks(-count);
-        return count;
+        // The copies of blocks this frame fuses first, then those only in the raycast's reach.
+        int moved = moveIn(scene, cache, true, max_blocks, max_blocks);
+        if (moved < max_blocks) moved += moveIn(scene, cache, false, max_blocks - moved, max_blocks);
+        return moved;
     }
 
     int swapOut(Scene<TVoxel, VoxelBlockHash>& scene, GlobalCache& cache, int max_blocks) override {
@@ -61,6 +50,29 @@ public:
     }
 
 private:
+    // Merges the waiting copies of up to max_blocks blocks in (visible) or out of the visible list, through
+    // transfer buffers of transfer_blocks (the call's bound, so that they keep their size).
+    int moveIn(Scene<TVoxel, VoxelBlockHash>& scene, GlobalCache& cache, bool visible, int max_blocks,
+               int transfer_blocks) {
+        VoxelBlockHash& hash = scene.index();
+        const HashTableState table = hash.state();
+        const int count = select(
+            hash, EntryMergePending{table.entries, table.stored_slot, table.entry_visibility, visible}, max_blocks);
+        if (count == 0) return 0;
+        prepareTransfer(cache, transfer_blocks);
+        TDevice::parallelFor(count, GatherStoredSlots{listed_.data(kDevice), table.stored_slot, slots_.data(kDevice)});
+        slots_.readRange(kDevice, 0, slots_host_.data(), std::size_t(count));
+        cache.take(slots_host_.data(), count, transfer_.host());
+        if (kDevice == Device::CUDA)
+            transfer_.writeRange(kDevice, 0, transfer_.host(), std::size_t(count) * kBlockVoxelCount);
+        TDevice::parallelFor(count * kBlockVoxelCount,
+                             MergeStoredBlocks<TVoxel>{scene.voxelData(), table.entries, listed_.data(kDevice),
+                                                       transfer_.data(kDevice), scene.params().max_weight});
+        TDevice::parallelFor(count, ClearStoredSlots{listed_.data(kDevice), table.stored_slot});
+        hash.addStoredBlocks(-count);
+        return count;
+    }
+
     // Moves up to max_blocks of the blocks EntryCanSwapOut{reach, in_reach} selects to the cache, through
     // transfer buffers of transfer_blocks (the call's bound, so that they keep their size).
     int moveOut(Scene<TVoxel, VoxelBlockHash>& scene, GlobalCache& cache, const RaycastReach& reach, bool in_reach,

@@ -10,8 +10,9 @@
 //                still waits in the cache) and fuse this frame's data from now on; then the stored blocks
 //                the raycast from this pose can read (shared/BlockProjection.h, RaycastReach), which fuse
 //                nothing, in the room the array has beyond a reserve for the view (reachReserveBlocks);
-//   swapIn       merges up to `max_blocks` waiting stored copies into their blocks, lowest entry first
-//                (the InfiniTAM report's secondary integration: never overwriting what was fused meanwhile);
+//   swapIn       merges up to `max_blocks` waiting stored copies into their blocks, those of the visible
+//                list first, lowest entry first (the InfiniTAM report's secondary integration: never
+//                overwriting what was fused meanwhile);
 //   integration, raycast;
 //   swapOut      moves up to `max_blocks` active blocks that are neither in the visible list nor in the
 //                raycast's reach (and wait for nothing) to the cache, lowest entry first, and frees their

@@ -81,12 +81,18 @@ struct EntryNeedsActivation {
     }
 };
 
-// Blocks back in the voxel array whose stored copy waits to be merged in. The slot (4 bytes an entry)
-// is tested first: a pass over every entry then reads a 16-byte entry only for stored blocks.
+// Blocks back in the voxel array whose stored copy waits to be merged in, in the visible list (they fuse
+// this frame: their copies come first) or (!visible) not. The slot (4 bytes an entry) is tested first: a
+// pass over every entry then reads a 16-byte entry only for stored blocks.
 struct EntryMergePending {
     const HashEntry* entries;
     const int* stored_slot;
-    VF_HOST_DEVICE bool operator()(int i) const { return stored_slot[i] != kNoStoredCopy && entries[i].ptr >= 0; }
+    const std::uint8_t* entry_visibility;
+    bool visible;
+    VF_HOST_DEVICE bool operator()(int i) const {
+        return stored_slot[i] != kNoStoredCopy && entries[i].ptr >= 0 &&
+               (entry_visibility[i] == kEntryVisible) == visible;
+    }
 };
 
 // Active blocks out of the view (not in the visible list) with nothing waiting to be merged, out of the
