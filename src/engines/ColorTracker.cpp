@@ -64,6 +64,7 @@ public:
     void forgetLastPose() override { frames_.forget(); }
     const TrackerStats& lastStats() const override { return stats_; }
     const TrackerSettings& settings() const override { return settings_; }
+    TrackerInputs inputs() const override { return TrackerInputs{}; }  // it aligns frame to frame
 
 private:
     NormalEquations<double> evaluate(int pyramid_level, const Eigen::Matrix4d& T) {

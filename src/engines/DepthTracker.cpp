@@ -95,6 +95,11 @@ public:
     }
     const TrackerStats& lastStats() const override { return stats_; }
     const TrackerSettings& settings() const override { return settings_; }
+    // rgbd's colour term aligns to the map's colours, and its far-field keyframes use the far depths.
+    TrackerInputs inputs() const override {
+        const bool rgbd = settings_.kind == TrackerKind::Rgbd;
+        return TrackerInputs{rgbd && settings_.far_field_keyframes > 0, rgbd && settings_.color_from_map};
+    }
 
 private:
     int levelCount() const { return int(settings_.levels.size()); }

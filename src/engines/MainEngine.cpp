@@ -1,17 +1,19 @@
-// The per-frame pipeline and the run-time dispatch over voxel and index types.
+// The per-frame pipeline (MainEngineT) and MainEngine::create. Settings and their checks:
+// MainEngineSettings.cpp; stage timing: StageClock.h; voxel type dispatch: VoxelTypeDispatch.h.
 
 #include "voxfuse/engines/MainEngine.h"
 
-#include <chrono>
 #include <climits>
 #include <cmath>
-#include <limits>
-#include <cstdio>
 #include <cstring>
-#include <fstream>
+#include <limits>
 #include <type_traits>
 
+#include "MainEngineSettings.h"
 #include "PoseUpdate.h"
+#include "StageClock.h"
+#include "SwappedMapOnHost.h"
+#include "VoxelTypeDispatch.h"
 #include "io/TextParsing.h"
 #include "voxfuse/core/Error.h"
 #include "voxfuse/core/Timer.h"
@@ -37,56 +39,6 @@ void requireCameraPose(const Mat4f& T_world_camera, const char* call) {
     const std::string problem = text::rigidPoseProblem(T_world_camera.m);
     if (!problem.empty()) throw ConfigError(std::string(call) + ": the given pose is no camera pose: " + problem);
 }
-
-// The frame's stage times: wall clock on the CPU; on the GPU, CUDA events recorded at the stage
-// boundaries, read once the frame's work has finished (no synchronisation between stages).
-class StageClock {
-public:
-    static constexpr int kMaxStages = 10;
-    explicit StageClock(bool gpu) : gpu_(gpu) {
-        if (gpu_)
-            for (void*& e : events_) e = device_memory::createEvent();
-    }
-    ~StageClock() {
-        for (void* e : events_) device_memory::destroyEvent(e);
-    }
-    StageClock(const StageClock&) = delete;
-    StageClock& operator=(const StageClock&) = delete;
-
-    void start(FrameResult& result) {
-        result_ = &result;
-        marks_ = 0;
-        mark();
-    }
-    // The stage that ran since the last mark ends here.
-    void stageDone(const char* name) {
-        mark();
-        result_->stages.push_back({name, 0.0});
-    }
-    // Fills in the stage times (waiting for the GPU's work on the GPU).
-    void finish() {
-        for (int i = 1; i < marks_; ++i)
-            result_->stages[std::size_t(i - 1)].ms =
-                gpu_ ? double(device_memory::eventElapsedMs(events_[i - 1], events_[i]))
-                     : std::chrono::duration<double, std::milli>(times_[i] - times_[i - 1]).count();
-    }
-
-private:
-    void mark() {
-        if (marks_ >= kMaxStages + 1) throw Error("StageClock: more stages than it can time");
-        if (gpu_)
-            device_memory::recordEvent(events_[marks_]);
-        else
-            times_[marks_] = std::chrono::steady_clock::now();
-        ++marks_;
-    }
-
-    bool gpu_;
-    void* events_[kMaxStages + 1] = {};
-    std::chrono::steady_clock::time_point times_[kMaxStages + 1];
-    int marks_ = 0;
-    FrameResult* result_ = nullptr;
-};
 
 template <class TVoxel, class TIndex>
 class MainEngineT final : public MainEngine {
@@ -125,7 +77,7 @@ public:
         low_level_->convertDepthToMetres(frame.depth_raw, view_.calib.disparity, view_.calib.depth.fx,
                                          settings_.scene.view_frustum_min_m, settings_.scene.view_frustum_max_m,
                                          settings_.depth_gap_tolerance, view_.depth);
-        if (settings_.tracker.kind == TrackerKind::Rgbd && settings_.tracker.far_field_keyframes > 0)
+        if (tracker_->inputs().far_depth)
             low_level_->convertDepthToMetres(frame.depth_raw, view_.calib.disparity, view_.calib.depth.fx,
                                              std::nextafter(settings_.scene.view_frustum_max_m, kInfinity), kInfinity,
                                              0.f, view_.far_depth);
@@ -329,11 +281,9 @@ private:
         const int factor = settings_.tracking_raycast_downsample;
         raycast_->raycast(scene_, factor > 1 ? view_.calib.depth.downsampled(factor) : view_.calib.depth,
                           tracking_.T_world_camera, model_, RaycastNormals::FromPoints, fused_depth);
-        // rgbd aligns the next frame's colours to the map's (frame to model), not to the last frame's:
-        // the map holds still while the camera's estimate drifts (docs/DESIGN_NOTES.md, "rgbd is ren plus
-        // colour, aligned to the map's colours").
-        const TrackerSettings& tracker = tracker_->settings();
-        if (TVoxel::hasColor && tracker.kind == TrackerKind::Rgbd && tracker.color_from_map)
+        // A tracker may align the next frame's colours to the map's (frame to model, docs/DESIGN_NOTES.md,
+        // "rgbd is ren plus colour, aligned to the map's colours").
+        if (TVoxel::hasColor && tracker_->inputs().model_intensity)
             raycast_->renderIntensity(scene_, model_, model_.intensity);
         model_depth_view_ = fused_depth ? views_converted_ : -1;
         ++model_version_;
@@ -497,37 +447,11 @@ private:
         return false;
     }
 
-    // The whole map in host memory: stored blocks read from the cache and waiting copies merged in,
-    // in a voxel array as large as the map needs (it may exceed the active budget).
+    // The whole map in host memory, stored blocks and waiting copies included (SwappedMapOnHost.h).
     Scene<TVoxel, TIndex> completeHostCopy() const {
-        Scene<TVoxel, TIndex> host = scene_.copyTo(Device::CPU);
-        if constexpr (kHash) {
-            if (host.index().storedBlocks() == 0) return host;
-            VoxelBlockHashSettings unbounded = settings_.hash;
-            unbounded.max_block_count = 1 << 22;
-            Scene<TVoxel, TIndex> whole(settings_.scene, VoxelBlockHash(unbounded), Device::CPU);
-            whole.reserveVoxelBlocks(host.index().blocksInUse() + host.index().storedBlocks());
-            const VoxelBlockHash& from = host.index();
-            std::vector<TVoxel> stored(kBlockVoxelCount);
-            for (int i = 0; i < from.entryCount(); ++i) {
-                const HashEntry& e = from.entry(i);
-                if (e.ptr < 0 && e.ptr != kEntrySwappedOut) continue;
-                int entry;
-                whole.index().insert({e.pos.x, e.pos.y, e.pos.z}, &entry);
-                TVoxel* block = whole.voxels().host() + std::size_t(whole.index().entry(entry).ptr) * kBlockVoxelCount;
-                if (e.ptr >= 0)
-                    std::copy_n(host.voxels().host() + std::size_t(e.ptr) * kBlockVoxelCount, kBlockVoxelCount, block);
-                else
-                    std::fill_n(block, kBlockVoxelCount, TVoxel::initial());
-                const int slot = from.storedSlots()[i];
-                if (slot == kNoStoredCopy) continue;
-                cache_->read(slot, stored.data());
-                for (int v = 0; v < kBlockVoxelCount; ++v)
-                    mergeStoredVoxel(block[v], stored[std::size_t(v)], settings_.scene.max_weight);
-            }
-            return whole;
-        }
-        return host;
+        if constexpr (kHash)
+            if (scene_.index().storedBlocks() > 0) return wholeMapOnHost(scene_, *cache_, settings_.hash);
+        return scene_.copyTo(Device::CPU);
     }
 
     TIndex newIndex() const {
@@ -623,236 +547,20 @@ std::unique_ptr<MainEngine> createForVoxel(const MainEngineSettings& s, const RG
     throw ConfigError("unknown index type");
 }
 
-template <class TVoxel>
-struct VoxelTag {
-    using Voxel = TVoxel;
-};
-
-constexpr VoxelType kVoxelTypes[] = {VoxelType::S,    VoxelType::F,      VoxelType::SRgb,
-                                     VoxelType::FRgb, VoxelType::SLabel, VoxelType::SRgbLabel};
-
-// Calls f(VoxelTag<TVoxel>{}) for the voxel struct that `type` names: the one place where run-time
-// voxel types meet the compile-time ones.
-template <class F>
-auto visitVoxelType(VoxelType type, F&& f) {
-    switch (type) {
-        case VoxelType::S:
-            return f(VoxelTag<VoxelS>{});
-        case VoxelType::F:
-            return f(VoxelTag<VoxelF>{});
-        case VoxelType::SRgb:
-            return f(VoxelTag<VoxelSRgb>{});
-        case VoxelType::FRgb:
-            return f(VoxelTag<VoxelFRgb>{});
-        case VoxelType::SLabel:
-            return f(VoxelTag<VoxelSLabel>{});
-        case VoxelType::SRgbLabel:
-            return f(VoxelTag<VoxelSRgbLabel>{});
-    }
-    throw ConfigError("unknown voxel type " + std::to_string(int(type)));
-}
-
 }  // namespace
-
-namespace {
-
-// Voxel coordinates of a dense volume stay within this of the origin: there a float still holds every
-// integer coordinate exactly, and offset + size never overflows an int.
-constexpr int kMaxDenseCoordinate = 1 << 24;
-
-// The widest truncation band accepted, in voxels (see validation in create()).
-constexpr float kMaxMuInVoxels = 64.f;
-
-std::string gib(double bytes) {
-    char text[32];
-    std::snprintf(text, sizeof text, "%.1f GiB", bytes / double(1ull << 30));
-    return text;
-}
-
-// What the kernel says it could give this process now, in bytes: MemAvailable, plus free swap with
-// `with_swap` (Linux); 0 when unknown.
-double availableHostBytes(bool with_swap) {
-    std::ifstream meminfo("/proc/meminfo");
-    std::string key;
-    double kb = 0.0, total_kb = 0.0;
-    int found = 0;
-    while (meminfo >> key >> kb) {
-        if (key == "MemAvailable:" || (with_swap && key == "SwapFree:")) {
-            total_kb += kb;
-            ++found;
-        }
-        meminfo.ignore(256, '\n');
-    }
-    return found > 0 ? total_kb * 1024.0 : 0.0;
-}
-
-std::size_t voxelBytes(VoxelType type) {
-    return visitVoxelType(type, [](auto tag) { return sizeof(typename decltype(tag)::Voxel); });
-}
-
-// The memory the index needs before the first frame: the dense array, or the hash's tables (its
-// voxel blocks grow with the scene).
-double indexBytes(const MainEngineSettings& s) {
-    if (s.index_type == IndexType::Dense)
-        return double(s.dense_size.x) * double(s.dense_size.y) * double(s.dense_size.z) *
-               double(voxelBytes(s.voxel_type));
-    return double(VoxelBlockHash::tableBytesFor(s.hash));
-}
-
-std::string indexDescription(const MainEngineSettings& s) {
-    if (s.index_type == IndexType::Dense)
-        return "the dense volume of " + std::to_string(s.dense_size.x) + "x" + std::to_string(s.dense_size.y) + "x" +
-               std::to_string(s.dense_size.z) + " '" + toString(s.voxel_type) + "' voxels";
-    return "the hash table of " +
-           std::to_string((long long)s.hash.bucket_count * s.hash.entries_per_bucket + s.hash.excess_entry_count) +
-           " entries";
-}
-
-std::string indexRemedy(const MainEngineSettings& s) {
-    return s.index_type == IndexType::Dense
-               ? "use a smaller --volume-size, or the hash index (--index hash), whose memory follows the scene"
-               : "use fewer --hash-buckets / --hash-excess";
-}
-
-void validateDepthRange(const SceneParams& p) {
-    if (!(p.view_frustum_min_m >= 0.f && std::isfinite(p.view_frustum_min_m) && std::isfinite(p.view_frustum_max_m) &&
-          p.view_frustum_max_m > p.view_frustum_min_m))
-        throw ConfigError("the depth range needs 0 <= minimum < maximum, both finite (--min-depth, --max-depth); got " +
-                          std::to_string(p.view_frustum_min_m) + " .. " + std::to_string(p.view_frustum_max_m) + " m");
-}
-
-void validateDenseVolume(const MainEngineSettings& s) {
-    for (int a = 0; a < 3; ++a) {
-        const long long lo = s.dense_offset[a], hi = lo + s.dense_size[a];
-        if (s.dense_size[a] <= 0)
-            throw ConfigError("dense volume size must be positive (--volume-size), got " +
-                              std::to_string(s.dense_size[a]) + " on axis " + "xyz"[a]);
-        if (lo < -kMaxDenseCoordinate || hi > kMaxDenseCoordinate)
-            throw ConfigError(std::string("the dense volume must lie within +-") + std::to_string(kMaxDenseCoordinate) +
-                              " voxels of the origin (--volume-offset, --volume-size); on axis " + "xyz"[a] +
-                              " it spans " + std::to_string(lo) + " .. " + std::to_string(hi));
-    }
-}
-
-}  // namespace
-
-int automaticMaxBlockCount(Device device, std::size_t voxel_bytes, const VoxelBlockHashSettings& hash,
-                           double available_bytes) {
-    constexpr int kDesignBlocks = 1 << 18, kMostBlocks = 1 << 22;
-    if (!(available_bytes > 0.0)) return kDesignBlocks;
-    const long long entries = (long long)hash.bucket_count * hash.entries_per_bucket + hash.excess_entry_count;
-    // Per block: its voxels (twice on the GPU, whose growth holds the old array and the new one at
-    // once; the host array grows in place), and its places in the free stack and the visible list.
-    const double voxel_copies = device == Device::CUDA ? 2.0 : 1.0;
-    const double block_bytes = voxel_copies * double(voxel_bytes) * kBlockVoxelCount + 2.0 * sizeof(int);
-    VoxelBlockHashSettings tables = hash;
-    tables.max_block_count = 0;
-    const double for_blocks = 0.75 * available_bytes - double(VoxelBlockHash::tableBytesFor(tables));
-    // In steps of 2^16 blocks, so that runs on one machine choose the same ceiling (map headers hold it)
-    // while the free memory drifts a little between them.
-    constexpr long long kStep = 1 << 16;
-    const long long by_memory = for_blocks > 0.0 ? (long long)(for_blocks / block_bytes) : 0;
-    const long long stepped = by_memory >= kStep ? by_memory / kStep * kStep : by_memory;
-    return int(std::max<long long>(1, std::min<long long>({entries, kMostBlocks, stepped})));
-}
 
 std::unique_ptr<MainEngine> MainEngine::create(const MainEngineSettings& requested, const RGBDCalib& calib) {
-    MainEngineSettings s = requested;
-    if (s.index_type == IndexType::Hash && s.hash.max_block_count == kAutomaticBlockCount)
-        s.hash.max_block_count = automaticMaxBlockCount(
-            s.device, voxelBytes(s.voxel_type), s.hash,
-            s.device == Device::CUDA ? double(device_memory::freeDeviceBytes()) : availableHostBytes(false));
-    if (!calib.depth.valid()) throw ConfigError("the depth camera calibration is missing or invalid");
-    if (!(s.scene.voxel_size_m > 0.f && std::isfinite(s.scene.voxel_size_m)) ||
-        !(s.scene.mu_m > s.scene.voxel_size_m && std::isfinite(s.scene.mu_m)))
-        throw ConfigError("need voxel size > 0 and mu > voxel size, both finite (got voxel " +
-                          std::to_string(s.scene.voxel_size_m) + " m, mu " + std::to_string(s.scene.mu_m) + " m)");
-    // Every pixel allocates and integrates the blocks within mu of its depth: a band of hundreds of
-    // voxels (mu = 8 m at 1 cm) made a frame take seconds to minutes. Usual bands are 2-8 voxels.
-    if (s.scene.mu_m > kMaxMuInVoxels * s.scene.voxel_size_m)
-        throw ConfigError("mu " + std::to_string(s.scene.mu_m) + " m is more than " +
-                          std::to_string(int(kMaxMuInVoxels)) + " voxels of " + std::to_string(s.scene.voxel_size_m) +
-                          " m (a truncation band is usually 2-8 voxels)");
-    if (s.scene.max_weight < 1 || s.scene.max_weight > 255) throw ConfigError("max weight must be in 1..255");
-    validateDepthRange(s.scene);
-    if (!(s.depth_gap_tolerance >= 0.f && s.depth_gap_tolerance <= 0.5f))
-        throw ConfigError(
-            "the depth gap tolerance is a fraction of the depth in [0, 0.5], 0 to keep every gap "
-            "(--depth-gap-tolerance); got " +
-            std::to_string(s.depth_gap_tolerance));
-    if (s.index_type == IndexType::Dense) validateDenseVolume(s);
-    if (s.swap.enabled && s.index_type != IndexType::Hash)
-        throw ConfigError("swapping needs the hash index (--index hash)");
-    if (s.swap.enabled && s.swap.blocks_per_frame < 1) throw ConfigError("swapping moves at least one block per frame");
-    if (s.tracking_raycast_downsample != 1 && s.tracking_raycast_downsample != 2 && s.tracking_raycast_downsample != 4)
-        throw ConfigError("the tracking raycast's downsampling must be 1, 2 or 4 (got " +
-                          std::to_string(s.tracking_raycast_downsample) + ")");
-    if (s.device == Device::CUDA && !device_memory::cudaAvailable())
-        throw DeviceError("CUDA was requested but is not usable: " + device_memory::cudaDescription());
-    // Said before the allocation, which would otherwise fail as a bare std::bad_alloc (or, with the
-    // kernel's overcommit, kill the process when the memory is first touched).
-    const double needed = indexBytes(s), available = availableHostBytes(true);
-    if (s.device == Device::CPU && available > 0.0 && needed > available)
-        throw ConfigError(indexDescription(s) + " needs " + gib(needed) + " of memory; this machine has " +
-                          gib(available) + " available: " + indexRemedy(s));
+    const MainEngineSettings s = checkedMainEngineSettings(requested, calib);
     try {
         return visitVoxelType(s.voxel_type,
                               [&](auto tag) { return createForVoxel<typename decltype(tag)::Voxel>(s, calib); });
     } catch (const std::bad_alloc&) {
-        throw ConfigError(indexDescription(s) + " needs " + gib(needed) +
-                          " of memory, more than could be allocated: " + indexRemedy(s));
+        throw ConfigError(indexMemoryNeed(s) + " of memory, more than could be allocated: " + indexRemedy(s));
     } catch (const DeviceError& e) {
         if (s.device != Device::CUDA || std::string(e.what()).find("memory") == std::string::npos) throw;
-        throw DeviceError(std::string(e.what()) + " (" + indexDescription(s) + " needs " + gib(needed) +
-                          " of GPU memory: " + indexRemedy(s) + ")");
+        throw DeviceError(std::string(e.what()) + " (" + indexMemoryNeed(s) + " of GPU memory: " + indexRemedy(s) +
+                          ")");
     }
-}
-
-MainEngineSettings settingsForMap(const MapFileInfo& info, MainEngineSettings base) {
-    base.voxel_type = parseVoxelType(info.voxel_type);
-    base.index_type = info.hash ? IndexType::Hash : IndexType::Dense;
-    if (info.hash)
-        base.hash = info.hash_settings;
-    else {
-        base.dense_offset = info.dense_offset;
-        base.dense_size = info.dense_size;
-    }
-    base.scene.voxel_size_m = info.scene.voxel_size_m;
-    base.scene.mu_m = info.scene.mu_m;
-    return base;
-}
-
-VoxelType parseVoxelType(const std::string& name) {
-    std::string names;
-    for (const VoxelType type : kVoxelTypes) {
-        if (name == toString(type)) return type;
-        names += std::string(names.empty() ? "" : ", ") + toString(type);
-    }
-    throw ConfigError("unknown voxel type '" + name + "' (expected one of " + names + ")");
-}
-
-const char* toString(VoxelType type) {
-    return visitVoxelType(type, [](auto tag) { return decltype(tag)::Voxel::name; });
-}
-
-bool voxelTypeHasColor(VoxelType type) {
-    return visitVoxelType(type, [](auto tag) { return decltype(tag)::Voxel::hasColor; });
-}
-
-bool voxelTypeHasLabels(VoxelType type) {
-    return visitVoxelType(type, [](auto tag) { return decltype(tag)::Voxel::hasLabel; });
-}
-
-IndexType parseIndexType(const std::string& name) {
-    if (name == "dense") return IndexType::Dense;
-    if (name == "hash") return IndexType::Hash;
-    throw ConfigError("unknown index type '" + name + "' (expected dense or hash)");
-}
-
-const char* toString(IndexType type) { return type == IndexType::Dense ? "dense" : "hash"; }
-
-const char* toString(TrackingStatus status) {
-    return status == TrackingStatus::Tracking ? "tracking" : status == TrackingStatus::Lost ? "lost" : "relocalised";
 }
 
 }  // namespace voxfuse

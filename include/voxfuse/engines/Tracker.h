@@ -29,6 +29,13 @@ struct TrackerStats {
     std::vector<TrackerLevelStats> levels;
 };
 
+// What a tracker reads beyond the frame's depth and colour and the model's points and normals, for the
+// pipeline to provide (it names no tracker kinds).
+struct TrackerInputs {
+    bool far_depth = false;        // View::far_depth: the depths beyond the view frustum (far-field keyframes)
+    bool model_intensity = false;  // RenderState::intensity of the model: the map's colour (colour aligned to it)
+};
+
 class Tracker {
 public:
     virtual ~Tracker() = default;
@@ -50,6 +57,7 @@ public:
     virtual void forgetLastPose() = 0;
     virtual const TrackerStats& lastStats() const = 0;
     virtual const TrackerSettings& settings() const = 0;
+    virtual TrackerInputs inputs() const = 0;
 };
 
 // The tracker `settings.kind` asks for (validated first: ConfigError when a setting is out of range),
