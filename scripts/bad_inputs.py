@@ -126,10 +126,10 @@ class Fixtures:
 
 class Case:
     def __init__(self, category, what, argv, expect=(), ok_exit=False, setup=None, check=None, program="voxfuse",
-                 interrupt=None, needs_mount=False):
+                 interrupt=None, needs_mount=False, env=None):
         self.category, self.what, self.argv, self.expect = category, what, argv, list(expect)
         self.ok_exit, self.setup, self.check, self.program = ok_exit, setup, check, program
-        self.interrupt, self.needs_mount = interrupt, needs_mount
+        self.interrupt, self.needs_mount, self.env = interrupt, needs_mount, env or {}
 
 
 def cases():
@@ -379,6 +379,13 @@ def cases():
     tum("a first depth image of zeros only (nothing to track)", image("depth.txt", depth_png(64, 48, 0), first_listed), [], True,
         check=first_frame_not_good)
 
+    # ---- environment variables: garbage is said and ignored, the run goes on with the default
+    for name, value, reason in (("VOXFUSE_NUM_THREADS", "abc", "not a thread count"), ("VOXFUSE_NUM_THREADS", "-3", "not a thread count"),
+                                ("VOXFUSE_NUM_THREADS", "99999999999", "not a thread count"), ("OMP_NUM_THREADS", "x", "not a thread count"),
+                                ("VOXFUSE_SPIN_US", "nan", "not a number of microseconds"), ("VOXFUSE_SPIN_US", "1e99", "not a number of microseconds")):
+        c.append(Case("environment", "%s=%s" % (name, value), ["synthetic:3", "--render-every", "0", "--out", OUT],
+                      ["ignoring " + name, reason], True, env={name: value}))
+
     # ---- per-frame folders: pose files and intrinsics
     def frames(what, edit, expect, ok_exit=False, check=None):
         def setup(d, edit=edit):
@@ -600,7 +607,8 @@ def run_case(case, programs, fixtures, work, number):
             case.setup(case_dir)
         argv = [programs.voxfuse if case.program == "voxfuse" else programs.bench] + [expand(a, values) for a in case.argv]
         start = time.time()
-        proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=programs.env, cwd=case_dir, preexec_fn=programs.limit)
+        proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=dict(programs.env, **case.env), cwd=case_dir,
+                                preexec_fn=programs.limit)
         timed_out = False
         try:
             if case.interrupt:
