@@ -9,8 +9,8 @@
 #include <limits>
 #include <type_traits>
 
+#include "CandidatePoseCheck.h"
 #include "MainEngineSettings.h"
-#include "PoseUpdate.h"
 #include "StageClock.h"
 #include "SwappedMapOnHost.h"
 #include "VoxelTypeDispatch.h"
@@ -358,61 +358,11 @@ private:
         return false;
     }
 
-    // Refines a candidate by the tracker against the model raycast from it (`model`, or raycast here
-    // when null), then once more against the raycast from the refined pose, and checks the result
-    // (Relocaliser.h), and that the camera could have got there from the last good pose in `elapsed_s`
-    // (the refinement may slide far from the candidate). Takes it as the frame's tracking state when
-    // it passes.
-    bool refineCandidate(Mat4f T_world_start, const RenderState* model, double elapsed_s) {
-        TrackingState first;
-        first.T_world_camera = T_world_start;
-        // The first refinement meets the model as tracking does (its resolution, normals from points:
-        // a fraction of the cost, and most candidates end here), in a render state of its own (one
-        // resized back and forth would be reallocated each time). The check's raycast is at the
-        // frame's resolution with SDF normals, valid up to silhouettes, so that inlier ratios are the
-        // ones its thresholds were measured with; the gate before it is looser by a fifth, as the
-        // coarse model explains less of the frame, also for right candidates.
-        if (!model) {
-            const int factor = settings_.tracking_raycast_downsample;
-            raycast_->raycast(scene_, factor > 1 ? view_.calib.depth.downsampled(factor) : view_.calib.depth,
-                              T_world_start, candidate_coarse_model_, RaycastNormals::FromPoints);
-        }
-        tracker_->track(first, view_, model ? *model : candidate_coarse_model_);
-        // Too little of the frame explained already: not worth the second refinement.
-        if (first.quality != TrackingQuality::Good ||
-            first.inlier_ratio < 0.8f * settings_.relocalisation.min_inlier_ratio)
-            return false;
-        raycast_->raycast(scene_, view_.calib.depth, first.T_world_camera, candidate_model_);
-        RelocalisationCheck check;
-        check.refined = first;
-        tracker_->track(check.refined, view_, candidate_model_);
-        pose::motionBetween(pose::toEigenD(first.T_world_camera), pose::toEigenD(check.refined.T_world_camera),
-                            check.step_m, check.step_deg);
-        if (onGpu()) candidate_model_.updateHost();
-        raycastDepth(candidate_model_, candidate_depth_);
-        check.depth = compareDepth(view_.depth, candidate_depth_, settings_.relocalisation.agreement_tolerance_m);
-        if (!acceptRelocalisation(settings_.relocalisation, check)) return false;
-        if (!withinReach(settings_.relocalisation, tracking_.T_world_camera, check.refined.T_world_camera, elapsed_s))
-            return false;
-        // Geometry and reach first: only a candidate they take is rendered in colour and compared.
-        check.colour = compareCandidateColour();
-        if (!acceptRelocalisation(settings_.relocalisation, check)) return false;
-        tracking_ = check.refined;
-        return true;
-    }
-
-    // The frame's colours against the map's, seen from the candidate (candidate_model_ and
-    // candidate_depth_); not compared where either has none.
-    ColourAgreement compareCandidateColour() {
-        if constexpr (!TVoxel::hasColor) {
-            return ColourAgreement{};
-        } else {
-            if (view_.rgb.empty()) return ColourAgreement{};
-            raycast_->renderIntensity(scene_, candidate_model_, candidate_intensity_);
-            if (onGpu()) candidate_intensity_.memory().updateHost();
-            return compareColour(view_, candidate_depth_, candidate_intensity_,
-                                 settings_.relocalisation.agreement_tolerance_m, settings_.scene.voxel_size_m);
-        }
+    // One candidate refined and checked (CandidatePoseCheck.h); on success it is the frame's tracking state.
+    bool refineCandidate(const Mat4f& T_world_start, const RenderState* model, double elapsed_s) {
+        const typename CandidatePoseCheck<TVoxel, TIndex>::Context context{scene_,    view_,     *raycast_,
+                                                                           *tracker_, settings_, onGpu()};
+        return candidate_check_.refine(context, T_world_start, model, tracking_.T_world_camera, elapsed_s, tracking_);
     }
 
     // Bookkeeping of a fused, tracked frame: a good one joins the frames loss detection compares with,
@@ -526,10 +476,7 @@ private:
     bool map_started_ = false;                  // a frame was fused, or a map loaded
     FrameClock last_pose_clock_;  // when the frame of that pose was taken (unknown after a reset or a loaded map)
     int frames_since_relocalisation_ = INT_MAX / 2;
-    RenderState candidate_coarse_model_;  // the model raycast from a relocalisation candidate, as tracking sees it
-    RenderState candidate_model_;         // and from its refined pose at full resolution, for the check
-    Image<float> candidate_depth_;
-    Image<float> candidate_intensity_;                  // the map's colours seen from it (colour voxel types)
+    CandidatePoseCheck<TVoxel, TIndex> candidate_check_;
     std::unique_ptr<SwappingEngine<TVoxel>> swapping_;  // with SwapSettings::enabled (hash only)
     std::unique_ptr<GlobalCache> cache_;
     StageClock clock_;
