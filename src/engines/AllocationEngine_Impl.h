@@ -222,18 +222,18 @@ private:
     int activateStoredBlocks(Scene<TVoxel, VoxelBlockHash>& scene, const RaycastReach& reach, bool reach_only,
                              AllocationStats& stats) {
         VoxelBlockHash& hash = scene.index();
+        // Blocks only in the raycast's reach take no more than the room beyond the view's reserve
+        // (the last visible list's size: this frame's is not made yet); without room, no pass over the table.
+        const int reach_room =
+            hash.settings().max_block_count - hash.blocksInUse() - reachReserveBlocks(hash.visibleCount());
+        if (reach_only && reach_room <= 0) return 0;
         grow(activation_, std::size_t(hash.entryCount()));
         const HashTableState before = hash.state();
         const int count = TDevice::selectIndices(
             hash.entryCount(), EntryNeedsActivation{before.entries, before.entry_visibility, reach, reach_only},
             on(activation_), scratch_);
         if (count == 0) return 0;
-        // Blocks only in the raycast's reach take no more than the room beyond the view's reserve
-        // (the last visible list's size: this frame's is not made yet).
-        const int wanted = reach_only
-                               ? std::min(count, std::max(0, hash.settings().max_block_count - hash.blocksInUse() -
-                                                                 reachReserveBlocks(hash.visibleCount())))
-                               : count;
+        const int wanted = reach_only ? std::min(count, reach_room) : count;
         if (wanted > hash.freeBlocks()) scene.reserveVoxelBlocks(hash.blocksInUse() + wanted);
         const int activated = std::min(hash.freeBlocks(), wanted);
         TDevice::parallelFor(count, ActivateStoredBlocks{hash.state(), on(activation_), hash.freeBlocks(), activated});
