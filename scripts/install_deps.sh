@@ -1,9 +1,17 @@
 #!/usr/bin/env bash
 # Installs what VoxFuse needs to build and test on Debian 12. Idempotent: installs only what is missing.
 # The CUDA toolkit is optional and not installed here (CMake uses it when nvcc is found). Packages
-# named as arguments are installed too (scripts/fuzz.sh adds clang's).
-#   ./scripts/install_deps.sh [PACKAGE...]
+# named as arguments are installed too (scripts/fuzz.sh adds clang's). --tests adds the Python
+# package's optional dependencies that its tests exercise (pyrealsense2, rerun-sdk; about 150 MB from
+# PyPI) in a virtual environment, .venv-extras/, that the tests run in (without it they skip).
+#   ./scripts/install_deps.sh [--tests] [PACKAGE...]
 set -euo pipefail
+
+with_test_extras=0
+if [ "${1:-}" = "--tests" ]; then
+  with_test_extras=1
+  shift
+fi
 
 packages=(
   cmake ninja-build g++ pkg-config
@@ -43,4 +51,19 @@ fi
 if ! python3 -c "import numpy, pytest" 2>/dev/null; then
   echo "install_deps: installing numpy and pytest for $(command -v python3)"
   python3 -m pip install --quiet --disable-pip-version-check numpy pytest
+fi
+
+# The optional Python dependencies, for the tests of RealSense input and Rerun logging. The venv sees
+# the interpreter's own packages (numpy, pytest); a failed download leaves those tests skipping.
+if [ "$with_test_extras" = 1 ]; then
+  extras="$(cd "$(dirname "$0")/.." && pwd)/.venv-extras"
+  if [ -x "$extras/bin/python" ] && "$extras/bin/python" -c "import pyrealsense2, rerun" 2>/dev/null; then
+    echo "install_deps: test extras present in $extras"
+  else
+    echo "install_deps: installing pyrealsense2 and rerun-sdk into $extras"
+    if ! { python3 -m venv --system-site-packages "$extras" &&
+           "$extras/bin/python" -m pip install --quiet --disable-pip-version-check pyrealsense2 rerun-sdk; }; then
+      echo "install_deps: warning: the test extras could not be installed; their tests will skip" >&2
+    fi
+  fi
 fi

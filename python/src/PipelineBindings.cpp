@@ -52,6 +52,8 @@ void checkShape(const py::array& a, const char* what, py::ssize_t h, py::ssize_t
                               channels_text + ") for this calibration, not " + shapeText(a));
 }
 
+}  // namespace
+
 // `raw_scale` > 0: uint16 depth in units of that many metres (converted to the calibration's units).
 void copyDepth(const py::handle& value, const RGBDCalib& calib, float raw_scale, Image<std::uint16_t>& out) {
     if (!py::isinstance<py::array>(value))
@@ -125,6 +127,8 @@ void copyRgb(const py::handle& value, const RGBDCalib& calib, Image<Vec4u8>& out
         }
     }
 }
+
+namespace {
 
 void copyLabels(const py::handle& value, Image<ClassId>& out) {
     const auto a = requireDtype<ClassId>(value, "labels", "uint16 (H, W)");

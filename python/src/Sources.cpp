@@ -3,6 +3,7 @@
 
 #include <pybind11/stl.h>
 
+#include <cmath>
 #include <memory>
 #include <mutex>
 
@@ -59,7 +60,25 @@ void bindSources(py::module_& m) {
     py::class_<RGBDFrame, FramePtr>(
         m, "Frame",
         "One frame as read from a source. Its arrays view the decoded images without a copy (writable;\n"
-        "np.copy() them to keep them apart from the frame).")
+        "np.copy() them to keep them apart from the frame).\n\n"
+        "Frame(depth, rgb=None, *, calib, index=0, timestamp=None) makes one from arrays (copied once), for\n"
+        "sources written in Python (voxfuse.realsense): depth uint16 raw or float metres, rgb uint8 (H, W, 3|4),\n"
+        "both the sizes calib's cameras have; timestamp in seconds (default index / 30).")
+        .def(py::init([](const py::handle& depth, const py::object& rgb, const RGBDCalib& calib, int index,
+                         const py::object& timestamp) {
+                 if (index < 0) throw py::value_error("index must not be negative");
+                 auto f = std::make_shared<RGBDFrame>();
+                 copyDepth(depth, calib, 0.f, f->depth_raw);
+                 if (!rgb.is_none()) copyRgb(rgb, calib, f->rgb);
+                 f->index = index;
+                 f->timestamp_s = timestamp.is_none() ? double(index) / 30.0 : timestamp.cast<double>();
+                 if (!std::isfinite(f->timestamp_s)) throw py::value_error("timestamp must be a finite number");
+                 f->depth_path = "frame " + std::to_string(index) + " made from arrays";
+                 f->labels_path = f->depth_path;
+                 return f;
+             }),
+             py::arg("depth"), py::arg("rgb") = py::none(), py::kw_only(), py::arg("calib"), py::arg("index") = 0,
+             py::arg("timestamp") = py::none())
         .def_readonly("index", &RGBDFrame::index, "0-based position in the source.")
         .def_readonly("timestamp", &RGBDFrame::timestamp_s,
                       "Seconds (the source's clock; index / 30 when it has none).")

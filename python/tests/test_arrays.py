@@ -114,3 +114,22 @@ def test_renders(room_frames):
     small = p.render("depth", pose=frames[1].ground_truth_pose, intrinsics=voxfuse.Intrinsics(160, 120, 131.25, 131.25, 79.5, 59.5))
     assert small.shape == (120, 160, 3)
     assert (last.sum(axis=2) > 0).mean() > 0.3
+
+
+def test_a_frame_made_from_arrays_holds_them_and_is_checked_against_the_calibration(room_frames):
+    source, frames = room_frames
+    f = frames[3]
+    made = voxfuse.Frame(f.depth, f.rgb, calib=source.calib, index=7, timestamp=2.5)
+    assert np.array_equal(made.depth, f.depth) and np.array_equal(made.rgb, f.rgb)
+    assert (made.index, made.timestamp, made.labels, made.ground_truth_pose) == (7, 2.5, None, None)
+    assert voxfuse.Frame(f.depth, calib=source.calib, index=30).timestamp == 1.0  # index / 30
+    metres = voxfuse.Frame(f.depth * source.calib.depth_scale, calib=source.calib)
+    assert np.abs(metres.depth.astype(int) - f.depth).max() <= 1
+    with pytest.raises(ValueError, match="shape"):
+        voxfuse.Frame(f.depth[:, :100], calib=source.calib)
+    with pytest.raises(TypeError):
+        voxfuse.Frame(f.depth.astype(np.int32), calib=source.calib)
+    with pytest.raises(ValueError, match="index"):
+        voxfuse.Frame(f.depth, calib=source.calib, index=-1)
+    with pytest.raises(ValueError, match="finite"):
+        voxfuse.Frame(f.depth, calib=source.calib, timestamp=float("nan"))

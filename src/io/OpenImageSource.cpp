@@ -28,11 +28,13 @@ std::string accepted() {
            (OpenNISource::available() ? "" : " (not in this build: no OpenNI2)");
 }
 
-bool hasOniExtension(const std::string& path) {
+std::string lowerCaseExtension(const std::string& path) {
     std::string ext = fs::path(path).extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-    return ext == ".oni";
+    return ext;
 }
+
+bool hasOniExtension(const std::string& path) { return lowerCaseExtension(path) == ".oni"; }
 
 bool holdsFrameFiles(const fs::path& folder) {
     std::error_code ec;
@@ -41,6 +43,12 @@ bool holdsFrameFiles(const fs::path& folder) {
         if (FrameFolderSource::parseDepthFileName(it->path().filename().string(), number)) return true;
     }
     return false;
+}
+
+// .bag / .db3 recordings and realsense:[SERIAL] (python/voxfuse/realsense.py reads them).
+bool isRealSenseInput(const std::string& path) {
+    const std::string ext = lowerCaseExtension(path);
+    return path.rfind("realsense:", 0) == 0 || ext == ".bag" || ext == ".db3";
 }
 
 // Relative patterns are taken relative to `path` (the sequence folder) when one is given.
@@ -68,6 +76,11 @@ std::unique_ptr<ImageSource> openImageSource(const std::string& path, const Sour
                                               options.first_index);
     }
     if (hasOniExtension(path)) return OpenNISource::openFile(path, options);
+    if (isRealSenseInput(path))
+        throw IoError(path,
+                      "RealSense recordings and cameras are read by the Python package (through pyrealsense2): "
+                      "python -m voxfuse " +
+                          path + " (pip install . pyrealsense2; see `python -m voxfuse --help`)");
 
     std::error_code ec;
     if (!fs::exists(path, ec)) throw IoError(path, "no such file or folder; " + accepted());

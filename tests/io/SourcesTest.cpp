@@ -581,6 +581,10 @@ TEST(OpenImageSource, ExplainsWhatIsAccepted) {
                  OpenNISource::available() ? "no such file" : "OpenNI2 input is not available in this build");
     expectReason(empty.path(), {}, "not a known image source; expected one of: a TUM RGB-D folder");
     expectReason(empty.path() + "/nothing_here", {}, "no such file or folder");
+    // RealSense input is the Python package's: the CLI and the library say where to go, file or not.
+    for (const std::string& realsense :
+         {empty.path() + "/walk.bag", empty.path() + "/walk.DB3", std::string("realsense:")})
+        expectReason(realsense, {}, "python -m voxfuse " + realsense);
     SourceOptions no_calib;
     no_calib.depth_pattern = "%04i.pgm";
     expectReason(empty.path(), no_calib, "needs a calibration file");
