@@ -59,7 +59,9 @@ std::string nothingFusedReason(const RunRecord& run) {
     if (countFused(run) == 0)
         return "none of the " + frames + " processed was fused (" +
                std::to_string(countQuality(run, TrackingQuality::Failed)) + " failed to track, " +
-               std::to_string(countStatus(run, TrackingStatus::Lost)) + " without a pose): the map holds nothing of " +
+               std::to_string(countStatus(run, TrackingStatus::Lost)) + " without a pose): " +
+               (run.map_loaded.empty() ? "the map holds nothing of "
+                                       : "nothing was added to the map loaded from " + run.map_loaded + " from ") +
                run.source + "; is the calibration's depth scale right, and does the depth reach " +
                metres(run.settings.scene.view_frustum_min_m) + " to " + metres(run.settings.scene.view_frustum_max_m) +
                " m?";
@@ -137,7 +139,8 @@ void writeSummaryJson(const std::string& path, const RunRecord& run) {
     j["frames"] = int(run.frames.size());
     j["frames_fused"] = fused;
     j["depth_samples_out_of_range"] = run.depth_samples_out_of_range;
-    j["frames_with_depth_out_of_range"] = run.frames_with_depth_out_of_range;
+    j["colour_samples_out_of_range"] = run.colour_samples_out_of_range;
+    j["frames_with_samples_out_of_range"] = run.frames_with_samples_out_of_range;
     j["frames_without_pose"] = run.frames_without_pose;
     j["frames_unreadable"] = run.frames_unreadable;
     j["frames_dropped"] = run.frames_dropped;

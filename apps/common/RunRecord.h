@@ -25,9 +25,11 @@ struct RunRecord {
     int frames_unreadable = 0;    // skipped: the source could not read them
     int frames_dropped = 0;       // live input: dropped by the reader thread while the engine lagged
     // Depth samples above the maximum their file declares or that the calibration maps to no depth (read
-    // as no measurement), and the frames with any.
+    // as no measurement), colour samples above their file's maximum (read as full intensity), and the
+    // frames with any.
     long long depth_samples_out_of_range = 0;
-    int frames_with_depth_out_of_range = 0;
+    long long colour_samples_out_of_range = 0;
+    int frames_with_samples_out_of_range = 0;
     bool has_labels = false;     // a label image stream was attached
     int frames_with_labels = 0;  // frames a label image was found for
     double wall_s = 0.0;

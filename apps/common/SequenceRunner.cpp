@@ -43,7 +43,7 @@ SequenceRunner::Step SequenceRunner::step() {
         std::cerr << "\n" << program_ << ": skipping unreadable frame: " << e.what() << "\n";
         return Step::Skipped;
     }
-    reportDepthOutOfRange();
+    reportSamplesOutOfRange();
     Mat4f pose;
     const Mat4f* given = nullptr;
     if (poses_ == PoseSource::GroundTruth) {
@@ -74,23 +74,30 @@ SequenceRunner::Step SequenceRunner::step() {
     return Step::Processed;
 }
 
-// Samples above the maximum their file declares, or that the calibration maps to no depth, are invalid:
-// read as no measurement, counted, and said per frame (the first few frames; then the count in the summary).
-void SequenceRunner::reportDepthOutOfRange() {
+// Samples above the maximum their file declares, or depth the calibration maps to no depth, are invalid:
+// depth is read as no measurement, colour as full intensity; counted, and said per frame (the first few
+// frames; then the count in the summary).
+void SequenceRunner::reportSamplesOutOfRange() {
     const RGBDCalib& calib = source_.calib();  // the engine's (view() would copy the view back from a GPU)
     const std::size_t above_maxval = frame_.depth_samples_out_of_range;
     const std::size_t without_depth = depthSamplesWithoutDepth(frame_.depth_raw, calib.disparity, calib.depth.fx);
-    if (above_maxval + without_depth == 0) return;
+    const std::size_t colour_above_maxval = frame_.colour_samples_out_of_range;
+    if (above_maxval + without_depth + colour_above_maxval == 0) return;
     record_.depth_samples_out_of_range += (long long)(above_maxval + without_depth);
+    record_.colour_samples_out_of_range += (long long)colour_above_maxval;
     constexpr int kFramesSaid = 10;
-    if (++record_.frames_with_depth_out_of_range > kFramesSaid) return;
-    std::cerr << "\n" << program_ << ": warning: frame " << frame_.index << ": " << frame_.depth_path << ": ";
+    if (++record_.frames_with_samples_out_of_range > kFramesSaid) return;
+    std::cerr << "\n" << program_ << ": warning: frame " << frame_.index << ": ";
+    if (colour_above_maxval > 0)
+        std::cerr << colour_above_maxval << " colour samples exceed the maximum the colour file declares (read as full "
+                  << "intensity)" << (above_maxval + without_depth > 0 ? "; " : "");
+    if (above_maxval + without_depth > 0) std::cerr << frame_.depth_path << ": ";
     if (above_maxval > 0) std::cerr << above_maxval << " depth samples exceed the maximum the file declares";
     if (above_maxval > 0 && without_depth > 0) std::cerr << " and ";
     if (without_depth > 0)
         std::cerr << without_depth << " depth samples lie where the calibration's depth conversion gives no depth";
-    std::cerr << "; they are read as no measurement"
-              << (record_.frames_with_depth_out_of_range == kFramesSaid
+    if (above_maxval + without_depth > 0) std::cerr << "; they are read as no measurement";
+    std::cerr << (record_.frames_with_samples_out_of_range == kFramesSaid
                       ? " (said for the first " + std::to_string(kFramesSaid) + " such frames; summary.json counts all)"
                       : std::string())
               << "\n";

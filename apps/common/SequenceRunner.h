@@ -41,7 +41,7 @@ public:
 
 private:
     void reportNoColourToTrack();
-    void reportDepthOutOfRange();
+    void reportSamplesOutOfRange();
     void reportFullMap(const FrameResult& result);
 
     ImageSource& source_;

@@ -149,10 +149,11 @@ bool FrameFolderSource::next(RGBDFrame& frame) {
     if (position_ >= frames_.size()) return false;
     const int index = int(position_);
     const FrameFiles& f = frames_[position_++];  // moves on even if this frame throws
-    const std::size_t out_of_range = frame_reading::readDepthAndColour(f.depth_path, f.colour_path, index, calib_.depth,
-                                                                       calib_.rgb, read_.depth_raw, read_.rgb);
+    const frame_reading::SamplesOutOfRange out_of_range = frame_reading::readDepthAndColour(
+        f.depth_path, f.colour_path, index, calib_.depth, calib_.rgb, read_.depth_raw, read_.rgb);
     read_.handOver(frame, !f.colour_path.empty());
-    frame.depth_samples_out_of_range = out_of_range;
+    frame.depth_samples_out_of_range = out_of_range.depth;
+    frame.colour_samples_out_of_range = out_of_range.colour;
     frame.index = index;
     frame.file_number = f.number;
     frame.timestamp_s = f.number / kFramesPerSecond;

@@ -291,7 +291,7 @@ bool hasExtension(const std::string& path, const char* extension) {
 
 }  // namespace
 
-void readPPM(const std::string& path, Image<Vec4u8>& image) {
+std::size_t readPPM(const std::string& path, Image<Vec4u8>& image) {
     requireImageFile(path);
     std::vector<unsigned char>& bytes = decodeScratch().bytes;
     readWholeFile(path, bytes);
@@ -301,15 +301,20 @@ void readPPM(const std::string& path, Image<Vec4u8>& image) {
                                 " out of range: an 8-bit PPM needs 1..255 (16-bit PPM is not supported)");
     requirePixelBytes(path, bytes, h, 3);
     // Rescale so that maxval means full intensity, as the format defines (samples above maxval are
-    // invalid; they are clamped rather than wrapped).
+    // invalid: clamped rather than wrapped, and counted).
     std::uint8_t to8bit[256];
     for (unsigned v = 0; v < 256; ++v)
         to8bit[v] = std::uint8_t(std::min(255u, (v * 255u + unsigned(h.maxval) / 2) / unsigned(h.maxval)));
     image.resize(Vec2i{h.width, h.height});
     const unsigned char* src = bytes.data() + h.data_offset;
     Vec4u8* dst = image.host();
-    for (std::size_t i = 0; i < image.pixelCount(); ++i, src += 3)
+    std::size_t over_maxval = 0;
+    const unsigned maxval = unsigned(h.maxval);
+    for (std::size_t i = 0; i < image.pixelCount(); ++i, src += 3) {
+        over_maxval += (src[0] > maxval) + (src[1] > maxval) + (src[2] > maxval);
         dst[i] = Vec4u8{to8bit[src[0]], to8bit[src[1]], to8bit[src[2]], 255};
+    }
+    return over_maxval;
 }
 
 Image<Vec4u8> readPPM(const std::string& path) {
@@ -402,10 +407,10 @@ bool readJpeg(const std::string& path, Image<Vec4u8>& image) {
 
 }  // namespace
 
-void readColorImage(const std::string& path, Image<Vec4u8>& rgba) {
+std::size_t readColorImage(const std::string& path, Image<Vec4u8>& rgba) {
     if (hasExtension(path, ".ppm")) return readPPM(path, rgba);
     requireImageFile(path);
-    if (requirePlausibleImage(path).format == image_header::Format::Jpeg && readJpeg(path, rgba)) return;
+    if (requirePlausibleImage(path).format == image_header::Format::Jpeg && readJpeg(path, rgba)) return 0;
     DecodeScratch& scratch = decodeScratch();
     decodeWithOpenCV(path, scratch.colour);
     const cv::Mat* m = &scratch.colour;
@@ -425,6 +430,7 @@ void readColorImage(const std::string& path, Image<Vec4u8>& rgba) {
     rgba.resize(Vec2i{m->cols, m->rows});
     cv::Mat into = matOver(rgba);
     cv::cvtColor(*m, into, to_rgba);
+    return 0;
 }
 
 Image<Vec4u8> readColorImage(const std::string& path) {

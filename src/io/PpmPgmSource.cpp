@@ -114,11 +114,12 @@ bool PpmPgmSource::next(RGBDFrame& frame) {
                               "); it goes on to index " + std::to_string(first_index_ + frame_count_ - 1),
                           position);
     }
-    const std::size_t out_of_range = frame_reading::readDepthAndColour(
+    const frame_reading::SamplesOutOfRange out_of_range = frame_reading::readDepthAndColour(
         depth_path, rgb_pattern_.empty() ? std::string() : fileName(rgb_pattern_, file_index), position, calib_.depth,
         calib_.rgb, read_.depth_raw, read_.rgb);
     read_.handOver(frame, !rgb_pattern_.empty());
-    frame.depth_samples_out_of_range = out_of_range;
+    frame.depth_samples_out_of_range = out_of_range.depth;
+    frame.colour_samples_out_of_range = out_of_range.colour;
     frame.index = position;
     frame.timestamp_s = double(file_index) / 30.0;
     frame.depth_path = depth_path;

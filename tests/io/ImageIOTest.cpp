@@ -120,6 +120,19 @@ TEST(ImageIO, PpmWithSmallMaxvalIsRescaled) {
     EXPECT_EQ(rgb.at(0, 0).z, 136);
 }
 
+// Colour samples above the maxval are invalid too: read as full intensity (not wrapped), and counted.
+TEST(ImageIO, PpmSamplesAboveMaxvalAreClampedAndCounted) {
+    ScratchDir dir;
+    const std::string path = dir.file("over.ppm");
+    writeBytes(path, "P6\n2 1\n15\n" + bytesOf({16, 15, 200, 0, 3, 15}));
+    Image<Vec4u8> rgb;
+    EXPECT_EQ(readPPM(path, rgb), 2u);  // 16 and 200; 15 is maxval itself
+    EXPECT_EQ(rgb.at(0, 0).x, 255);
+    EXPECT_EQ(rgb.at(0, 0).z, 255);
+    EXPECT_EQ(rgb.at(1, 0).y, 51);
+    EXPECT_EQ(readColorImage(path, rgb), 2u);
+}
+
 TEST(ImageIO, BadNetpbmFilesGiveReasons) {
     ScratchDir dir;
     struct Case {

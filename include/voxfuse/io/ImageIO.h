@@ -23,11 +23,13 @@ void writePNG(const std::string& path, const Image<Vec4u8>& rgba);
 // The same readers decoding into `image`, whose memory is kept when it has the file's size already:
 // a sequence of frames read into the same images allocates nothing per frame. After an error the
 // image's contents are unspecified.
-void readPPM(const std::string& path, Image<Vec4u8>& image);
+// These two return the colour samples above the maxval a PPM declares (read as full intensity; 0 for
+// other formats).
+std::size_t readPPM(const std::string& path, Image<Vec4u8>& image);
 // A depth PGM's samples above the maxval its header declares are invalid: they are read as 0 (no
 // measurement), and this readPGM16 returns how many there were.
 std::size_t readPGM16(const std::string& path, Image<std::uint16_t>& image);
-void readColorImage(const std::string& path, Image<Vec4u8>& image);
+std::size_t readColorImage(const std::string& path, Image<Vec4u8>& image);
 void readDepthPNG(const std::string& path, Image<std::uint16_t>& image);
 
 void writeDepthPNG(const std::string& path, const Image<std::uint16_t>& depth);
