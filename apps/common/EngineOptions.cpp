@@ -67,7 +67,7 @@ void addMapOptions(CLI::App& cli, EngineOptions& o) {
         "or --swap-file");
     cli.add_option("--active-blocks", o.active_blocks,
                    "swapping: blocks the active voxel array holds at most (implies --swap)")
-        ->check(positiveInt());
+        ->check(intIn(1, 1 << 22));  // the block array's limit, as --max-blocks
     cli.add_option(
         "--swap-file", e.swap.swap_file,
         "swapping: keep the swapped-out map in this new file (an existing path is refused; deleted as it opens) "

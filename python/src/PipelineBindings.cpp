@@ -460,6 +460,8 @@ void bindPipeline(py::module_& m) {
                 if (!pose.is_none()) given = arrayToMatrix(pose, "pose");
                 f.index = p.framesProcessed();
                 f.timestamp_s = timestamp.is_none() ? double(f.index) / 30.0 : timestamp.cast<double>();
+                if (!std::isfinite(f.timestamp_s))
+                    throw py::value_error("timestamp must be a finite number of seconds");  // the trajectory's key
                 f.has_ground_truth = false;
                 f.depth_path = "frame " + std::to_string(f.index) + " given to Pipeline.process";
                 f.labels_path = f.depth_path;

@@ -43,6 +43,8 @@ def test_wrong_shapes_are_value_errors(pipeline, room_frames):
         pipeline.process(f.depth, pose=np.eye(3))
     with pytest.raises(ValueError, match="not finite"):
         pipeline.process(f.depth, pose=np.full((4, 4), np.nan))
+    with pytest.raises(ValueError, match="timestamp must be a finite number"):
+        pipeline.process(f.depth, timestamp=float("nan"))  # it would key the trajectory
     assert pipeline.frames_processed == 0
 
 

@@ -53,12 +53,12 @@ def handles(path):
     return p.startswith(_LIVE_PREFIX) or p.lower().endswith(_RECORDING_SUFFIXES)
 
 
-def _import_rs():
+def _import_rs(path):
     try:
         import pyrealsense2 as rs  # optional: only RealSense input needs it
     except ImportError as e:
         raise ImportError(
-            "RealSense input needs pyrealsense2, the official Python wrapper (it ships librealsense): "
+            f"{path}: RealSense input needs pyrealsense2, the official Python wrapper (it ships librealsense): "
             "pip install pyrealsense2"
         ) from e
     return rs
@@ -125,7 +125,7 @@ class RealSenseSource:
                 raise _voxfuse.ConfigError(f"{name} must be a positive integer, not {value!r}")
         if not (isinstance(timeout_s, (int, float)) and math.isfinite(timeout_s) and timeout_s > 0):
             raise _voxfuse.ConfigError(f"timeout_s must be a positive number of seconds, not {timeout_s!r}")
-        self._rs = _import_rs()
+        self._rs = _import_rs(path)
         self._path = str(path)
         self._align_mode = align
         self._timeout_s = float(timeout_s)
@@ -436,7 +436,7 @@ def write_recording(path, frames, calib, *, fps=30):
     T_depth_rgb become the recording's colour stream and extrinsics). Frame numbers and timestamps
     are the frames' own. librealsense 2.57 and later write ROS 2 bags (.db3), earlier ones .bag.
     """
-    rs = _import_rs()
+    rs = _import_rs(path)
     depth_k, colour_k = calib.depth, calib.rgb if calib.rgb.width > 0 else calib.depth
     device = rs.software_device()
     depth_sensor, colour_sensor = device.add_sensor("Depth"), device.add_sensor("Color")

@@ -155,11 +155,14 @@ TrackerSettings parseTrackerSettingsText(const std::string& text, const std::str
     // Per-level lists are applied once the number of levels is known (after the last line).
     std::vector<double> iterations, distances, pixel_steps;
 
-    auto number = [](const std::string& v, double& out) { return text::parseDouble(v, out) && std::isfinite(out); };
+    // Finite as the float the setting keeps, not only as a double: 1e39 would become infinity.
+    auto number = [](const std::string& v, double& out) {
+        return text::parseDouble(v, out) && std::isfinite(out) && std::isfinite(float(out));
+    };
     auto setFloat = [&](float& field) {
         return [&field, number](const std::string& v) -> std::string {
             double d;
-            if (!number(v, d)) return "not a number: '" + v + "'";
+            if (!number(v, d)) return "not a number (finite, in float range): '" + v + "'";
             field = float(d);
             return {};
         };
@@ -192,7 +195,8 @@ TrackerSettings parseTrackerSettingsText(const std::string& text, const std::str
             list.clear();
             for (std::string_view token : text::splitWhitespace(v)) {
                 double d;
-                if (!number(std::string(token), d)) return "not a number: '" + std::string(token) + "'";
+                if (!number(std::string(token), d))
+                    return "not a number (finite, in float range): '" + std::string(token) + "'";
                 list.push_back(d);
             }
             return {};

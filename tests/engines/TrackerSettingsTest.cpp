@@ -99,6 +99,8 @@ TEST(TrackerSettingsTest, BadLinesNameFileLineAndReason) {
     expectParseError("pixel_step = 1 0 1\n", 1, "pixel_step: expected integers in 1..8");
     expectParseError("pixel_step = 1.5\n", 1, "pixel_step: expected integers in 1..8");
     expectParseError("max_normal_angle_deg = abc\n", 1, "not a number");
+    expectParseError("robust_scale_m = 1e39\n", 1, "in float range): '1e39'");  // infinite as a float
+    expectParseError("max_distance_m = 0.1 1e39 0.02\n", 1, "in float range): '1e39'");
     expectParseError("bilateral_filter = maybe\n", 1, "true or false");
     expectParseError("just some words\n", 1, "key = value");
     expectParseError("color_weight =\n", 1, "no value");
