@@ -44,6 +44,8 @@ class Programs:
         self.bench = find("apps/voxfuse_bench", "voxfuse_bench")
         self.synth = find("apps/synth/voxfuse_synth", "voxfuse_synth")
         self.env = dict(os.environ, LD_LIBRARY_PATH=folder + ":" + os.environ.get("LD_LIBRARY_PATH", ""))
+        # The Python package as the build assembled it (<build>/python/voxfuse), if it did.
+        self.python_package = os.path.join(folder, "python") if os.path.isdir(os.path.join(folder, "python", "voxfuse")) else None
         # AddressSanitizer reserves terabytes of address space: no limit for such a build.
         ldd = subprocess.run(["ldd", self.voxfuse], capture_output=True, text=True, env=self.env).stdout
         self.limit = limit_memory if "libasan" not in ldd else None
@@ -151,6 +153,8 @@ def cases():
         "--occupancy": ["nan", "0", "1e-9", "1e39"],
         "--tracker-max-distance": ["nan", "-1", "0"],
         "--relocalise-max-speed": ["nan", "-1", "x"],
+        "--relocalise-min-colour-correlation": ["nan", "2", "-1.5"],
+        "--depth-gap-tolerance": ["nan", "-1", "1"],
     }.items():
         for v in values:
             opt(option, v, v)
@@ -159,7 +163,8 @@ def cases():
         "--frames": ["-1", "x", "99999999999"],
         "--skip": ["-1"],
         "--render-every": ["-1", "99999999999"],
-        "--active-blocks": ["0", "-5"],
+        "--active-blocks": ["0", "-5", "2147483647"],
+        "--relocalise-candidates": ["0", "100000"],
         "--max-blocks": ["-1", "999999999"],
         "--hash-buckets": ["0", "-1"],
         "--hash-excess": ["-1"],
@@ -222,7 +227,7 @@ def cases():
         c.append(Case(category, what, ["--rgb", "{ppm}/%04i.ppm", "--depth", "{ppm}/%04i.pgm", "--calib", calib,
                                        "--render-every", "0", "--out", OUT] + args, expect, ok_exit, setup, check))
     c.append(Case("ppm/pgm", "an rgb pattern without a depth pattern", ["--rgb", "{ppm}/%04i.ppm", "--calib", "{ppm}/calib.txt",
-                                                                         "--out", OUT], ["depth pattern"]))
+                                                                         "--out", OUT], ["depth file pattern", "--depth"]))
     c.append(Case("ppm/pgm", "a depth pattern without a calibration", ["--depth", "{ppm}/%04i.pgm", "--out", OUT], ["calibration"]))
     c.append(Case("ppm/pgm", "a pattern with %s", ["--depth", "{ppm}/%s.pgm", "--calib", "{ppm}/calib.txt", "--out", OUT],
                   ["%s", "unsupported conversion"]))
@@ -255,10 +260,16 @@ def cases():
     skipped_frame("a depth frame missing in the middle", "0001.pgm", None, "missing")
     def over_maxval(result, case_dir):
         s = json.load(open(os.path.join(case_dir, "out", "summary.json")))
-        return s["depth_samples_out_of_range"] == 64 * 48 and s["frames_with_depth_out_of_range"] == 1
+        return s["depth_samples_out_of_range"] == 64 * 48 and s["frames_with_samples_out_of_range"] == 1
     seq("a PGM whose samples exceed its maxval", [], ["0001.pgm", "frame 1", "exceed the maximum the file declares"],
         setup=lambda d: write(os.path.join(d, "ppm", "0001.pgm"), b"P5\n64 48\n1000\n" + b"\x07\xd0" * 3072),
         ok_exit=True, check=over_maxval)
+    def colour_over_maxval(result, case_dir):
+        s = json.load(open(os.path.join(case_dir, "out", "summary.json")))
+        return s["colour_samples_out_of_range"] == 64 * 48 and s["frames_with_samples_out_of_range"] == 1
+    seq("a PPM whose samples exceed its maxval", [], ["frame 1", "colour samples exceed the maximum"],
+        setup=lambda d: write(os.path.join(d, "ppm", "0001.ppm"), b"P6\n64 48\n100\n" + b"\xc8\x32\x32" * 3072),
+        ok_exit=True, check=colour_over_maxval)
     seq("a folder where a depth frame should be", [], ["0001.pgm", "frame 1"], ok_exit=True,
         setup=lambda d: (os.remove(os.path.join(d, "ppm", "0001.pgm")), os.makedirs(os.path.join(d, "ppm", "0001.pgm"))))
 
@@ -421,6 +432,11 @@ def cases():
            lambda t: write(os.path.join(t, "labels.txt"), "x y z\n"))
     labels("a colour label image", [], ["frame 1", "channels"], lambda t: write(os.path.join(t, "labels", sorted(os.listdir(os.path.join(t, "labels")))[1]),
                                                                               png(64, 48, 8, 2, [b"\x01\x02\x03" * 64] * 48)), True)
+    labels("a truncated label PNG", [], ["frame 1"], lambda t: write(os.path.join(t, "labels", sorted(os.listdir(os.path.join(t, "labels")))[1]),
+                                                                    png(64, 48, 8, 0, [b"\x01" * 64] * 48)[:60]), True)
+    labels("a 1-bit label PNG: classes 0 and 1, fused", [], ["outputs"],
+           lambda t: write(os.path.join(t, "labels", sorted(os.listdir(os.path.join(t, "labels")))[1]), png(64, 48, 1, 0, [b"\xff" * 8] * 48)),
+           True)
     labels("a label image of another aspect ratio", [], ["frame 1"], lambda t: write(os.path.join(t, "labels", sorted(os.listdir(os.path.join(t, "labels")))[1]),
                                                                                     png(64, 64, 8, 0, [b"\x01" * 64] * 64)), True)
 
@@ -436,6 +452,14 @@ def cases():
     tracker("failed above good", "good_inlier_ratio = 0.2\nfailed_inlier_ratio = 0.5\n", ":2:", "must not exceed")
     tracker("a line without '='", "tracker icp\n", ":1:", "key = value")
     tracker("a 2 MB file", "# " + "x" * 2000000 + "\n", "larger than")
+    tracker("a value infinite as a float", "robust_scale_m = 1e39\n", ":1:", "float range")
+    tracker("zero iterations", "iterations = 0\n", ":1:", "1..1000")
+    tracker("a negative motion bound", "max_motion_m = -1\n", ":1:", "must be > 0")
+    tracker("an inlier ratio above 1", "good_inlier_ratio = 2\n", ":1:", "[0, 1]")
+    tracker("17 far-field keyframes", "far_field_keyframes = 17\n", ":1:", "0..16")
+    tracker("a far-field point share of 0", "far_field_point_share = 0\n", ":1:", "(0, 1]")
+    tracker("a negative far-field spacing", "far_field_spacing_m = -1\n", ":1:", ">= 0")
+    tracker("an infinite far-field angle", "far_field_spacing_deg = inf\n", ":1:", "not a number")
     c.append(Case("tracker config", "a folder as the settings file", base + ["--tracker-config", "{case}"], ["--tracker-config"]))
     c.append(Case("tracker config", "/dev/zero as the settings file", base + ["--tracker-config", "/dev/zero"], ["/dev/zero", "larger than"]))
 
@@ -461,6 +485,26 @@ def cases():
     mapfile("a voxel size of NaN, checksum fixed", patched(16 + 68, struct.pack("<f", float("nan"))), "out of range")
     mapfile("bytes after the end marker", lambda b: b + b"extra", "after the end marker")
     c.append(Case("map file", "a folder as the map", ["--load-map", "{case}", "--frames", "0", "--out", OUT], ["--load-map"]))
+    # A good map (5 mm 's' voxels, hash) with the options that would change what it is (the voxel type
+    # and size: under "combination").
+    for args, expect in [(["--voxel", "s_label", "--labels", "{tum}/labels.txt"], ["room.vfm", "--voxel"]),
+                         (["--index", "dense"], ["room.vfm", "--index cannot change it"]), (["--mu", "0.5"], ["room.vfm", "--mu cannot change it"]),
+                         (["--hash-buckets", "1024"], ["room.vfm", "--hash-buckets cannot change it"]),
+                         (["--max-blocks", "1"], ["room.vfm", "more than the voxel array's maximum"]), (["--device", "cuda"], ["CUDA"])]:
+        c.append(Case("map file", "a map loaded with " + " ".join(args),
+                      [TUM, "--load-map", "{map}", "--frames", "1", "--render-every", "0", "--out", OUT] + args, expect))
+    # Read whole before the new one replaces it: the map grows, and no temporary file is left.
+    c.append(Case("map file", "a map saved over the map it loads", [TUM, "--load-map", "{case}/m.vfm", "--save-map", "{case}/m.vfm", "--skip", "2",
+                                                                    "--frames", "1", "--poses", "groundtruth", "--render-every", "0", "--out", OUT],
+                  ["m.vfm"], ok_exit=True, setup=lambda d: shutil.copy(FIX.map, os.path.join(d, "m.vfm")),
+                  check=lambda r, d: os.path.getsize(os.path.join(d, "m.vfm")) > os.path.getsize(FIX.map) and not [
+                      n for n in os.listdir(d) if n.startswith("m.vfm") and n != "m.vfm"]))
+
+    # ---- swapping budgets at their limits: the run goes on, says what did not fit
+    c.append(Case("swapping", "one active block", ["{tum}", "--active-blocks", "1", "--frames", "2", "--render-every", "0", "--out", OUT],
+                  ["the map is full", "--active-blocks"], ok_exit=True))
+    c.append(Case("swapping", "one block moved per frame", ["{tum}", "--active-blocks", "3000", "--swap-blocks-per-frame", "1", "--frames", "3",
+                                                             "--render-every", "0", "--out", OUT], ["--active-blocks"], ok_exit=True))
 
     # ---- output paths
     def output(what, args, expect, ok_exit=False, setup=None, check=None, needs_mount=False, tum_source=TUM):
@@ -538,6 +582,52 @@ def cases():
     c.append(Case("source", "a folder that is no known source", ["{case}", "--out", "{case}/out"], ["not a known image source"]))
     c.append(Case("source", "synthetic:abc", ["synthetic:abc", "--out", OUT], ["synthetic:abc"]))
 
+    # ---- the Python API: arrays and calls a script gets wrong; an uncaught error exits 1 with its message
+    START = ("import sys, numpy as np, voxfuse\n"
+             "source = voxfuse.open_source('{tum}')\n"
+             "f = next(iter(source))\n"
+             "p = voxfuse.Pipeline(source.calib, voxel_size=0.01)\n")
+    def py(what, code, *expect, ok_exit=False):
+        c.append(Case("python", what, ["-c", START + code], list(expect), ok_exit, program="python"))
+    py("depth of dtype float16", "p.process(f.depth.astype(np.float16))", "TypeError", "float16")
+    py("depth of dtype int32", "p.process(f.depth.astype(np.int32))", "TypeError", "int32")
+    py("depth transposed", "p.process(np.ascontiguousarray(f.depth.T))", "ValueError", "shape (48, 64)")
+    py("depth in Fortran order is read as its values",
+       "q = voxfuse.Pipeline(source.calib, voxel_size=0.01)\n"
+       "a, b = p.process(f.depth), q.process(np.asfortranarray(f.depth))\n"
+       "print('same' if (a.pose == b.pose).all() and a.fused == b.fused else 'differ')", "same", ok_exit=True)
+    py("depth in metres with NaN and infinities: no measurement there",
+       "d = f.depth * np.float32(source.calib.depth_scale); d[::3] = np.nan; d[1::5] = np.inf; d[2::7] = -1\n"
+       "r = p.process(d)\nprint('handled', r.quality)", "handled", ok_exit=True)
+    py("rgb of dtype float32", "p.process(f.depth, f.rgb.astype(np.float32))", "TypeError", "uint8")
+    py("rgb with 2 channels", "p.process(f.depth, f.rgb[..., :2])", "ValueError", "3 or 4")
+    py("labels of dtype int64", "p.process(f.depth, labels=np.zeros((48, 64), np.int64))", "TypeError", "uint16")
+    py("a pose of NaN", "p.process(f.depth, pose=np.full((4, 4), np.nan))", "ValueError", "not finite")
+    py("a pose that scales", "p.process(f.depth, pose=np.diag([2.0, 2.0, 2.0, 1.0]))", "ConfigError", "not a rotation")
+    py("a timestamp of NaN", "p.process(f.depth, timestamp=float('nan'))", "ValueError", "timestamp")
+    py("an unknown setting", "voxfuse.Pipeline(source.calib, voxel_sise=0.01)", "TypeError", "voxel_sise")
+    py("a setting of the wrong type", "voxfuse.Pipeline(source.calib, voxel_size='fine')", "TypeError", "voxel_size")
+    py("a setting out of range", "voxfuse.Pipeline(source.calib, voxel_size=-1.0)", "ConfigError", "voxel size")
+    py("an unknown render mode", "p.process(f.depth)\np.render('sparkly')", "ConfigError", "sparkly")
+    py("calls after an error go on",
+       "try:\n    p.process(f.depth[:10])\nexcept ValueError:\n    pass\n"
+       "r = p.process(f.depth)\nm = p.extract_mesh()\nprint('went on', p.frames_processed, r.fused, len(m.faces) > 0)",
+       "went on 1 True True", ok_exit=True)
+    py("from_map on half a map file",
+       "open('half.vfm', 'wb').write(open('{map}', 'rb').read()[:100000])\nvoxfuse.Pipeline.from_map('half.vfm')", "half.vfm", "truncated")
+    py("from_map on a missing file", "voxfuse.Pipeline.from_map('none.vfm')", "none.vfm")
+    py("from_map with a setting the map decides", "voxfuse.Pipeline.from_map('{map}', voxel_size=0.01)", "ConfigError", "voxel_size")
+    py("a frame made from arrays of another size", "voxfuse.Frame(f.depth[:, :10], calib=source.calib)", "ValueError", "shape")
+    py("RealSense input without pyrealsense2", "sys.modules['pyrealsense2'] = None\nvoxfuse.open_source('walk.bag')",
+       "ImportError", "pip install pyrealsense2")
+    py("Rerun logging without rerun-sdk", "sys.modules['rerun'] = None\np.log_to_rerun(p.process(f.depth), f)", "ImportError",
+       "pip install rerun-sdk")
+    py("python -m voxfuse with a setting that does not exist", "import voxfuse.__main__ as m\n"
+       "sys.exit(m.main(['{tum}', '--out', 'o', '--set', 'voxel_sise=1']))", "unknown setting")
+    py("python -m voxfuse with a RealSense recording that is no recording",
+       "open('junk.bag', 'wb').write(b'junk' * 1000)\nimport voxfuse.__main__ as m\nsys.exit(m.main(['junk.bag', '--out', 'o']))",
+       "junk.bag")
+
     # ---- voxfuse_bench: every option
     def bench(what, args, *expect):
         json_arg = [] if "--json" in args else ["--json", "{case}/b.json"]
@@ -605,10 +695,17 @@ def run_case(case, programs, fixtures, work, number):
         fixtures.copy_ppm(case_dir)
         if case.setup:
             case.setup(case_dir)
-        argv = [programs.voxfuse if case.program == "voxfuse" else programs.bench] + [expand(a, values) for a in case.argv]
+        env = dict(programs.env, **case.env)
+        if case.program == "python":
+            if not programs.python_package:
+                return "skipped", "the build has no Python package"
+            env["PYTHONPATH"] = programs.python_package
+            program = sys.executable
+        else:
+            program = programs.voxfuse if case.program == "voxfuse" else programs.bench
+        argv = [program] + [expand(a, values) for a in case.argv]
         start = time.time()
-        proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=dict(programs.env, **case.env), cwd=case_dir,
-                                preexec_fn=programs.limit)
+        proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env, cwd=case_dir, preexec_fn=programs.limit)
         timed_out = False
         try:
             if case.interrupt:
