@@ -1,18 +1,16 @@
 // The per-frame pipeline (MainEngineT) and MainEngine::create. Settings and their checks:
-// MainEngineSettings.cpp; stage timing: StageClock.h; voxel type dispatch: VoxelTypeDispatch.h.
+// MainEngineSettings.cpp; stage timing: StageClock.h; voxel type dispatch: VoxelTypeDispatch.h; a frame's
+// view: ViewFromFrame.h; tracking, loss and relocalisation: RelocalisingTracking.h; swapping: MapSwapping.h.
 
 #include "voxfuse/engines/MainEngine.h"
 
-#include <climits>
-#include <cmath>
-#include <cstring>
-#include <limits>
 #include <type_traits>
 
-#include "CandidatePoseCheck.h"
 #include "MainEngineSettings.h"
+#include "MapSwapping.h"
+#include "RelocalisingTracking.h"
 #include "StageClock.h"
-#include "SwappedMapOnHost.h"
+#include "ViewFromFrame.h"
 #include "VoxelTypeDispatch.h"
 #include "io/TextParsing.h"
 #include "voxfuse/core/Error.h"
@@ -22,16 +20,11 @@
 #include "voxfuse/engines/LowLevelEngine.h"
 #include "voxfuse/engines/MeshingEngine.h"
 #include "voxfuse/engines/RaycastEngine.h"
-#include "voxfuse/engines/Relocaliser.h"
-#include "voxfuse/engines/SwappingEngine.h"
 #include "voxfuse/objects/GlobalCache.h"
 #include "voxfuse/objects/Scene.h"
-#include "voxfuse/shared/Swapping.h"
 
 namespace voxfuse {
 namespace {
-
-constexpr float kInfinity = std::numeric_limits<float>::infinity();
 
 // A pose given from outside must be a camera's (a rotation and a plausible position): a scaled or
 // sheared matrix would be fused as if it were one, into an empty or garbled map.
@@ -54,16 +47,10 @@ public:
           raycast_(makeRaycastEngine<TVoxel, TIndex>(settings.device)),
           tracker_(makeTracker(settings.tracker, settings.device)),
           meshing_(makeMeshingEngine<TVoxel, TIndex>(settings.device)),
+          relocalising_(settings, calib),
+          swapping_(settings),
           clock_(settings.device == Device::CUDA) {
         view_.calib = calib;
-        if constexpr (kHash) {
-            if (settings.swap.enabled) {
-                swapping_ = makeSwappingEngine<TVoxel>(settings.device);
-                cache_ = std::make_unique<GlobalCache>(sizeof(TVoxel) * kBlockVoxelCount, settings.swap.swap_file);
-            }
-        }
-        if (settings.relocalisation.enabled)
-            relocaliser_ = std::make_unique<Relocaliser>(settings.relocalisation, calib.depth.size(), settings.device);
     }
 
     // On the GPU only the frame's images go up (raw depth, colour, classes); everything else stays there.
@@ -74,38 +61,17 @@ public:
         clock_.start(result);
 
         ++views_converted_;  // first: from here on view_.depth is no longer the last one's, even if this frame throws
-        low_level_->convertDepthToMetres(frame.depth_raw, view_.calib.disparity, view_.calib.depth.fx,
-                                         settings_.scene.view_frustum_min_m, settings_.scene.view_frustum_max_m,
-                                         settings_.depth_gap_tolerance, view_.depth);
-        if (tracker_->inputs().far_depth)
-            low_level_->convertDepthToMetres(frame.depth_raw, view_.calib.disparity, view_.calib.depth.fx,
-                                             std::nextafter(settings_.scene.view_frustum_max_m, kInfinity), kInfinity,
-                                             0.f, view_.far_depth);
-        copyColor(frame);
-        copyLabels(frame);
-        view_.frame_index = frame.index;
-        view_.timestamp_s = frame.timestamp_s;
-        if (view_.depth.size() != view_.calib.depth.size())
-            throw IoError(frame.depth_path,
-                          "depth image is " + std::to_string(view_.depth.width()) + "x" +
-                              std::to_string(view_.depth.height()) + " but the calibration says " +
-                              std::to_string(view_.calib.depth.width) + "x" + std::to_string(view_.calib.depth.height),
-                          frame.index);
-        if (!view_.labels.empty())
-            checkLabelImageSize(view_.labels.size(), view_.calib, frame.labels_path, frame.index);
-        if (onGpu()) uploadView();
+        viewFromFrame(frame, settings_, {tracker_->inputs().far_depth, TVoxel::hasLabel, onGpu()}, *low_level_, view_);
         clock_.stageDone("depth");
 
         if (T_world_camera_given) {
             tracking_ = TrackingState();
             tracking_.T_world_camera = *T_world_camera_given;
-            lost_ = false;
-            result.keyframes = relocaliser_ ? relocaliser_->database().size() : 0;
+            relocalising_.poseGiven(view_, result);
             clock_.stageDone("track");
         } else {
-            trackOrRelocalise(result);
+            relocalising_.track(trackingContext(), tracking_, result);
         }
-        if (!lost_) last_pose_clock_ = view_.clock();
         result.tracking = tracking_;
         result.quality = tracking_.quality;
         result.T_world_camera = tracking_.T_world_camera;
@@ -119,13 +85,7 @@ public:
         allocation_stats_ = allocation_->allocate(scene_, view_, tracking_.T_world_camera);
         clock_.stageDone("allocate");
 
-        if (swapping_) {
-            // Stored copies of the blocks this frame needs come back before it is fused.
-            if constexpr (kHash)
-                allocation_stats_.blocks_swapped_in_this_frame =
-                    swapping_->swapIn(scene_, *cache_, settings_.swap.blocks_per_frame);
-            clock_.stageDone("swap_in");
-        }
+        swapping_.swapIn(scene_, allocation_stats_, clock_);
 
         integration_->integrate(scene_, view_, tracking_.T_world_camera);
         result.fused = true;
@@ -135,15 +95,9 @@ public:
         raycastModel(&view_.depth);
         clock_.stageDone("raycast");
 
-        if (relocaliser_ && !T_world_camera_given) keepKeyframes(result);
+        if (!T_world_camera_given) relocalising_.frameFused(trackingContext(), tracking_, result);
 
-        if (swapping_) {
-            // Blocks that left the view go to the cache.
-            if constexpr (kHash)
-                allocation_stats_.blocks_swapped_out_this_frame =
-                    swapping_->swapOut(scene_, *cache_, settings_.swap.blocks_per_frame);
-            clock_.stageDone("swap_out");
-        }
+        swapping_.swapOut(scene_, allocation_stats_, clock_);
 
         // Between frames, so that no stage holds voxel pointers.
         if (settings_.remove_empty_blocks_every > 0 && ++frames_fused_ % settings_.remove_empty_blocks_every == 0) {
@@ -197,19 +151,17 @@ public:
         pose.T_source_world = T_source_world_;
         pose.camera = view_.calib.depth;
         if (onGpu())
-            writeMapFile(path, scene_.copyTo(Device::CPU), pose, cache_.get());
+            writeMapFile(path, scene_.copyTo(Device::CPU), pose, swapping_.cache());
         else
-            writeMapFile(path, scene_, pose, cache_.get());
+            writeMapFile(path, scene_, pose, swapping_.cache());
     }
 
     MapFileInfo loadMap(const std::string& path) override {
         // Read into a new host scene first: a file that fails leaves the engine as it was.
         Scene<TVoxel, TIndex> loaded(settings_.scene, newIndex(), Device::CPU);
-        std::unique_ptr<GlobalCache> cache;
-        if (swapping_)
-            cache = std::make_unique<GlobalCache>(sizeof(TVoxel) * kBlockVoxelCount, settings_.swap.swap_file);
+        std::unique_ptr<GlobalCache> cache = swapping_.newCache();
         const MapFileInfo info = readMapFile(path, loaded, cache.get());
-        if (swapping_) cache_ = std::move(cache);
+        swapping_.setCache(std::move(cache));
         scene_ = onGpu() ? loaded.copyTo(Device::CUDA) : std::move(loaded);
         if constexpr (std::is_same<TIndex, VoxelBlockHash>::value)
             allocation_stats_ = scene_.index().stats();
@@ -217,7 +169,7 @@ public:
             allocation_stats_ = AllocationStats();
         frames_fused_ = 0;
         tracker_->reset();
-        forgetKeyframes();
+        relocalising_.forget();
         tracking_ = TrackingState();
         tracking_.T_world_camera = info.T_world_camera;
         map_started_ = true;
@@ -240,7 +192,7 @@ public:
         resetScene();
         map_started_ = false;
         tracker_->reset();
-        forgetKeyframes();
+        relocalising_.forget();
         tracking_ = TrackingState();
         model_ = RenderState();
         ++model_version_;
@@ -259,14 +211,14 @@ public:
     // The map is meshed where it lives; a map with swapped-out blocks is meshed on the CPU from a host
     // copy with every block in it (the whole map may not fit the active budget on the device).
     void extractMesh(Mesh& mesh) override {
-        if (hasStoredBlocks())
-            hostMeshing().extractMesh(completeHostCopy(), mesh);
+        if (swapping_.hasStoredBlocks(scene_))
+            hostMeshing().extractMesh(swapping_.completeHostCopy(scene_), mesh);
         else
             meshing_->extractMesh(scene_, mesh);
     }
     void extractPointCloud(PointCloud& cloud) override {
-        if (hasStoredBlocks())
-            hostMeshing().extractPointCloud(completeHostCopy(), cloud);
+        if (swapping_.hasStoredBlocks(scene_))
+            hostMeshing().extractPointCloud(swapping_.completeHostCopy(scene_), cloud);
         else
             meshing_->extractPointCloud(scene_, cloud);
     }
@@ -303,87 +255,8 @@ private:
         return display_;
     }
 
-    // The pose of a frame that has none given: tracked from the last pose, or, on the frame tracking
-    // fails and on every frame while lost, looked up among the keyframes (relocalise()).
-    void trackOrRelocalise(FrameResult& result) {
-        bool found = false;
-        if (lost_ && relocaliser_) {
-            // Only relocalisation runs: the frame has no verdict of the tracker's own.
-            tracking_.quality = TrackingQuality::Failed;
-            tracking_.inlier_ratio = tracking_.residual_m = tracking_.condition = 0.f;
-            if (tracking_.translation_constraint >= 0.f) tracking_.translation_constraint = 0.f;
-        } else {
-            const Mat4f T_world_last = tracking_.T_world_camera;
-            tracker_->track(tracking_, view_, model_);
-            clock_.stageDone("track");
-            found = tracking_.quality != TrackingQuality::Failed;
-            if (found && relocaliser_ && relocaliser_->looksLost(tracking_)) {
-                // Converged, but onto far too little of the model: most likely a wrong pose after a jump.
-                tracking_.T_world_camera = T_world_last;
-                tracking_.quality = TrackingQuality::Failed;
-                tracker_->forgetLastPose();
-                found = false;
-            }
-        }
-        // A frame with less depth than the tracker needs (a covered lens) is not worth the candidates.
-        if (!found && map_started_ && relocaliser_ &&
-            low_level_->countValidDepth(view_.depth) >= settings_.tracker.min_inliers) {
-            result.relocalisation_tried = true;
-            found = relocalise();
-            if (!found) tracker_->forgetLastPose();  // every try's pose was rejected
-            clock_.stageDone("relocalise");
-            if (found) result.status = TrackingStatus::Relocalised;
-        }
-        // Before the map has started (the first frames without depth) a failed frame is not lost: the next
-        // one with depth starts the map, as the first frame would have.
-        lost_ = !found && map_started_;
-        if (lost_) result.status = TrackingStatus::Lost;
-        result.keyframes = relocaliser_ ? relocaliser_->database().size() : 0;
-    }
-
-    // Candidate poses for the frame: while lost, the last good pose first (after a short gap the camera
-    // is still near it), then those of the keyframes that look most like the frame and that the camera
-    // could have reached since (withinReach). The first that passes acceptRelocalisation() becomes the
-    // frame's pose. Returns whether one did; if none did, tracking_ keeps the last good pose.
-    bool relocalise() {
-        if (onGpu()) view_.depth.memory().updateHost();
-        // The last good pose is tracked against the raycast from it, which the last good frame left.
-        const double elapsed_s = secondsBetween(last_pose_clock_, view_.clock());
-        if (lost_ && refineCandidate(tracking_.T_world_camera, &model_, elapsed_s)) return true;
-        for (const KeyframeMatch& m : relocaliser_->lookUp(view_)) {
-            const Mat4f& T_world_keyframe = relocaliser_->database().keyframe(m.keyframe).T_world_camera;
-            if (!withinReach(settings_.relocalisation, tracking_.T_world_camera, T_world_keyframe, elapsed_s)) continue;
-            if (refineCandidate(T_world_keyframe, nullptr, elapsed_s)) return true;
-        }
-        return false;
-    }
-
-    // One candidate refined and checked (CandidatePoseCheck.h); on success it is the frame's tracking state.
-    bool refineCandidate(const Mat4f& T_world_start, const RenderState* model, double elapsed_s) {
-        const typename CandidatePoseCheck<TVoxel, TIndex>::Context context{scene_,    view_,     *raycast_,
-                                                                           *tracker_, settings_, onGpu()};
-        return candidate_check_.refine(context, T_world_start, model, tracking_.T_world_camera, elapsed_s, tracking_);
-    }
-
-    // Bookkeeping of a fused, tracked frame: a good one joins the frames loss detection compares with,
-    // and becomes a keyframe when it is unlike every keyframe.
-    void keepKeyframes(FrameResult& result) {
-        const bool relocalised = result.status == TrackingStatus::Relocalised;
-        if (relocalised) relocaliser_->forgetRecentFrames();
-        frames_since_relocalisation_ = relocalised ? 0 : frames_since_relocalisation_ + 1;
-        if (tracking_.quality != TrackingQuality::Good) return;
-        relocaliser_->rememberGoodFrame(tracking_);
-        if (frames_since_relocalisation_ <= settings_.relocalisation.keyframe_pause_frames) return;
-        relocaliser_->addKeyframe(view_, tracking_.T_world_camera);  // the frame's code is made where its images are
-        result.keyframes = relocaliser_->database().size();
-        clock_.stageDone("keyframes");
-    }
-
-    void forgetKeyframes() {
-        if (relocaliser_) relocaliser_->clear();
-        lost_ = false;
-        last_pose_clock_ = FrameClock();
-        frames_since_relocalisation_ = INT_MAX / 2;
+    typename RelocalisingTracking<TVoxel, TIndex>::Context trackingContext() {
+        return {scene_, view_, model_, *tracker_, *raycast_, *low_level_, settings_, clock_, onGpu(), map_started_};
     }
 
     MeshingEngine<TVoxel, TIndex>& hostMeshing() {
@@ -392,61 +265,20 @@ private:
         return *host_meshing_;
     }
 
-    bool hasStoredBlocks() const {
-        if constexpr (kHash) return scene_.index().storedBlocks() > 0;
-        return false;
-    }
-
-    // The whole map in host memory, stored blocks and waiting copies included (SwappedMapOnHost.h).
-    Scene<TVoxel, TIndex> completeHostCopy() const {
-        if constexpr (kHash)
-            if (scene_.index().storedBlocks() > 0) return wholeMapOnHost(scene_, *cache_, settings_.hash);
-        return scene_.copyTo(Device::CPU);
-    }
-
     TIndex newIndex() const {
         if constexpr (std::is_same<TIndex, VoxelBlockHash>::value)
             return VoxelBlockHash(settings_.hash);
         else
             return PlainVoxelArray(settings_.dense_offset, settings_.dense_size);
     }
-    // Frame images that go to the GPU every frame live in pinned host memory.
-    HostMemory frameImageMemory() const { return onGpu() ? HostMemory::Pinned : HostMemory::Pageable; }
-
-    // The frame's images go to the GPU once, for every engine that reads them (the depth was made there).
-    void uploadView() {
-        if (!view_.rgb.empty()) view_.rgb.memory().updateDevice();  // colour voxels and the colour trackers
-        if (TVoxel::hasLabel && !view_.labels.empty()) view_.labels.memory().updateDevice();
-    }
-
     void resetScene() {
         if constexpr (std::is_same<TIndex, VoxelBlockHash>::value)
             scene_.clearVoxelBlocks();
         else
             integration_->resetScene(scene_);
-        if (cache_) cache_ = std::make_unique<GlobalCache>(sizeof(TVoxel) * kBlockVoxelCount, settings_.swap.swap_file);
+        swapping_.setCache(swapping_.newCache());
         allocation_stats_ = AllocationStats();
         frames_fused_ = 0;
-    }
-
-    void copyColor(const RGBDFrame& frame) {
-        if (frame.rgb.empty()) {
-            view_.rgb = Image<Vec4u8>();
-            return;
-        }
-        view_.rgb.resize(frame.rgb.size(), true, false, frameImageMemory());
-        std::memcpy(static_cast<void*>(view_.rgb.host()), frame.rgb.host(), frame.rgb.pixelCount() * sizeof(Vec4u8));
-    }
-
-    // Only the semantic voxel types use labels; the others ignore them (and the copy).
-    void copyLabels(const RGBDFrame& frame) {
-        if (!TVoxel::hasLabel || frame.labels.empty()) {
-            view_.labels = Image<ClassId>();
-            return;
-        }
-        view_.labels.resize(frame.labels.size(), true, false, frameImageMemory());
-        std::memcpy(static_cast<void*>(view_.labels.host()), frame.labels.host(),
-                    frame.labels.pixelCount() * sizeof(ClassId));
     }
 
     MainEngineSettings settings_;
@@ -471,14 +303,9 @@ private:
     int frames_fused_ = 0;
     bool has_source_origin_ = false;
     Mat4f T_source_world_ = Mat4f::identity();
-    std::unique_ptr<Relocaliser> relocaliser_;  // with RelocalisationSettings::enabled
-    bool lost_ = false;                         // the last frame had no pose; tracking_ holds the last good one
-    bool map_started_ = false;                  // a frame was fused, or a map loaded
-    FrameClock last_pose_clock_;  // when the frame of that pose was taken (unknown after a reset or a loaded map)
-    int frames_since_relocalisation_ = INT_MAX / 2;
-    CandidatePoseCheck<TVoxel, TIndex> candidate_check_;
-    std::unique_ptr<SwappingEngine<TVoxel>> swapping_;  // with SwapSettings::enabled (hash only)
-    std::unique_ptr<GlobalCache> cache_;
+    bool map_started_ = false;  // a frame was fused, or a map loaded
+    RelocalisingTracking<TVoxel, TIndex> relocalising_;
+    MapSwapping<TVoxel, TIndex> swapping_;
     StageClock clock_;
 };
 
