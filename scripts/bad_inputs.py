@@ -65,12 +65,12 @@ def read(path):
         return f.read()
 
 
-def png(width, height, bit_depth, colour_type, rows):
+def png(width, height, bit_depth, color_type, rows):
     """A PNG from rows of raw bytes (no filtering)."""
     def chunk(kind, body):
         return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", zlib.crc32(kind + body) & 0xFFFFFFFF)
     raw = b"".join(b"\x00" + r for r in rows)
-    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, bit_depth, colour_type, 0, 0, 0)) +
+    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, bit_depth, color_type, 0, 0, 0)) +
             chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
 
 
@@ -153,7 +153,8 @@ def cases():
         "--occupancy": ["nan", "0", "1e-9", "1e39"],
         "--tracker-max-distance": ["nan", "-1", "0"],
         "--relocalise-max-speed": ["nan", "-1", "x"],
-        "--relocalise-min-colour-correlation": ["nan", "2", "-1.5"],
+        "--relocalise-min-color-correlation": ["nan", "2", "-1.5"],
+        "--relocalise-min-colour-correlation": ["nan"],  # the former spelling, checked alike
         "--depth-gap-tolerance": ["nan", "-1", "1"],
     }.items():
         for v in values:
@@ -264,12 +265,12 @@ def cases():
     seq("a PGM whose samples exceed its maxval", [], ["0001.pgm", "frame 1", "exceed the maximum the file declares"],
         setup=lambda d: write(os.path.join(d, "ppm", "0001.pgm"), b"P5\n64 48\n1000\n" + b"\x07\xd0" * 3072),
         ok_exit=True, check=over_maxval)
-    def colour_over_maxval(result, case_dir):
+    def color_over_maxval(result, case_dir):
         s = json.load(open(os.path.join(case_dir, "out", "summary.json")))
-        return s["colour_samples_out_of_range"] == 64 * 48 and s["frames_with_samples_out_of_range"] == 1
+        return s["color_samples_out_of_range"] == 64 * 48 and s["frames_with_samples_out_of_range"] == 1
     seq("a PPM whose samples exceed its maxval", [], ["frame 1", "colour samples exceed the maximum"],
         setup=lambda d: write(os.path.join(d, "ppm", "0001.ppm"), b"P6\n64 48\n100\n" + b"\xc8\x32\x32" * 3072),
-        ok_exit=True, check=colour_over_maxval)
+        ok_exit=True, check=color_over_maxval)
     seq("a folder where a depth frame should be", [], ["0001.pgm", "frame 1"], ok_exit=True,
         setup=lambda d: (os.remove(os.path.join(d, "ppm", "0001.pgm")), os.makedirs(os.path.join(d, "ppm", "0001.pgm"))))
 

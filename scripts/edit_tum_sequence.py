@@ -41,7 +41,7 @@ def read_list(folder, name):
     return entries
 
 
-def pair_colour(depth, rgb, max_difference_s=0.02):
+def pair_color(depth, rgb, max_difference_s=0.02):
     """The colour image of each depth image (None: none), paired as TumSource pairs them: one to one,
     closest in time first, at most max_difference_s apart."""
     rgb_times = sorted((float(stamp), path) for stamp, path in rgb)
@@ -124,7 +124,7 @@ def main():
                 f.write(f"{stamp} {path}\n")
         else:
             f.write("# the colour image of each played depth image, edited by edit_tum_sequence.py\n")
-            rgb_for = pair_colour(depth, rgb)
+            rgb_for = pair_color(depth, rgb)
             for k, i in enumerate(frames):
                 if rgb_for[i] is not None:  # else the source drops this frame, as it dropped the original
                     f.write(f"{stamp_of(k, i)} {rgb_for[i]}\n")

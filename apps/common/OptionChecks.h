@@ -8,6 +8,7 @@
 #include <charconv>
 #include <cmath>
 #include <filesystem>
+#include <iostream>
 #include <limits>
 #include <sstream>
 #include <string>
@@ -90,6 +91,18 @@ inline CLI::Validator meshFileName() {
             return {};
         },
         "MESH FILE");
+}
+
+// A former spelling of an option, kept for a release: hidden from --help, it sets the same value
+// (with the same checks, given by the caller) and says on stderr which name to use.
+template <class T>
+CLI::Option* addFormerSpelling(CLI::App& cli, const std::string& former, CLI::Option* current, T& value) {
+    CLI::Option* o = cli.add_option(former, value)->group("");
+    const std::string now = current->get_name();
+    o->each([former, now](const std::string&) {
+        std::cerr << "warning: " << former << " is the former spelling of " << now << ", which it will give way to\n";
+    });
+    return o;  // given with the current name too, the last one on the command line counts
 }
 
 }  // namespace voxfuse::app

@@ -9,7 +9,7 @@
 namespace voxfuse::app {
 
 // --relocalise on|off, --relocalise-candidates N, --relocalise-max-speed M and
-// --relocalise-min-colour-correlation C, written into `settings`
+// --relocalise-min-color-correlation C (formerly -colour-), written into `settings`
 // (kept alive by the caller).
 inline void addRelocalisationOptions(CLI::App& cli, RelocalisationSettings& settings) {
     cli.add_option_function<std::string>(
@@ -26,10 +26,13 @@ inline void addRelocalisationOptions(CLI::App& cli, RelocalisationSettings& sett
                    "not taken (0: no limit)")
         ->capture_default_str()
         ->check(app::floatIn(0.0, 1e6));
-    cli.add_option("--relocalise-min-colour-correlation", settings.min_colour_correlation,
-                   "relocalisation: how well a found pose's view must correlate with the map's colours (colour voxels; "
-                   "-1: no colour test)")
-        ->capture_default_str()
+    CLI::Option* correlation =
+        cli.add_option("--relocalise-min-color-correlation", settings.min_color_correlation,
+                       "relocalisation: how well a found pose's view must correlate with the map's colours (colour "
+                       "voxels; -1: no colour test)")
+            ->capture_default_str()
+            ->check(app::floatIn(-1.0, 1.0));
+    addFormerSpelling(cli, "--relocalise-min-colour-correlation", correlation, settings.min_color_correlation)
         ->check(app::floatIn(-1.0, 1.0));
 }
 

@@ -139,7 +139,7 @@ void writeSummaryJson(const std::string& path, const RunRecord& run) {
     j["frames"] = int(run.frames.size());
     j["frames_fused"] = fused;
     j["depth_samples_out_of_range"] = run.depth_samples_out_of_range;
-    j["colour_samples_out_of_range"] = run.colour_samples_out_of_range;
+    j["color_samples_out_of_range"] = run.color_samples_out_of_range;
     j["frames_with_samples_out_of_range"] = run.frames_with_samples_out_of_range;
     j["frames_without_pose"] = run.frames_without_pose;
     j["frames_unreadable"] = run.frames_unreadable;

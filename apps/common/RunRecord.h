@@ -28,7 +28,7 @@ struct RunRecord {
     // as no measurement), colour samples above their file's maximum (read as full intensity), and the
     // frames with any.
     long long depth_samples_out_of_range = 0;
-    long long colour_samples_out_of_range = 0;
+    long long color_samples_out_of_range = 0;
     int frames_with_samples_out_of_range = 0;
     bool has_labels = false;     // a label image stream was attached
     int frames_with_labels = 0;  // frames a label image was found for

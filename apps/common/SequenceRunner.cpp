@@ -66,7 +66,7 @@ SequenceRunner::Step SequenceRunner::step() {
     fr.timestamp_s = frame_.timestamp_s;
     fr.result = engine_.processFrame(frame_, given);
     reportFullMap(fr.result);
-    reportNoColourToTrack();
+    reportNoColorToTrack();
     record_.frames.push_back(fr);
     // A lost frame has no pose (it holds the last good one): the trajectory leaves it out.
     if (fr.result.status != TrackingStatus::Lost)
@@ -81,15 +81,15 @@ void SequenceRunner::reportSamplesOutOfRange() {
     const RGBDCalib& calib = source_.calib();  // the engine's (view() would copy the view back from a GPU)
     const std::size_t above_maxval = frame_.depth_samples_out_of_range;
     const std::size_t without_depth = depthSamplesWithoutDepth(frame_.depth_raw, calib.disparity, calib.depth.fx);
-    const std::size_t colour_above_maxval = frame_.colour_samples_out_of_range;
-    if (above_maxval + without_depth + colour_above_maxval == 0) return;
+    const std::size_t color_above_maxval = frame_.color_samples_out_of_range;
+    if (above_maxval + without_depth + color_above_maxval == 0) return;
     record_.depth_samples_out_of_range += (long long)(above_maxval + without_depth);
-    record_.colour_samples_out_of_range += (long long)colour_above_maxval;
+    record_.color_samples_out_of_range += (long long)color_above_maxval;
     constexpr int kFramesSaid = 10;
     if (++record_.frames_with_samples_out_of_range > kFramesSaid) return;
     std::cerr << "\n" << program_ << ": warning: frame " << frame_.index << ": ";
-    if (colour_above_maxval > 0)
-        std::cerr << colour_above_maxval << " colour samples exceed the maximum the colour file declares (read as full "
+    if (color_above_maxval > 0)
+        std::cerr << color_above_maxval << " colour samples exceed the maximum the colour file declares (read as full "
                   << "intensity)" << (above_maxval + without_depth > 0 ? "; " : "");
     if (above_maxval + without_depth > 0) std::cerr << frame_.depth_path << ": ";
     if (above_maxval > 0) std::cerr << above_maxval << " depth samples exceed the maximum the file declares";
@@ -105,11 +105,11 @@ void SequenceRunner::reportSamplesOutOfRange() {
 
 // The colour tracker has nothing to go on in a frame without colour: said once, with the remedy,
 // since the frame's only other sign is a failed track.
-void SequenceRunner::reportNoColourToTrack() {
-    if (reported_no_colour_ || !frame_.rgb.empty() || poses_ == PoseSource::GroundTruth ||
+void SequenceRunner::reportNoColorToTrack() {
+    if (reported_no_color_ || !frame_.rgb.empty() || poses_ == PoseSource::GroundTruth ||
         engine_.settings().tracker.kind != TrackerKind::Color)
         return;
-    reported_no_colour_ = true;
+    reported_no_color_ = true;
     std::cerr << "\n"
               << program_ << ": warning: frame " << frame_.index
               << " has no colour image, and the colour tracker (--tracker color) follows colour alone: such frames "

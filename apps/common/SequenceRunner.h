@@ -40,7 +40,7 @@ public:
     const FrameRecord& lastRecord() const { return record_.frames.back(); }
 
 private:
-    void reportNoColourToTrack();
+    void reportNoColorToTrack();
     void reportSamplesOutOfRange();
     void reportFullMap(const FrameResult& result);
 
@@ -52,7 +52,7 @@ private:
     RGBDFrame frame_;
     bool have_origin_ = false;
     Mat4f T_origin_world_ = Mat4f::identity();
-    bool reported_blocks_full_ = false, reported_hash_full_ = false, reported_no_colour_ = false;
+    bool reported_blocks_full_ = false, reported_hash_full_ = false, reported_no_color_ = false;
 };
 
 }  // namespace voxfuse::app

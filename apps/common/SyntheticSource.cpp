@@ -22,7 +22,7 @@ struct SyntheticSource::Renderer {
     synth::SyntheticScene scene;
     synth::PinholeCamera camera;
     synth::KinectDepthModel depth_model;
-    std::mt19937 colour_rng;
+    std::mt19937 color_rng;
     // Kept between frames, so that a sequence allocates no image memory per frame.
     synth::RenderedFrame rendered;
     std::vector<float> depth_m;
@@ -32,7 +32,7 @@ struct SyntheticSource::Renderer {
                                        : synth::SyntheticScene::defaultRoom()),
           camera(synth::PinholeCamera::kinectV1(width, height)),
           depth_model(depthParams(camera), seed),
-          colour_rng(seed + 1) {}
+          color_rng(seed + 1) {}
     static synth::KinectDepthParams depthParams(const synth::PinholeCamera& camera) {
         synth::KinectDepthParams p;
         p.fx = camera.fx;
@@ -104,7 +104,7 @@ bool SyntheticSource::next(RGBDFrame& frame) {
         const float raw = std::round(r.depth_m[p] * kDepthScale);
         r.images.depth_raw.host()[p] = raw >= 1.f && raw <= 65535.f ? std::uint16_t(raw) : 0;
         auto channel = [&](float v) {
-            return std::uint8_t(std::clamp(std::round(v * 255.f + noise(r.colour_rng)), 0.f, 255.f));
+            return std::uint8_t(std::clamp(std::round(v * 255.f + noise(r.color_rng)), 0.f, 255.f));
         };
         const Eigen::Vector3f& c = r.rendered.rgb[p];
         const std::uint8_t red = channel(c.x()), green = channel(c.y()), blue = channel(c.z());

@@ -549,13 +549,13 @@ Eigen::Vector3f SyntheticScene::shade(const Eigen::Vector3f& point, const Hit& h
 }
 
 RenderedFrame SyntheticScene::render(const PinholeCamera& camera, const Eigen::Isometry3f& T_world_camera,
-                                     int colourSamples) const {
+                                     int colorSamples) const {
     RenderedFrame frame;
-    render(camera, T_world_camera, colourSamples, frame);
+    render(camera, T_world_camera, colorSamples, frame);
     return frame;
 }
 
-void SyntheticScene::render(const PinholeCamera& camera, const Eigen::Isometry3f& T_world_camera, int colourSamples,
+void SyntheticScene::render(const PinholeCamera& camera, const Eigen::Isometry3f& T_world_camera, int colorSamples,
                             RenderedFrame& frame) const {
     frame.width = camera.width;
     frame.height = camera.height;
@@ -566,7 +566,7 @@ void SyntheticScene::render(const PinholeCamera& camera, const Eigen::Isometry3f
     frame.label.assign(count, kUnlabelled);
     const Eigen::Matrix3f R = T_world_camera.linear();
     const Eigen::Vector3f origin = T_world_camera.translation();
-    const int n = std::max(colourSamples, 1);
+    const int n = std::max(colorSamples, 1);
 
     // A row per task, on the library's CPU threads (not a second set of threads beside them).
     forEachCpuTask(camera.height, [&](int v) {
@@ -581,22 +581,21 @@ void SyntheticScene::render(const PinholeCamera& camera, const Eigen::Isometry3f
                 frame.cosIncidence[idx] = std::abs(hit.normal.dot(dir)) / dir.norm();
                 frame.label[idx] = primitives_[hit.primitive].classId;
             }
-            Eigen::Vector3f colour = Eigen::Vector3f::Zero();
+            Eigen::Vector3f color = Eigen::Vector3f::Zero();
             if (n == 1) {
                 // The one colour sample is the depth ray itself (du = dv = 0): its hit is the one above.
-                if (found) colour = shade(origin + hit.t * dir, hit);
+                if (found) color = shade(origin + hit.t * dir, hit);
             } else {
                 for (int sy = 0; sy < n; ++sy) {
                     for (int sx = 0; sx < n; ++sx) {
                         const float du = (sx + 0.5f) / n - 0.5f, dv = (sy + 0.5f) / n - 0.5f;
                         const Eigen::Vector3f sampleDir = R * camera.ray(u + du, v + dv);
                         Hit sample;
-                        if (intersect(origin, sampleDir, sample))
-                            colour += shade(origin + sample.t * sampleDir, sample);
+                        if (intersect(origin, sampleDir, sample)) color += shade(origin + sample.t * sampleDir, sample);
                     }
                 }
             }
-            frame.rgb[idx] = gammaEncode(colour / static_cast<float>(n * n));
+            frame.rgb[idx] = gammaEncode(color / static_cast<float>(n * n));
         }
     });
 }

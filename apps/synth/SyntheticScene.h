@@ -131,12 +131,12 @@ public:
     // in linear RGB.
     Eigen::Vector3f shade(const Eigen::Vector3f& point, const Hit& hit) const;
     // Renders exact depth, incidence, class labels and colour; colour uses
-    // colourSamples x colourSamples samples per pixel against aliasing.
+    // colorSamples x colorSamples samples per pixel against aliasing.
     RenderedFrame render(const PinholeCamera& camera, const Eigen::Isometry3f& T_world_camera,
-                         int colourSamples = 2) const;
+                         int colorSamples = 2) const;
     // The same into `frame`, whose buffers are reused: rendering a sequence this way allocates no
     // image memory per frame (megabyte temporaries freed every frame fragment the heap).
-    void render(const PinholeCamera& camera, const Eigen::Isometry3f& T_world_camera, int colourSamples,
+    void render(const PinholeCamera& camera, const Eigen::Isometry3f& T_world_camera, int colorSamples,
                 RenderedFrame& frame) const;
 
     const std::vector<Primitive>& primitives() const { return primitives_; }

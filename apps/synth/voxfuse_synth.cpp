@@ -6,6 +6,7 @@
 #include "KinectDepthModel.h"
 #include "SyntheticScene.h"
 #include "CommandLine.h"
+#include "OptionChecks.h"  // addFormerSpelling
 #include "voxfuse/io/AtomicFile.h"
 
 #include <CLI/CLI.hpp>
@@ -44,13 +45,13 @@ struct Options {
     std::uint32_t seed = 1;
     bool noNoise = false;
     bool noLabels = false;
-    int colourSamples = 2;
+    int colorSamples = 2;
     bool overwrite = false;
 };
 
 constexpr double kFirstTimestamp = 1000.0;
 constexpr float kTumDepthScale = 5000.0f;  // TUM PNG depth: metres * 5000
-constexpr float kColourNoiseSigma = 1.5f;  // sensor noise, 8-bit levels
+constexpr float kColorNoiseSigma = 1.5f;   // sensor noise, 8-bit levels
 
 // Pose line "timestamp tx ty tz qx qy qz qw" plus the pose exactly as a reader
 // of that line gets it, so the images match the written ground truth.
@@ -101,7 +102,7 @@ void writeCalib(const fs::path& path, const PinholeCamera& cam, const std::strin
 
 // 8-bit interleaved colour with a little Gaussian sensor noise; OpenCV wants BGR.
 std::vector<std::uint8_t> toBytes(const std::vector<Eigen::Vector3f>& rgb, std::mt19937* rng, bool bgr) {
-    std::normal_distribution<float> noise(0.0f, kColourNoiseSigma);
+    std::normal_distribution<float> noise(0.0f, kColorNoiseSigma);
     std::vector<std::uint8_t> bytes(rgb.size() * 3);
     for (std::size_t i = 0; i < rgb.size(); ++i)
         for (int c = 0; c < 3; ++c) {
@@ -196,8 +197,8 @@ void render(const Options& opt, const fs::path& out) {
     const CorridorWalk corridor_walk(opt.corridorLength, opt.frames);
     KinectDepthModel::Params depthParams;
     depthParams.fx = camera.fx;
-    std::seed_seq depthSeed{opt.seed, 1u}, colourSeed{opt.seed, 2u};
-    std::mt19937 depthRng(depthSeed), colourRng(colourSeed);
+    std::seed_seq depthSeed{opt.seed, 1u}, colorSeed{opt.seed, 2u};
+    std::mt19937 depthRng(depthSeed), colorRng(colorSeed);
     KinectDepthModel depthModel(depthParams, depthRng());
 
     std::ostringstream disparityLine;
@@ -235,14 +236,14 @@ void render(const Options& opt, const fs::path& out) {
         const PoseRecord pose = makePoseRecord(timestamp, corridor ? corridor_walk.pose(i) : room_path.pose(i));
         groundTruth->stream() << pose.line << "\n";
 
-        const RenderedFrame frame = scene.render(camera, pose.pose, opt.colourSamples);
+        const RenderedFrame frame = scene.render(camera, pose.pose, opt.colorSamples);
         const std::vector<float> depth =
             opt.noNoise ? frame.depth : depthModel.apply(frame.depth, frame.cosIncidence, frame.width, frame.height);
-        std::vector<std::uint8_t> colour = toBytes(frame.rgb, opt.noNoise ? nullptr : &colourRng, /*bgr=*/tum);
+        std::vector<std::uint8_t> color = toBytes(frame.rgb, opt.noNoise ? nullptr : &colorRng, /*bgr=*/tum);
 
         if (tum) {
             const std::string name = timestampName(timestamp);
-            const cv::Mat bgr(opt.height, opt.width, CV_8UC3, colour.data());
+            const cv::Mat bgr(opt.height, opt.width, CV_8UC3, color.data());
             cv::Mat depthImage(opt.height, opt.width, CV_16UC1);
             for (int v = 0; v < opt.height; ++v)
                 for (int u = 0; u < opt.width; ++u) {
@@ -272,7 +273,7 @@ void render(const Options& opt, const fs::path& out) {
             std::vector<std::uint16_t> raw(depth.size());
             std::transform(depth.begin(), depth.end(), raw.begin(),
                            [&](float z) { return depthModel.depthToKinectRaw(z); });
-            writePpm(out / (std::string(base) + ".ppm"), opt.width, opt.height, colour);
+            writePpm(out / (std::string(base) + ".ppm"), opt.width, opt.height, color);
             writePgm16(out / (std::string(base) + ".pgm"), opt.width, opt.height, raw);
         }
         std::cout << "\rframe " << (i + 1) << "/" << opt.frames << std::flush;
@@ -336,7 +337,9 @@ int main(int argc, char** argv) {
         ->check(CLI::IsMember({"jpg", "png"}));
     app.add_option("--jpeg-quality", opt.jpegQuality, "JPEG quality")->check(CLI::Range(1, 100));
     app.add_option("--seed", opt.seed, "Seed of the depth and colour noise");
-    app.add_option("--colour-samples", opt.colourSamples, "Colour supersampling per axis")->check(CLI::Range(1, 4));
+    CLI::Option* samples =
+        app.add_option("--color-samples", opt.colorSamples, "Colour supersampling per axis")->check(CLI::Range(1, 4));
+    voxfuse::app::addFormerSpelling(app, "--colour-samples", samples, opt.colorSamples)->check(CLI::Range(1, 4));
     app.add_flag("--no-noise", opt.noNoise, "Exact depth (only the file's own quantisation) and noise-free colour");
     app.add_flag("--no-labels", opt.noLabels,
                  "No semantic label images (TUM layout: labels/*.png, labels.txt, classes.txt)");

@@ -15,7 +15,7 @@ struct PanelRect {
 struct PanelLayout {
     PanelRect model;
     PanelRect live_depth;
-    PanelRect live_colour;
+    PanelRect live_color;
     PanelRect status_bar;
 };
 
@@ -44,7 +44,7 @@ inline PanelLayout layoutPanels(int width, int height) {
     PanelLayout layout;
     layout.model = {0, 0, model_width, panels_height};
     layout.live_depth = {model_width, 0, small_width, panels_height / 2};
-    layout.live_colour = {model_width, panels_height / 2, small_width, panels_height - panels_height / 2};
+    layout.live_color = {model_width, panels_height / 2, small_width, panels_height - panels_height / 2};
     layout.status_bar = {0, panels_height, width, bar_height};
     return layout;
 }

@@ -46,7 +46,7 @@ const char* modeName(RenderMode mode) {
 ViewerApp* appOf(GLFWwindow* window) { return static_cast<ViewerApp*>(glfwGetWindowUserPointer(window)); }
 
 // Depth in metres, colour-mapped over the frame's own range so near and far scenes both use the whole map.
-void colourMapDepth(const Image<float>& depth_m, Image<Vec4u8>& out) {
+void colorMapDepth(const Image<float>& depth_m, Image<Vec4u8>& out) {
     if (out.size() != depth_m.size()) out.resize(depth_m.size());
     float max_m = 0.f;
     for (std::size_t i = 0; i < depth_m.pixelCount(); ++i) max_m = std::max(max_m, depth_m.host()[i]);
@@ -202,9 +202,9 @@ void ViewerApp::processNextFrame() {
 
 void ViewerApp::updateLiveImages() {
     const View& view = engine_->view();
-    colourMapDepth(view.depth, depth_image_);
+    colorMapDepth(view.depth, depth_image_);
     depth_texture_.upload(depth_image_);
-    colour_texture_.upload(view.rgb);
+    color_texture_.upload(view.rgb);
 }
 
 void ViewerApp::renderModel() {
@@ -233,7 +233,7 @@ void ViewerApp::drawPanels() {
     const PanelLayout layout = layoutPanels(width, height);
     model_texture_.draw(layout.model);
     depth_texture_.draw(layout.live_depth);
-    colour_texture_.draw(layout.live_colour);
+    color_texture_.draw(layout.live_color);
     drawStatusBar(layout.status_bar, statusLine(), kKeysLine);
 }
 

@@ -74,7 +74,7 @@ private:
     std::unique_ptr<app::SequenceRunner> runner_;
     GlfwWindow window_;
 
-    TextureImage model_texture_, depth_texture_, colour_texture_;
+    TextureImage model_texture_, depth_texture_, color_texture_;
     Image<Vec4u8> model_image_, depth_image_;
     RenderMode mode_ = RenderMode::Shaded;
     OrbitCamera free_view_;

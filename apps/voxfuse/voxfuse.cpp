@@ -176,6 +176,7 @@ void checkCombinations(const CliOptions& o) {
                                    "--relocalise",
                                    "--relocalise-candidates",
                                    "--relocalise-max-speed",
+                                   "--relocalise-min-color-correlation",
                                    "--relocalise-min-colour-correlation"})
             if (p.wasGiven(option))
                 throw ConfigError(

@@ -37,7 +37,7 @@ MainEngineSettings PipelineSettings::toEngineSettings() const {
     s.relocalisation.enabled = relocalise;
     s.relocalisation.candidates = relocalise_candidates;
     s.relocalisation.max_speed_m_per_s = relocalise_max_speed;
-    s.relocalisation.min_colour_correlation = relocalise_min_colour_correlation;
+    s.relocalisation.min_color_correlation = relocalise_min_color_correlation;
     return s;
 }
 

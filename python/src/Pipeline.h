@@ -42,7 +42,7 @@ struct PipelineSettings {
     bool relocalise = RelocalisationSettings{}.enabled;
     int relocalise_candidates = RelocalisationSettings{}.candidates;
     float relocalise_max_speed = RelocalisationSettings{}.max_speed_m_per_s;
-    float relocalise_min_colour_correlation = RelocalisationSettings{}.min_colour_correlation;
+    float relocalise_min_color_correlation = RelocalisationSettings{}.min_color_correlation;
 
     // The engine's settings; ConfigError naming the setting when one is not valid.
     MainEngineSettings toEngineSettings() const;

@@ -32,7 +32,13 @@ PipelineSettings withOverrides(PipelineSettings base, const py::kwargs& override
     if (!overrides || overrides.empty()) return base;
     py::object obj = py::cast(base);
     for (const auto& item : overrides) {
-        const std::string name = py::str(item.first);
+        std::string name = py::str(item.first);
+        if (name == "relocalise_min_colour_correlation") {  // the former spelling, kept for a release
+            if (PyErr_WarnEx(PyExc_DeprecationWarning,
+                             "relocalise_min_colour_correlation is now relocalise_min_color_correlation", 1) < 0)
+                throw py::error_already_set();
+            name = "relocalise_min_color_correlation";
+        }
         if (name.empty() || name[0] == '_' || !py::hasattr(obj, name.c_str()) || name == "to_dict")
             throw py::type_error("unknown setting '" + name + "' (see voxfuse.Settings)");
         try {
@@ -295,7 +301,7 @@ void bindPipeline(py::module_& m) {
         .def_readwrite("relocalise_max_speed", &PipelineSettings::relocalise_max_speed,
                        "relocalisation: m/s the camera may have moved since the last good frame; poses farther away "
                        "are not taken (0: no limit)")
-        .def_readwrite("relocalise_min_colour_correlation", &PipelineSettings::relocalise_min_colour_correlation,
+        .def_readwrite("relocalise_min_color_correlation", &PipelineSettings::relocalise_min_color_correlation,
                        "relocalisation: how well a found pose's view must correlate with the map's colours (colour "
                        "voxels; -1: no colour test)")
         .def(
@@ -330,7 +336,7 @@ void bindPipeline(py::module_& m) {
                                          "relocalise",
                                          "relocalise_candidates",
                                          "relocalise_max_speed",
-                                         "relocalise_min_colour_correlation"})
+                                         "relocalise_min_color_correlation"})
                     d[name] = obj.attr(name);
                 return d;
             },

@@ -171,9 +171,12 @@ def test_relocalisation_settings_are_checked():
     with pytest.raises(voxfuse.ConfigError, match="speed limit"):
         voxfuse.Pipeline(calib, relocalise_max_speed=-1.0)
     with pytest.raises(voxfuse.ConfigError, match="colour correlation"):
-        voxfuse.Pipeline(calib, relocalise_min_colour_correlation=1.5)
-    off = voxfuse.Pipeline(calib, relocalise_min_colour_correlation=-1.0)
-    assert off.settings.to_dict()["relocalise_min_colour_correlation"] == -1.0
+        voxfuse.Pipeline(calib, relocalise_min_color_correlation=1.5)
+    off = voxfuse.Pipeline(calib, relocalise_min_color_correlation=-1.0)
+    assert off.settings.to_dict()["relocalise_min_color_correlation"] == -1.0
+    with pytest.warns(DeprecationWarning, match="relocalise_min_color_correlation"):
+        former = voxfuse.Pipeline(calib, relocalise_min_colour_correlation=-1.0)  # the former spelling
+    assert former.settings.relocalise_min_color_correlation == -1.0
 
 
 def test_reset_forgets_the_ground_truth_origin(room_frames):

@@ -51,7 +51,7 @@ def test_a_recording_reads_back_bit_for_bit_with_its_calibration(recorded):
     path, tum, frames = recorded
     with voxfuse.open_source(str(path)) as source:
         got = list(source)
-        assert source.dropped_frames == 0 and source.dropped_colour_frames == 0
+        assert source.dropped_frames == 0 and source.dropped_color_frames == 0
         calib = source.calib
     assert len(got) == FRAMES
     for want, have in zip(frames, got):
@@ -85,7 +85,7 @@ def test_it_reconstructs_as_the_same_frames_from_the_tum_folder(recorded):
     assert ate["realsense"][1] < 0.005
 
 
-def test_the_colour_camera_and_the_extrinsics_come_from_the_streams(tmp_path, suffix):
+def test_the_color_camera_and_the_extrinsics_come_from_the_streams(tmp_path, suffix):
     # Colour at half the resolution, 25 mm to the side and turned 2 degrees: what a D435 looks like.
     tum, frames = room(3)
     calib = tum.calib
@@ -104,9 +104,9 @@ def test_the_colour_camera_and_the_extrinsics_come_from_the_streams(tmp_path, su
         assert (raw.calib.rgb.width, raw.calib.rgb.fx) == (320, pytest.approx(262.5))
         frame = next(raw)
         assert frame.depth.shape == (480, 640) and frame.rgb.shape == (240, 320, 3)
-    with voxfuse.open_source(str(path), align="color") as to_colour:
-        assert (to_colour.calib.depth.width, to_colour.calib.depth.fx) == (320, pytest.approx(262.5))
-        frame = next(to_colour)
+    with voxfuse.open_source(str(path), align="color") as to_color:
+        assert (to_color.calib.depth.width, to_color.calib.depth.fx) == (320, pytest.approx(262.5))
+        frame = next(to_color)
         assert frame.depth.shape == (240, 320) and frame.rgb.shape == (240, 320, 3)
         assert (frame.depth > 0).mean() > 0.5  # depth resampled into the colour camera, not lost
         # librealsense's own resampling puts each depth sample where VoxFuse's T_depth_rgb says it lies:
@@ -138,7 +138,7 @@ def test_frames_missing_from_the_recording_are_counted_as_dropped(tmp_path, suff
     realsense.write_recording(path, kept, tum.calib)
     with voxfuse.open_source(str(path)) as source:
         got = list(source)
-        assert len(got) == 5 and source.dropped_frames == 3 and source.dropped_colour_frames == 3
+        assert len(got) == 5 and source.dropped_frames == 3 and source.dropped_color_frames == 3
     assert [f.timestamp for f in got] == pytest.approx([f.timestamp for f in kept], abs=1e-6)
 
 

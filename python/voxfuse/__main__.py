@@ -131,7 +131,7 @@ def _reconstruct(args, out, source):
     write_tum_trajectory(str(out / "trajectory.txt"), timestamps, poses)
     summary = pipeline.summary()
     summary["source"] = source.description
-    for name in ("dropped_frames", "dropped_colour_frames", "unreadable_frames"):
+    for name in ("dropped_frames", "dropped_color_frames", "unreadable_frames"):
         if hasattr(source, name):
             summary[name] = getattr(source, name)
     gt_timestamps, gt_poses = source.ground_truth

@@ -123,7 +123,7 @@ class Settings:
     relocalise: bool
     relocalise_candidates: int
     relocalise_max_speed: float
-    relocalise_min_colour_correlation: float
+    relocalise_min_color_correlation: float
     def __init__(self, **settings: object) -> None: ...
     def to_dict(self) -> dict[str, object]: ...
 

@@ -19,7 +19,7 @@ extrinsics and the depth sensor's depth units. ``align`` says how depth and colo
 
 Frames are paired by device timestamp (each depth frame with the colour frame nearest in time).
 Frames missing from a stream's frame numbers are counted in ``dropped_frames`` (depth) and
-``dropped_colour_frames``: in a recording they were dropped when it was made, from a live camera
+``dropped_color_frames``: in a recording they were dropped when it was made, from a live camera
 while the reconstruction lagged.
 """
 
@@ -68,7 +68,7 @@ def _intrinsics(profile):
     return profile.as_video_stream_profile().get_intrinsics()
 
 
-def _calibration(depth_k, colour_k, depth_scale, T_depth_rgb, align):
+def _calibration(depth_k, color_k, depth_scale, T_depth_rgb, align):
     """A voxfuse.Calibration from rs.intrinsics (librealsense's pixel centres are at integers, as VoxFuse's)."""
 
     def pinhole(k):
@@ -77,11 +77,11 @@ def _calibration(depth_k, colour_k, depth_scale, T_depth_rgb, align):
         )
 
     if align == "color":
-        return pinhole(colour_k)
+        return pinhole(color_k)
     calib = pinhole(depth_k)
-    if align == "none" and colour_k is not None:
+    if align == "none" and color_k is not None:
         calib.rgb = _voxfuse.Intrinsics(
-            colour_k.width, colour_k.height, colour_k.fx, colour_k.fy, colour_k.ppx, colour_k.ppy
+            color_k.width, color_k.height, color_k.fx, color_k.fy, color_k.ppx, color_k.ppy
         )
         calib.T_depth_rgb = T_depth_rgb
     return calib
@@ -133,7 +133,7 @@ class RealSenseSource:
         self._next_index = 0
         self._last_number = {}
         self.dropped_frames = 0
-        self.dropped_colour_frames = 0
+        self.dropped_color_frames = 0
         self.unreadable_frames = 0
         self._aligner = None
         if align != "none":
@@ -168,10 +168,10 @@ class RealSenseSource:
                 f"{fps} fps: {e}"
             ) from e
         depth_profile = profile.get_stream(rs.stream.depth)
-        colour_profile = profile.get_stream(rs.stream.color)
+        color_profile = profile.get_stream(rs.stream.color)
         scale = profile.get_device().first_depth_sensor().get_depth_scale()
         self._description = f"RealSense camera {serial or serials[0]}"
-        self._set_calibration(depth_profile, colour_profile, scale)
+        self._set_calibration(depth_profile, color_profile, scale)
 
     def _open_recording(self, path):
         rs = self._rs
@@ -182,7 +182,7 @@ class RealSenseSource:
         self._device = device
         self._player = device.as_playback()
         self._player.set_real_time(False)  # every frame, paced by the reader, none dropped by the player
-        depth_profile = colour_profile = None
+        depth_profile = color_profile = None
         self._sensors = []
         depth_sensor = None
         for sensor in device.query_sensors():
@@ -191,15 +191,15 @@ class RealSenseSource:
                 if p.stream_type() == rs.stream.depth and p.format() == rs.format.z16 and depth_profile is None:
                     depth_profile, depth_sensor = p, sensor
                     wanted.append(p)
-                elif p.stream_type() == rs.stream.color and colour_profile is None:
-                    colour_profile = p
+                elif p.stream_type() == rs.stream.color and color_profile is None:
+                    color_profile = p
                     wanted.append(p)
             if wanted:
                 self._sensors.append((sensor, wanted))
         if depth_profile is None:
             raise _voxfuse.IoError(f"{path}: the recording has no depth stream (Z16)")
-        if colour_profile is not None:
-            fmt = str(colour_profile.format()).split(".")[-1]
+        if color_profile is not None:
+            fmt = str(color_profile.format()).split(".")[-1]
             if fmt not in _COLOUR_CHANNELS:
                 raise _voxfuse.IoError(
                     f"{path}: colour is recorded as {fmt}; VoxFuse reads {', '.join(_COLOUR_CHANNELS)}"
@@ -212,7 +212,7 @@ class RealSenseSource:
             scale = 0.001  # librealsense's default unit when a recording does not carry one
             warnings.warn(f"{path}: no depth units recorded; taking 1 mm", RuntimeWarning, stacklevel=3)
         self._description = f"RealSense recording {path}"
-        self._set_calibration(depth_profile, colour_profile, scale)
+        self._set_calibration(depth_profile, color_profile, scale)
         self._frames = queue.Queue(maxsize=4)
         self._stop = threading.Event()
         for sensor, profiles in self._sensors:
@@ -224,26 +224,26 @@ class RealSenseSource:
         self._player.resume()
         self._pending_depth = []  # depth frames waiting for the colour frame after them
         self._ready = []  # pairs decided, in order
-        self._previous_colour = None
+        self._previous_color = None
         self._ended = False
 
-    def _set_calibration(self, depth_profile, colour_profile, depth_scale):
+    def _set_calibration(self, depth_profile, color_profile, depth_scale):
         depth_k = _intrinsics(depth_profile)
-        colour_k = _intrinsics(colour_profile) if colour_profile is not None else None
+        color_k = _intrinsics(color_profile) if color_profile is not None else None
         T_depth_rgb = np.eye(4)
-        if colour_profile is not None:
-            T_depth_rgb = _transform(colour_profile.get_extrinsics_to(depth_profile))
-        self.calib = _calibration(depth_k, colour_k, depth_scale, T_depth_rgb, self._align_mode)
-        used = {"none": [("depth", depth_k), ("colour", colour_k)], "color": [("colour", colour_k)]}.get(
+        if color_profile is not None:
+            T_depth_rgb = _transform(color_profile.get_extrinsics_to(depth_profile))
+        self.calib = _calibration(depth_k, color_k, depth_scale, T_depth_rgb, self._align_mode)
+        used = {"none": [("depth", depth_k), ("colour", color_k)], "color": [("colour", color_k)]}.get(
             self._align_mode, [("depth", depth_k)]
         )
         for name, k in used:
             if k is not None:
                 _warn_distortion(name, k, self._align_mode)
-        self._colour_channels = None
-        if colour_profile is not None:
-            self._colour_channels = _COLOUR_CHANNELS.get(str(colour_profile.format()).split(".")[-1], (3, False))
-        self._has_colour = colour_profile is not None
+        self._color_channels = None
+        if color_profile is not None:
+            self._color_channels = _COLOUR_CHANNELS.get(str(color_profile.format()).split(".")[-1], (3, False))
+        self._has_color = color_profile is not None
 
     # --- reading ---------------------------------------------------------------------------------
 
@@ -266,7 +266,7 @@ class RealSenseSource:
             if is_depth:
                 self.dropped_frames += number - last - 1
             else:
-                self.dropped_colour_frames += number - last - 1
+                self.dropped_color_frames += number - last - 1
         self._last_number[stream] = number
 
     def _next_recorded(self):
@@ -290,7 +290,7 @@ class RealSenseSource:
             if self._ended:
                 if not self._pending_depth:
                     return None
-                self._ready = [(d, self._previous_colour) for d in self._pending_depth]
+                self._ready = [(d, self._previous_color) for d in self._pending_depth]
                 self._pending_depth = []
                 break
             frame = self._next_recorded()
@@ -300,21 +300,21 @@ class RealSenseSource:
             is_depth = frame.get_profile().stream_type() == rs.stream.depth
             self._count_drops(frame, is_depth)
             if is_depth:
-                if self._has_colour:
+                if self._has_color:
                     self._pending_depth.append(frame)
                 else:
                     self._ready.append((frame, None))
                 continue
             # A colour frame decides the depth frames up to its time: each takes the nearer of it and the last.
-            colour, previous = frame, self._previous_colour
-            while self._pending_depth and self._pending_depth[0].get_timestamp() <= colour.get_timestamp():
+            color, previous = frame, self._previous_color
+            while self._pending_depth and self._pending_depth[0].get_timestamp() <= color.get_timestamp():
                 depth = self._pending_depth.pop(0)
                 t = depth.get_timestamp()
-                if previous is not None and abs(previous.get_timestamp() - t) <= abs(colour.get_timestamp() - t):
+                if previous is not None and abs(previous.get_timestamp() - t) <= abs(color.get_timestamp() - t):
                     self._ready.append((depth, previous))
                 else:
-                    self._ready.append((depth, colour))
-            self._previous_colour = colour
+                    self._ready.append((depth, color))
+            self._previous_color = color
         return self._ready.pop(0)
 
     def _next_live_pair(self):
@@ -323,38 +323,38 @@ class RealSenseSource:
             frames = self._pipeline.wait_for_frames(int(self._timeout_s * 1000))
         except RuntimeError as e:
             raise _voxfuse.IoError(f"{self._description}: no frame within {self._timeout_s:g} s: {e}") from e
-        depth, colour = frames.get_depth_frame(), frames.get_color_frame()
+        depth, color = frames.get_depth_frame(), frames.get_color_frame()
         if not depth:
             raise _voxfuse.IoError(f"{self._description}: a frame set without depth")
         self._count_drops(depth, True)
-        if colour:
-            self._count_drops(colour, False)
-        return (frames if self._aligner is not None else depth), (colour or None)
+        if color:
+            self._count_drops(color, False)
+        return (frames if self._aligner is not None else depth), (color or None)
 
-    def _aligned(self, depth, colour):
+    def _aligned(self, depth, color):
         """rs.align on a frame set made of the pair (recordings deliver the streams separately)."""
         rs = self._rs
         if not isinstance(depth, rs.composite_frame):
             made = rs.frame_queue(1, keep_frames=True)
-            block = rs.processing_block(lambda f, src: src.frame_ready(src.allocate_composite_frame([depth, colour])))
+            block = rs.processing_block(lambda f, src: src.frame_ready(src.allocate_composite_frame([depth, color])))
             block.start(made)
             block.invoke(depth)
             depth = made.wait_for_frame(1000)
         frames = self._aligner.process(depth.as_frameset())
         return frames.get_depth_frame(), frames.get_color_frame()
 
-    def _to_frame(self, depth, colour):
+    def _to_frame(self, depth, color):
         if self._aligner is not None:
-            if colour is None:
+            if color is None:
                 raise _voxfuse.IoError(f"{self._description}: a depth frame without colour cannot be aligned")
-            depth, colour = self._aligned(depth, colour)
+            depth, color = self._aligned(depth, color)
         elif isinstance(depth, self._rs.composite_frame):
             depth = depth.get_depth_frame()
         depth_array = np.asanyarray(depth.get_data())
         rgb = None
-        if colour is not None:
-            _, bgr = self._colour_channels
-            rgb = np.asanyarray(colour.get_data())
+        if color is not None:
+            _, bgr = self._color_channels
+            rgb = np.asanyarray(color.get_data())
             if bgr:
                 rgb = rgb[..., [2, 1, 0]]
         index = self._next_index
@@ -437,9 +437,9 @@ def write_recording(path, frames, calib, *, fps=30):
     are the frames' own. librealsense 2.57 and later write ROS 2 bags (.db3), earlier ones .bag.
     """
     rs = _import_rs(path)
-    depth_k, colour_k = calib.depth, calib.rgb if calib.rgb.width > 0 else calib.depth
+    depth_k, color_k = calib.depth, calib.rgb if calib.rgb.width > 0 else calib.depth
     device = rs.software_device()
-    depth_sensor, colour_sensor = device.add_sensor("Depth"), device.add_sensor("Color")
+    depth_sensor, color_sensor = device.add_sensor("Depth"), device.add_sensor("Color")
 
     def video_stream(kind, uid, k, bpp, fmt):
         intrinsics = rs.intrinsics()
@@ -452,29 +452,29 @@ def write_recording(path, frames, calib, *, fps=30):
         return s
 
     depth_profile = depth_sensor.add_video_stream(video_stream(rs.stream.depth, 0, depth_k, 2, rs.format.z16))
-    colour_profile = colour_sensor.add_video_stream(video_stream(rs.stream.color, 1, colour_k, 3, rs.format.rgb8))
+    color_profile = color_sensor.add_video_stream(video_stream(rs.stream.color, 1, color_k, 3, rs.format.rgb8))
     depth_sensor.add_read_only_option(rs.option.depth_units, float(calib.depth_scale))
     T_rgb_depth = np.linalg.inv(np.asarray(calib.T_depth_rgb, dtype=np.float64))
     extrinsics = rs.extrinsics()
     extrinsics.rotation = [float(v) for v in T_rgb_depth[:3, :3].T.ravel()]  # column-major
     extrinsics.translation = [float(v) for v in T_rgb_depth[:3, 3]]
-    depth_profile.register_extrinsics_to(colour_profile, extrinsics)
+    depth_profile.register_extrinsics_to(color_profile, extrinsics)
     try:
         recorder = rs.recorder(str(path), device)
     except RuntimeError as e:
         raise _voxfuse.ConfigError(f"{path}: librealsense {rs.__version__} cannot record there: {e}") from e
     depth_sensor.open(depth_profile)
-    colour_sensor.open(colour_profile)
+    color_sensor.open(color_profile)
     sinks = rs.frame_queue(2), rs.frame_queue(2)
     depth_sensor.start(sinks[0])
-    colour_sensor.start(sinks[1])
+    color_sensor.start(sinks[1])
     count = 0
     try:
         for frame in frames:
             stamp_ms = frame.timestamp * 1000.0
             images = [(depth_sensor, depth_profile, np.ascontiguousarray(frame.depth), 2)]
             if frame.rgb is not None:
-                images.append((colour_sensor, colour_profile, np.ascontiguousarray(frame.rgb), 3))
+                images.append((color_sensor, color_profile, np.ascontiguousarray(frame.rgb), 3))
             for sensor, profile, pixels, bpp in images:
                 f = rs.software_video_frame()
                 f.pixels, f.stride, f.bpp = pixels, pixels.shape[1] * bpp, bpp
@@ -484,8 +484,8 @@ def write_recording(path, frames, calib, *, fps=30):
             count += 1
     finally:
         depth_sensor.stop()
-        colour_sensor.stop()
+        color_sensor.stop()
         depth_sensor.close()
-        colour_sensor.close()
+        color_sensor.close()
         del recorder  # the file is complete once the recorder is gone
     return count

@@ -126,14 +126,14 @@ def log_mesh(pipeline, *, recording=None, path="world/mesh"):
     mesh = pipeline.extract_mesh()
     if len(mesh.faces) == 0:
         return
-    colours = mesh.colors if mesh.colors is not None and len(mesh.colors) else None
+    colors = mesh.colors if mesh.colors is not None and len(mesh.colors) else None
     rr.log(
         path,
         rr.Mesh3D(
             vertex_positions=mesh.vertices,
             triangle_indices=mesh.faces,
             vertex_normals=mesh.normals if mesh.normals is not None and len(mesh.normals) else None,
-            vertex_colors=colours,
+            vertex_colors=colors,
         ),
         recording=recording,
     )

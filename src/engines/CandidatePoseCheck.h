@@ -61,7 +61,7 @@ public:
         if (!acceptRelocalisation(settings, check)) return false;
         if (!withinReach(settings, T_world_last_good, check.refined.T_world_camera, elapsed_s)) return false;
         // Geometry and reach first: only a candidate they take is rendered in colour and compared.
-        check.colour = compareCandidateColour(c);
+        check.color = compareCandidateColor(c);
         if (!acceptRelocalisation(settings, check)) return false;
         accepted = check.refined;
         return true;
@@ -70,15 +70,15 @@ public:
 private:
     // The frame's colours against the map's, seen from the candidate (model_ and depth_); not compared
     // where either has none.
-    ColourAgreement compareCandidateColour(const Context& c) {
+    ColorAgreement compareCandidateColor(const Context& c) {
         if constexpr (!TVoxel::hasColor) {
-            return ColourAgreement{};
+            return ColorAgreement{};
         } else {
-            if (c.view.rgb.empty()) return ColourAgreement{};
+            if (c.view.rgb.empty()) return ColorAgreement{};
             c.raycast.renderIntensity(c.scene, model_, intensity_);
             if (c.gpu) intensity_.memory().updateHost();
-            return compareColour(c.view, depth_, intensity_, c.settings.relocalisation.agreement_tolerance_m,
-                                 c.settings.scene.voxel_size_m);
+            return compareColor(c.view, depth_, intensity_, c.settings.relocalisation.agreement_tolerance_m,
+                                c.settings.scene.voxel_size_m);
         }
     }
 

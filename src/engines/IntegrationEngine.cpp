@@ -18,9 +18,9 @@ IntegrationFrame makeIntegrationFrame(const SceneParams& params, const View& vie
     f.T_rgb_world = rigidInverse(view.calib.T_depth_rgb) * f.T_depth_world;
     f.rgb = view.rgb.empty() ? nullptr : rgb;
     // Colour and label images whose size disagrees with the calibration are scaled into it.
-    f.rgb_intrinsics = f.rgb ? view.colourCamera() : view.calib.rgb;
+    f.rgb_intrinsics = f.rgb ? view.colorCamera() : view.calib.rgb;
     f.labels = view.labels.empty() ? nullptr : labels;
-    f.T_label_world = view.calib.labelsFromColour() ? f.T_rgb_world : f.T_depth_world;
+    f.T_label_world = view.calib.labelsFromColor() ? f.T_rgb_world : f.T_depth_world;
     f.label_intrinsics = view.calib.labelCamera().resized(view.labels.width(), view.labels.height());
     f.label_update = params.label_update;
     f.label_seed = integration_number;

@@ -11,7 +11,7 @@ bool PhotometricFrames::prepare(const View& view, int level_count) {
     has_current_ = false;
     depth_width_ = view.calib.depth.width;
     if (view.rgb.empty() || !view.calib.rgb.valid()) return false;
-    const Intrinsics rgb = view.colourCamera();  // at the colour image's resolution
+    const Intrinsics rgb = view.colorCamera();  // at the colour image's resolution
     levels_.resize(std::size_t(level_count));
     T_rgb_depth_ = rigidInverse(view.calib.T_depth_rgb);
     for (int i = 0; i < level_count; ++i) {

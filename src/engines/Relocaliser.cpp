@@ -80,19 +80,19 @@ private:
 
 }  // namespace
 
-ColourAgreement compareColour(const View& view, const Image<float>& model_depth_m, const Image<float>& model_intensity,
-                              float tolerance_m, float voxel_size_m, int min_textured_cells) {
-    ColourAgreement a;
+ColorAgreement compareColor(const View& view, const Image<float>& model_depth_m, const Image<float>& model_intensity,
+                            float tolerance_m, float voxel_size_m, int min_textured_cells) {
+    ColorAgreement a;
     const Image<float>& frame_depth_m = view.depth;
     if (view.rgb.empty() || model_intensity.empty() || !view.calib.rgb.valid()) return a;
     if (frame_depth_m.size() != model_depth_m.size() || model_intensity.size() != model_depth_m.size())
         throw ConfigError(
-            "compareColour: the frame's depth, the model's depth and the model's intensities differ in size");
+            "compareColor: the frame's depth, the model's depth and the model's intensities differ in size");
     const Intrinsics& depth_camera = view.calib.depth;
-    const Intrinsics rgb_camera = view.colourCamera();  // at the colour image's resolution
+    const Intrinsics rgb_camera = view.colorCamera();  // at the colour image's resolution
     const Mat4f T_rgb_depth = rigidInverse(view.calib.T_depth_rgb);
     const int width = frame_depth_m.width(), height = frame_depth_m.height();
-    const int cell = std::max(kColourCellMinPixels, width / kColourCellsAcross);
+    const int cell = std::max(kColorCellMinPixels, width / kColorCellsAcross);
     const int cells_x = (width + cell - 1) / cell, cells_y = (height + cell - 1) / cell;
     std::vector<CorrelationSums> cells(std::size_t(cells_x) * std::size_t(cells_y));
     const float* frame = frame_depth_m.host();
@@ -101,7 +101,7 @@ ColourAgreement compareColour(const View& view, const Image<float>& model_depth_
     const BoxIntensity frame_intensity(view.rgb);
     // Half the footprint, in colour pixels, of the model's colour at one metre.
     const float half_footprint_px_m =
-        0.5f * kColourFootprintVoxels * voxel_size_m * 0.5f * (rgb_camera.fx + rgb_camera.fy);
+        0.5f * kColorFootprintVoxels * voxel_size_m * 0.5f * (rgb_camera.fx + rgb_camera.fy);
     for (int v = 0; v < height; ++v)
         for (int u = 0; u < width; ++u) {
             const int i = u + v * width;
@@ -144,7 +144,7 @@ bool acceptRelocalisation(const RelocalisationSettings& s, const RelocalisationC
            c.refined.residual_m <= s.max_residual_m && c.depth.overlap >= s.min_overlap &&
            c.depth.agreement >= s.min_agreement && c.step_m <= s.max_refinement_step_m &&
            c.step_deg <= s.max_refinement_step_deg &&
-           (!c.colour.compared || c.colour.correlation >= s.min_colour_correlation);
+           (!c.color.compared || c.color.correlation >= s.min_color_correlation);
 }
 
 bool withinReach(const RelocalisationSettings& s, const Mat4f& T_world_last, const Mat4f& T_world_candidate,
@@ -161,7 +161,7 @@ Relocaliser::Relocaliser(const RelocalisationSettings& settings, Vec2i frame_siz
         throw ConfigError("the relocalisation speed limit is a speed in m/s, 0 for none");
     if (!(settings.keyframe_min_dissimilarity >= 0.f && settings.keyframe_min_dissimilarity <= 1.f))
         throw ConfigError("the keyframe dissimilarity threshold lies in [0, 1]");
-    if (!(settings.min_colour_correlation >= -1.f && settings.min_colour_correlation <= 1.f))
+    if (!(settings.min_color_correlation >= -1.f && settings.min_color_correlation <= 1.f))
         throw ConfigError("the relocalisation's least colour correlation lies in [-1, 1] (-1: no colour test)");
     FernEncoder check(settings.ferns, frame_size, false);  // ConfigError now rather than at the first frame
 }

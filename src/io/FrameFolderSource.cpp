@@ -52,9 +52,9 @@ void FrameFolderSource::findFrames() {
         const std::string stem =
             (fs::path(folder_) / name.substr(0, name.size() - std::string(".depth.png").size())).string();
         FrameFiles files{number, stem, it->path().string(), "", false, Mat4f::identity()};
-        for (const char* colour_suffix : {".color.png", ".color.jpg"})
-            if (frame_reading::fileExists(stem + colour_suffix)) {
-                files.colour_path = stem + colour_suffix;
+        for (const char* color_suffix : {".color.png", ".color.jpg"})
+            if (frame_reading::fileExists(stem + color_suffix)) {
+                files.color_path = stem + color_suffix;
                 break;
             }
         frames_.push_back(std::move(files));
@@ -126,13 +126,13 @@ void FrameFolderSource::calibrateFromK() {
                                   "x" + std::to_string(depth.height) + " depth images (" + frames_.front().depth_path +
                                   ")");
     Intrinsics rgb = depth;
-    if (!frames_.front().colour_path.empty()) {
-        const Vec2i colour_size = readColorImage(frames_.front().colour_path).size();
-        if (colour_size != depth.size()) {
+    if (!frames_.front().color_path.empty()) {
+        const Vec2i color_size = readColorImage(frames_.front().color_path).size();
+        if (color_size != depth.size()) {
             // Same field of view at another resolution; keeps pixel centres consistent (see Intrinsics::downsampled).
-            const float sx = float(colour_size.x) / float(depth.width), sy = float(colour_size.y) / float(depth.height);
-            rgb = Intrinsics{colour_size.x,
-                             colour_size.y,
+            const float sx = float(color_size.x) / float(depth.width), sy = float(color_size.y) / float(depth.height);
+            rgb = Intrinsics{color_size.x,
+                             color_size.y,
                              depth.fx * sx,
                              depth.fy * sy,
                              (depth.cx + 0.5f) * sx - 0.5f,
@@ -149,11 +149,11 @@ bool FrameFolderSource::next(RGBDFrame& frame) {
     if (position_ >= frames_.size()) return false;
     const int index = int(position_);
     const FrameFiles& f = frames_[position_++];  // moves on even if this frame throws
-    const frame_reading::SamplesOutOfRange out_of_range = frame_reading::readDepthAndColour(
-        f.depth_path, f.colour_path, index, calib_.depth, calib_.rgb, read_.depth_raw, read_.rgb);
-    read_.handOver(frame, !f.colour_path.empty());
+    const frame_reading::SamplesOutOfRange out_of_range = frame_reading::readDepthAndColor(
+        f.depth_path, f.color_path, index, calib_.depth, calib_.rgb, read_.depth_raw, read_.rgb);
+    read_.handOver(frame, !f.color_path.empty());
     frame.depth_samples_out_of_range = out_of_range.depth;
-    frame.colour_samples_out_of_range = out_of_range.colour;
+    frame.color_samples_out_of_range = out_of_range.color;
     frame.index = index;
     frame.file_number = f.number;
     frame.timestamp_s = f.number / kFramesPerSecond;

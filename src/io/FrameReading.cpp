@@ -94,37 +94,37 @@ std::size_t readDepth(const std::string& path, int frame, const Intrinsics& dept
     return out_of_range;
 }
 
-std::size_t readColour(const std::string& path, int frame, const Intrinsics& rgb_camera, Image<Vec4u8>& rgb) {
+std::size_t readColor(const std::string& path, int frame, const Intrinsics& rgb_camera, Image<Vec4u8>& rgb) {
     std::size_t out_of_range = 0;
     withFrame(frame, [&] { out_of_range = readColorImage(path, rgb); });
     requireSize(path, frame, rgb.size(), rgb_camera, "rgb");
     return out_of_range;
 }
 
-SamplesOutOfRange readDepthAndColour(const std::string& depth_path, const std::string& colour_path, int frame,
-                                     const Intrinsics& depth_camera, const Intrinsics& rgb_camera,
-                                     Image<std::uint16_t>& depth, Image<Vec4u8>& rgb) {
+SamplesOutOfRange readDepthAndColor(const std::string& depth_path, const std::string& color_path, int frame,
+                                    const Intrinsics& depth_camera, const Intrinsics& rgb_camera,
+                                    Image<std::uint16_t>& depth, Image<Vec4u8>& rgb) {
     SamplesOutOfRange out_of_range;
-    if (colour_path.empty()) {
+    if (color_path.empty()) {
         out_of_range.depth = readDepth(depth_path, frame, depth_camera, depth);
         return out_of_range;
     }
-    std::future<std::size_t> colour;
+    std::future<std::size_t> color;
     try {
-        colour = std::async(std::launch::async, [&] { return readColour(colour_path, frame, rgb_camera, rgb); });
+        color = std::async(std::launch::async, [&] { return readColor(color_path, frame, rgb_camera, rgb); });
     } catch (const std::system_error&) {
         // No thread to be had (a process limit): one after the other.
         out_of_range.depth = readDepth(depth_path, frame, depth_camera, depth);
-        out_of_range.colour = readColour(colour_path, frame, rgb_camera, rgb);
+        out_of_range.color = readColor(color_path, frame, rgb_camera, rgb);
         return out_of_range;
     }
     try {
         out_of_range.depth = readDepth(depth_path, frame, depth_camera, depth);
     } catch (...) {
-        colour.wait();  // it writes into `rgb`, which the caller owns
+        color.wait();  // it writes into `rgb`, which the caller owns
         throw;
     }
-    out_of_range.colour = colour.get();
+    out_of_range.color = color.get();
     return out_of_range;
 }
 

@@ -38,21 +38,21 @@ std::size_t readDepth(const std::string& path, int frame, const Intrinsics& dept
 
 // Any colour image (PPM by hand, the rest through OpenCV), converted to RGBA. The image must have
 // the calibrated RGB camera's size. Returns the samples above a PPM's maxval (read as full intensity).
-std::size_t readColour(const std::string& path, int frame, const Intrinsics& rgb_camera, Image<Vec4u8>& rgb);
+std::size_t readColor(const std::string& path, int frame, const Intrinsics& rgb_camera, Image<Vec4u8>& rgb);
 
 // Samples outside the range their files declare, per image of a frame.
 struct SamplesOutOfRange {
-    std::size_t depth = 0;   // read as no measurement
-    std::size_t colour = 0;  // read as full intensity
+    std::size_t depth = 0;  // read as no measurement
+    std::size_t color = 0;  // read as full intensity
 };
 
-// Both images of one frame (the colour only when `colour_path` is not empty), decoded at the same
+// Both images of one frame (the colour only when `color_path` is not empty), decoded at the same
 // time, the colour on a second thread: they do not depend on each other, and decoding them one after
 // the other is a noticeable part of a frame's time. One after the other when no thread can be had. Both are waited for;
-// when both fail, the depth's error is the one thrown. Returns readDepth's and readColour's counts.
-SamplesOutOfRange readDepthAndColour(const std::string& depth_path, const std::string& colour_path, int frame,
-                                     const Intrinsics& depth_camera, const Intrinsics& rgb_camera,
-                                     Image<std::uint16_t>& depth, Image<Vec4u8>& rgb);
+// when both fail, the depth's error is the one thrown. Returns readDepth's and readColor's counts.
+SamplesOutOfRange readDepthAndColor(const std::string& depth_path, const std::string& color_path, int frame,
+                                    const Intrinsics& depth_camera, const Intrinsics& rgb_camera,
+                                    Image<std::uint16_t>& depth, Image<Vec4u8>& rgb);
 
 }  // namespace frame_reading
 }  // namespace voxfuse

@@ -70,7 +70,7 @@ std::vector<unsigned char> readWholeFile(const std::string& path) {
 struct DecodeScratch {
     std::vector<unsigned char> bytes;  // the file
     cv::Mat depth;                     // a decoded depth image
-    cv::Mat colour, converted;         // a decoded colour image; its 8-bit version where it had 16
+    cv::Mat color, converted;          // a decoded colour image; its 8-bit version where it had 16
 };
 DecodeScratch& decodeScratch() {
     thread_local DecodeScratch scratch;
@@ -412,8 +412,8 @@ std::size_t readColorImage(const std::string& path, Image<Vec4u8>& rgba) {
     requireImageFile(path);
     if (requirePlausibleImage(path).format == image_header::Format::Jpeg && readJpeg(path, rgba)) return 0;
     DecodeScratch& scratch = decodeScratch();
-    decodeWithOpenCV(path, scratch.colour);
-    const cv::Mat* m = &scratch.colour;
+    decodeWithOpenCV(path, scratch.color);
+    const cv::Mat* m = &scratch.color;
     if (m->depth() == CV_16U) {
         m->convertTo(scratch.converted, CV_8U, 1.0 / 257.0);  // 65535 -> 255
         m = &scratch.converted;

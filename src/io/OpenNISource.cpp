@@ -91,7 +91,7 @@ struct OpenNISource::Impl {
         std::uint64_t time_us = 0;
         Image<std::uint16_t> image;
     };
-    struct ColourRecord {
+    struct ColorRecord {
         std::uint64_t time_us = 0;
         Image<Vec4u8> image;
     };
@@ -99,7 +99,7 @@ struct OpenNISource::Impl {
     Impl(std::string source_name, bool is_live) : name(std::move(source_name)), live(is_live) {}
     // Then the members go in reverse order: the streams before the device.
     ~Impl() {
-        colour.stop();
+        color.stop();
         depth.stop();
         // A camera driver's threads may still be delivering a frame; some drivers (OpenNI2's own
         // sample "Dummy" device among them) do not wait for them before a stream is destroyed.
@@ -107,15 +107,15 @@ struct OpenNISource::Impl {
     }
 
     void openStreams();
-    void registerDepthToColour();
+    void registerDepthToColor();
     void calibrate(const std::string& calib_path);
     bool next(RGBDFrame& frame);
     std::string description() const;
 
     // One frame of either stream, in arrival order; false at the end of a recording.
-    bool readRecord(std::optional<DepthRecord>& depth_record, std::optional<ColourRecord>& colour_record);
+    bool readRecord(std::optional<DepthRecord>& depth_record, std::optional<ColorRecord>& color_record);
     Image<std::uint16_t> convertDepth(const openni::VideoFrameRef& f) const;
-    Image<Vec4u8> convertColour(const openni::VideoFrameRef& f) const;
+    Image<Vec4u8> convertColor(const openni::VideoFrameRef& f) const;
     void checkFrame(const openni::VideoFrameRef& f, int bytes_per_pixel, const char* what,
                     const Intrinsics& camera) const;
     [[noreturn]] void failOpening(const std::string& reason) const { throw IoError(name, reason); }
@@ -124,50 +124,50 @@ struct OpenNISource::Impl {
     OpenNIRuntime runtime;
     openni::Device device;
     openni::VideoStream depth;
-    openni::VideoStream colour;
+    openni::VideoStream color;
 
     std::string name;  // file path or device URI, for messages
     bool live;
-    bool has_colour = false;
-    bool unmirror_depth = false, unmirror_colour = false;
+    bool has_color = false;
+    bool unmirror_depth = false, unmirror_color = false;
     bool registered = false;
     std::string registration_note;
     RGBDCalib calib;
     std::string calib_origin;
-    int depth_total = -1, colour_total = -1;  // frames in a recording
-    int depth_read = 0, colour_read = 0;
+    int depth_total = -1, color_total = -1;  // frames in a recording
+    int depth_read = 0, color_read = 0;
     int delivered = 0;     // frames handed out (the next frame's index)
     bool stalled = false;  // a recording that stopped delivering frames
 
     std::optional<DepthRecord> pending;    // the depth frame next() delivers
     std::optional<DepthRecord> following;  // a depth frame read while looking ahead for colour
-    std::optional<ColourRecord> latest;    // the newest colour frame read
+    std::optional<ColorRecord> latest;     // the newest colour frame read
 };
 
 void OpenNISource::Impl::openStreams() {
     if (!device.hasSensor(openni::SENSOR_DEPTH)) failOpening("has no depth stream");
     if (depth.create(device, openni::SENSOR_DEPTH) != openni::STATUS_OK)
         failOpening("cannot create the depth stream: " + extendedError());
-    has_colour =
-        device.hasSensor(openni::SENSOR_COLOR) && colour.create(device, openni::SENSOR_COLOR) == openni::STATUS_OK;
+    has_color =
+        device.hasSensor(openni::SENSOR_COLOR) && color.create(device, openni::SENSOR_COLOR) == openni::STATUS_OK;
     if (live) {
         preferVgaMode(depth, {openni::PIXEL_FORMAT_DEPTH_1_MM, openni::PIXEL_FORMAT_DEPTH_100_UM});
-        if (has_colour) preferVgaMode(colour, {openni::PIXEL_FORMAT_RGB888});
+        if (has_color) preferVgaMode(color, {openni::PIXEL_FORMAT_RGB888});
     }
     const openni::PixelFormat depth_format = depth.getVideoMode().getPixelFormat();
     if (depth_format != openni::PIXEL_FORMAT_DEPTH_1_MM && depth_format != openni::PIXEL_FORMAT_DEPTH_100_UM)
         failOpening("the depth stream's pixel format (" + std::to_string(int(depth_format)) +
                     ") is not depth in millimetres or 100 micrometres");
-    if (has_colour) {
-        const openni::PixelFormat colour_format = colour.getVideoMode().getPixelFormat();
-        if (colour_format != openni::PIXEL_FORMAT_RGB888 && colour_format != openni::PIXEL_FORMAT_GRAY8)
-            failOpening("the colour stream's pixel format (" + std::to_string(int(colour_format)) +
+    if (has_color) {
+        const openni::PixelFormat color_format = color.getVideoMode().getPixelFormat();
+        if (color_format != openni::PIXEL_FORMAT_RGB888 && color_format != openni::PIXEL_FORMAT_GRAY8)
+            failOpening("the colour stream's pixel format (" + std::to_string(int(color_format)) +
                         ") is not RGB888 or GRAY8");
     }
     unmirror_depth = mustUnmirror(depth);
-    unmirror_colour = has_colour && mustUnmirror(colour);
-    registerDepthToColour();
-    if (live && has_colour) device.setDepthColorSyncEnabled(true);  // best effort: pairs arrive together
+    unmirror_color = has_color && mustUnmirror(color);
+    registerDepthToColor();
+    if (live && has_color) device.setDepthColorSyncEnabled(true);  // best effort: pairs arrive together
 
     if (openni::PlaybackControl* playback = device.getPlaybackControl()) {
         // Manual stepping: the player delivers one record each time waitForAnyStream finds none
@@ -175,16 +175,16 @@ void OpenNISource::Impl::openStreams() {
         playback->setSpeed(-1.0f);
         playback->setRepeatEnabled(false);
         depth_total = playback->getNumberOfFrames(depth);
-        colour_total = has_colour ? playback->getNumberOfFrames(colour) : 0;
+        color_total = has_color ? playback->getNumberOfFrames(color) : 0;
         if (depth_total <= 0) failOpening("the recording holds no depth frames");
     }
     if (depth.start() != openni::STATUS_OK) failOpening("cannot start the depth stream: " + extendedError());
-    if (has_colour && colour.start() != openni::STATUS_OK)
+    if (has_color && color.start() != openni::STATUS_OK)
         failOpening("cannot start the colour stream: " + extendedError());
 }
 
-void OpenNISource::Impl::registerDepthToColour() {
-    if (!has_colour) {
+void OpenNISource::Impl::registerDepthToColor() {
+    if (!has_color) {
         registration_note = "no colour stream";
         return;
     }
@@ -212,8 +212,8 @@ void OpenNISource::Impl::calibrate(const std::string& calib_path) {
         if (calib.depth.size() != Vec2i{dw, dh})
             throw IoError(calib_path, "the depth camera is " + sizeText(calib.depth.width, calib.depth.height) +
                                           " but " + name + " streams depth at " + sizeText(dw, dh));
-        if (has_colour) {
-            const openni::VideoMode m = colour.getVideoMode();
+        if (has_color) {
+            const openni::VideoMode m = color.getVideoMode();
             if (calib.rgb.size() != Vec2i{m.getResolutionX(), m.getResolutionY()})
                 throw IoError(calib_path, "the RGB camera is " + sizeText(calib.rgb.width, calib.rgb.height) + " but " +
                                               name + " streams colour at " +
@@ -222,14 +222,14 @@ void OpenNISource::Impl::calibrate(const std::string& calib_path) {
         calib_origin = calib_path;
         return;
     }
-    bool depth_from_fov = false, colour_from_fov = false;
+    bool depth_from_fov = false, color_from_fov = false;
     calib.depth = intrinsicsFromFieldOfView(dw, dh, depth.getHorizontalFieldOfView(), depth.getVerticalFieldOfView(),
                                             depth_from_fov);
     calib.rgb = calib.depth;
-    if (has_colour) {
-        const openni::VideoMode m = colour.getVideoMode();
-        calib.rgb = intrinsicsFromFieldOfView(m.getResolutionX(), m.getResolutionY(), colour.getHorizontalFieldOfView(),
-                                              colour.getVerticalFieldOfView(), colour_from_fov);
+    if (has_color) {
+        const openni::VideoMode m = color.getVideoMode();
+        calib.rgb = intrinsicsFromFieldOfView(m.getResolutionX(), m.getResolutionY(), color.getHorizontalFieldOfView(),
+                                              color.getVerticalFieldOfView(), color_from_fov);
         if (registered) {  // depth now sees through the colour camera
             const float sx = float(dw) / float(calib.rgb.width), sy = float(dh) / float(calib.rgb.height);
             calib.depth = Intrinsics{dw,
@@ -238,7 +238,7 @@ void OpenNISource::Impl::calibrate(const std::string& calib_path) {
                                      calib.rgb.fy * sy,
                                      (calib.rgb.cx + 0.5f) * sx - 0.5f,
                                      (calib.rgb.cy + 0.5f) * sy - 0.5f};
-            depth_from_fov = colour_from_fov;
+            depth_from_fov = color_from_fov;
         }
     }
     calib.T_depth_rgb = Mat4f::identity();  // registered; unregistered: the baseline is unknown here
@@ -278,7 +278,7 @@ Image<std::uint16_t> OpenNISource::Impl::convertDepth(const openni::VideoFrameRe
     return image;
 }
 
-Image<Vec4u8> OpenNISource::Impl::convertColour(const openni::VideoFrameRef& f) const {
+Image<Vec4u8> OpenNISource::Impl::convertColor(const openni::VideoFrameRef& f) const {
     const openni::PixelFormat format = f.getVideoMode().getPixelFormat();
     const bool grey = format == openni::PIXEL_FORMAT_GRAY8;
     if (!grey && format != openni::PIXEL_FORMAT_RGB888)
@@ -290,7 +290,7 @@ Image<Vec4u8> OpenNISource::Impl::convertColour(const openni::VideoFrameRef& f) 
         const std::uint8_t* row =
             static_cast<const std::uint8_t*>(f.getData()) + std::size_t(y) * std::size_t(f.getStrideInBytes());
         for (int x = 0; x < w; ++x) {
-            const std::uint8_t* p = row + (unmirror_colour ? w - 1 - x : x) * (grey ? 1 : 3);
+            const std::uint8_t* p = row + (unmirror_color ? w - 1 - x : x) * (grey ? 1 : 3);
             image.at(x, y) = grey ? Vec4u8{p[0], p[0], p[0], 255} : Vec4u8{p[0], p[1], p[2], 255};
         }
     }
@@ -298,12 +298,12 @@ Image<Vec4u8> OpenNISource::Impl::convertColour(const openni::VideoFrameRef& f) 
 }
 
 bool OpenNISource::Impl::readRecord(std::optional<DepthRecord>& depth_record,
-                                    std::optional<ColourRecord>& colour_record) {
+                                    std::optional<ColorRecord>& color_record) {
     if (stalled) return false;
-    if (!live && depth_read >= depth_total && colour_read >= colour_total) return false;
-    openni::VideoStream* streams[2] = {&depth, &colour};
+    if (!live && depth_read >= depth_total && color_read >= color_total) return false;
+    openni::VideoStream* streams[2] = {&depth, &color};
     int ready = -1;
-    if (openni::OpenNI::waitForAnyStream(streams, has_colour ? 2 : 1, &ready, kFrameTimeoutMs) != openni::STATUS_OK) {
+    if (openni::OpenNI::waitForAnyStream(streams, has_color ? 2 : 1, &ready, kFrameTimeoutMs) != openni::STATUS_OK) {
         if (live)
             failFrame("no frame from the camera for " + std::to_string(kFrameTimeoutMs / 1000) +
                       " s (unplugged, or busy?)");
@@ -319,8 +319,8 @@ bool OpenNISource::Impl::readRecord(std::optional<DepthRecord>& depth_record,
         ++depth_read;
         depth_record = DepthRecord{f.getTimestamp(), convertDepth(f)};
     } else {
-        ++colour_read;
-        colour_record = ColourRecord{f.getTimestamp(), convertColour(f)};
+        ++color_read;
+        color_record = ColorRecord{f.getTimestamp(), convertColor(f)};
     }
     return true;
 }
@@ -328,17 +328,17 @@ bool OpenNISource::Impl::readRecord(std::optional<DepthRecord>& depth_record,
 bool OpenNISource::Impl::next(RGBDFrame& frame) {
     if (!pending) pending.swap(following);
     while (!pending) {
-        std::optional<ColourRecord> colour_record;
-        if (!readRecord(pending, colour_record)) return false;
-        if (colour_record) latest = std::move(colour_record);
+        std::optional<ColorRecord> color_record;
+        if (!readRecord(pending, color_record)) return false;
+        if (color_record) latest = std::move(color_record);
     }
     // The colour frame nearest in time may arrive just after the depth frame: look one record ahead.
     // (A throw here keeps `pending`, so the next call delivers it.)
     const std::uint64_t t = pending->time_us;
     const auto distance = [t](std::uint64_t u) { return u > t ? u - t : t - u; };
-    const ColourRecord* best = latest ? &*latest : nullptr;
-    std::optional<ColourRecord> after;
-    if (has_colour && !following && (!latest || latest->time_us < t) && readRecord(following, after) && after) {
+    const ColorRecord* best = latest ? &*latest : nullptr;
+    std::optional<ColorRecord> after;
+    if (has_color && !following && (!latest || latest->time_us < t) && readRecord(following, after) && after) {
         if (!best || distance(after->time_us) < distance(best->time_us)) best = &*after;
     }
     frame.depth_raw = std::move(pending->image);
@@ -358,9 +358,9 @@ std::string OpenNISource::Impl::description() const {
     std::string text = live ? "OpenNI2 camera " + name : "OpenNI2 recording " + name;
     text += " (depth " + sizeText(m.getResolutionX(), m.getResolutionY());
     if (!live)
-        text += ", " + std::to_string(depth_total) + " depth and " + std::to_string(colour_total) + " colour frames";
+        text += ", " + std::to_string(depth_total) + " depth and " + std::to_string(color_total) + " colour frames";
     text += ", " + registration_note;
-    if (unmirror_depth || unmirror_colour) text += ", mirrored frames flipped back";
+    if (unmirror_depth || unmirror_color) text += ", mirrored frames flipped back";
     return text + ", calibration from " + calib_origin + ")";
 }
 

@@ -114,12 +114,12 @@ bool PpmPgmSource::next(RGBDFrame& frame) {
                               "); it goes on to index " + std::to_string(first_index_ + frame_count_ - 1),
                           position);
     }
-    const frame_reading::SamplesOutOfRange out_of_range = frame_reading::readDepthAndColour(
+    const frame_reading::SamplesOutOfRange out_of_range = frame_reading::readDepthAndColor(
         depth_path, rgb_pattern_.empty() ? std::string() : fileName(rgb_pattern_, file_index), position, calib_.depth,
         calib_.rgb, read_.depth_raw, read_.rgb);
     read_.handOver(frame, !rgb_pattern_.empty());
     frame.depth_samples_out_of_range = out_of_range.depth;
-    frame.colour_samples_out_of_range = out_of_range.colour;
+    frame.color_samples_out_of_range = out_of_range.color;
     frame.index = position;
     frame.timestamp_s = double(file_index) / 30.0;
     frame.depth_path = depth_path;

@@ -14,7 +14,7 @@ void checkLabelImageSize(Vec2i label_size, const RGBDCalib& calib, const std::st
     if (std::abs(label_aspect / camera_aspect - 1.0) <= 0.01) return;
     throw IoError(path,
                   "label image is " + std::to_string(label_size.x) + "x" + std::to_string(label_size.y) +
-                      ", not the aspect ratio of the " + (calib.labelsFromColour() ? "colour" : "depth") + " camera (" +
+                      ", not the aspect ratio of the " + (calib.labelsFromColor() ? "colour" : "depth") + " camera (" +
                       std::to_string(camera.width) + "x" + std::to_string(camera.height) +
                       "); any resolution of that aspect ratio (within 1%) is accepted",
                   frame_index);

@@ -85,12 +85,12 @@ StrayScannerSource::StrayScannerSource(const std::string& folder, const SourceOp
       min_confidence_(options.min_depth_confidence) {
     std::error_code ec;
     if (!fs::is_directory(folder, ec)) throw IoError(folder, "not a folder");
-    if (options.max_colour_width < 0)
-        throw ConfigError("SourceOptions::max_colour_width must be 0 (full size) or positive, got " +
-                          std::to_string(options.max_colour_width));
+    if (options.max_color_width < 0)
+        throw ConfigError("SourceOptions::max_color_width must be 0 (full size) or positive, got " +
+                          std::to_string(options.max_color_width));
     findFrames();
     video_ = std::make_unique<VideoFrameReader>(video_path_);
-    calibrate(options.calib_path, options.max_colour_width);
+    calibrate(options.calib_path, options.max_color_width);
     loadPoses();
 }
 
@@ -116,7 +116,7 @@ void StrayScannerSource::findFrames() {
               [](const FrameFiles& a, const FrameFiles& b) { return a.number < b.number; });
 }
 
-void StrayScannerSource::calibrate(const std::string& calib_path, int max_colour_width) {
+void StrayScannerSource::calibrate(const std::string& calib_path, int max_color_width) {
     const Vec2i depth_size = readDepthPNG(frames_.front().depth_path).size();
     if (!calib_path.empty()) {
         calib_ = readCalib(calib_path);
@@ -143,10 +143,10 @@ void StrayScannerSource::calibrate(const std::string& calib_path, int max_colour
         throw IoError(folder_, "the depth maps are " + sizeText(depth_size) + " but the video frames are " +
                                    sizeText(video_size) +
                                    ": different aspect ratios (was the video rotated or cropped?)");
-    Vec2i colour_size = video_size;
-    if (max_colour_width > 0 && video_size.x > max_colour_width)
-        colour_size = Vec2i{max_colour_width, int(std::lround(double(video_size.y) * max_colour_width / video_size.x))};
-    calib_.rgb = scaledTo(full, colour_size);
+    Vec2i color_size = video_size;
+    if (max_color_width > 0 && video_size.x > max_color_width)
+        color_size = Vec2i{max_color_width, int(std::lround(double(video_size.y) * max_color_width / video_size.x))};
+    calib_.rgb = scaledTo(full, color_size);
     calib_.depth = scaledTo(full, depth_size);
     calib_.T_depth_rgb = Mat4f::identity();
     calib_.disparity = DisparityCalib::affine(0.001f, 0.f);  // millimetres

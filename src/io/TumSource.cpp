@@ -132,11 +132,11 @@ bool TumSource::next(RGBDFrame& frame) {
     if (position_ >= pairs_.size()) return false;
     const int index = int(position_);
     const FramePair& pair = pairs_[position_++];  // moves on even if this frame throws
-    const frame_reading::SamplesOutOfRange out_of_range = frame_reading::readDepthAndColour(
+    const frame_reading::SamplesOutOfRange out_of_range = frame_reading::readDepthAndColor(
         pair.depth_path, pair.rgb_path, index, calib_.depth, calib_.rgb, read_.depth_raw, read_.rgb);
     read_.handOver(frame, true);
     frame.depth_samples_out_of_range = out_of_range.depth;
-    frame.colour_samples_out_of_range = out_of_range.colour;
+    frame.color_samples_out_of_range = out_of_range.color;
     frame.index = index;
     frame.timestamp_s = pair.depth_time_s;
     frame.rgb_timestamp_s = pair.rgb_time_s;

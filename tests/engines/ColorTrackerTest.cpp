@@ -47,23 +47,23 @@ TEST_P(ColorTrackerTest, RecoversASmallMotion) {
     EXPECT_GT(tracker->lastStats().levels.back().iterations, 0);
 }
 
-TEST_P(ColorTrackerTest, AColourImageOfAnotherSizeIsTheCalibratedCameraAtThatResolution) {
+TEST_P(ColorTrackerTest, AColorImageOfAnotherSizeIsTheCalibratedCameraAtThatResolution) {
     // Colour at twice the depth's resolution, the calibration at the depth's (as integration takes it):
     // the colour camera's intrinsics scale with the image, and the motion is recovered all the same.
     const Intrinsics intr = test::kinectIntrinsics();
     const Intrinsics large = test::kinectIntrinsics(1280, 960);
-    const auto withLargeColour = [&](const Mat4f& T_world_camera) {
+    const auto withLargeColor = [&](const Mat4f& T_world_camera) {
         View view = test::renderView(room(), intr, T_world_camera);
         view.rgb = test::renderView(room(), large, T_world_camera).rgb;
         return view;
     };
-    const View first = withLargeColour(startPose());
+    const View first = withLargeColor(startPose());
     const Mat4f moved = test::moveInCamera(startPose(), {0.4f, 1.f, 0.1f}, 1.5f, {0.015f, -0.01f, 0.01f});
     auto tracker = makeTracker(colorSettings(), GetParam());
     TrackingState state;
     state.T_world_camera = startPose();
     tracker->track(state, first, test::emptyModel(intr));
-    tracker->track(state, withLargeColour(moved), test::modelFromView(first, startPose()));
+    tracker->track(state, withLargeColor(moved), test::modelFromView(first, startPose()));
     EXPECT_EQ(state.quality, TrackingQuality::Good);
     EXPECT_LT(test::translationErrorM(state.T_world_camera, moved), 0.003f);
     EXPECT_LT(test::rotationErrorDeg(state.T_world_camera, moved), 0.1f);
@@ -84,7 +84,7 @@ TEST_P(ColorTrackerTest, AMotionBeyondItsBasinIsReportedFailed) {
     EXPECT_EQ(test::translationErrorM(state.T_world_camera, startPose()), 0.f);
 }
 
-TEST_P(ColorTrackerTest, ViewWithoutColourFailsAndKeepsThePose) {
+TEST_P(ColorTrackerTest, ViewWithoutColorFailsAndKeepsThePose) {
     const Intrinsics intr = test::kinectIntrinsics(320, 240);
     const View first = test::renderView(room(), intr, startPose());
     auto tracker = makeTracker(colorSettings(), GetParam());
@@ -97,7 +97,7 @@ TEST_P(ColorTrackerTest, ViewWithoutColourFailsAndKeepsThePose) {
     EXPECT_EQ(test::translationErrorM(state.T_world_camera, startPose()), 0.f);
 }
 
-TEST_P(ColorTrackerTest, WithoutAnEarlierColourFrameThePoseIsKeptAsPoor) {
+TEST_P(ColorTrackerTest, WithoutAnEarlierColorFrameThePoseIsKeptAsPoor) {
     const Intrinsics intr = test::kinectIntrinsics(320, 240);
     const View first = test::renderView(room(), intr, startPose());
     auto tracker = makeTracker(colorSettings(), GetParam());
@@ -109,7 +109,7 @@ TEST_P(ColorTrackerTest, WithoutAnEarlierColourFrameThePoseIsKeptAsPoor) {
 
 // A model that carries the map's colours (RenderState::intensity: what MainEngine gives the rgbd
 // tracker) is aligned to them: no earlier frame is needed, as after a reset or a relocalisation.
-TEST_P(ColorTrackerTest, AModelCarryingTheMapsColoursNeedsNoEarlierFrame) {
+TEST_P(ColorTrackerTest, AModelCarryingTheMapsColorsNeedsNoEarlierFrame) {
     const Intrinsics intr = test::kinectIntrinsics();
     const View first = test::renderView(room(), intr, startPose());
     const Mat4f moved = test::moveInCamera(startPose(), {0.4f, 1.f, 0.1f}, 1.5f, {0.015f, -0.01f, 0.01f});

@@ -258,7 +258,7 @@ TEST(DepthTrackerRobustnessTest, DepthsBeyondTheTrackingLimitDoNotPullThePose) {
 // sixteenfold to make up for it, so the pose does not move. A fixed weight lets depth take over. Measured (distance
 // from the true motion): ren 8.33 mm; automatic 7.61 mm bright, 7.65 dimmed to a quarter (integer grey levels: not
 // exactly the same images); fixed 8.10 and 8.31.
-TEST(DepthTrackerRobustnessTest, RgbdBalancesColourAgainstDepthWhateverTheImagesBrightness) {
+TEST(DepthTrackerRobustnessTest, RgbdBalancesColorAgainstDepthWhateverTheImagesBrightness) {
     RoomStep step, dim;
     step.biasFarDepths(0.006f);
     dim.biasFarDepths(0.006f);

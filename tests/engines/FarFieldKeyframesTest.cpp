@@ -27,7 +27,7 @@ std::vector<float> ramp(float a) {
     return image;
 }
 
-TEST(FarFieldPointTest, PlacesTheKeyframesDepthInTheWorldWithItsColour) {
+TEST(FarFieldPointTest, PlacesTheKeyframesDepthInTheWorldWithItsColor) {
     const Intrinsics cam = smallCamera();
     const std::vector<float> image = ramp(0.01f);
     std::vector<Vec2f> gradient(image.size());

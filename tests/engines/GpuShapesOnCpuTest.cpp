@@ -221,9 +221,9 @@ TYPED_TEST(GpuShapesOnCpuTest, DenseIntegrationVoxelByVoxelEqualsTheClippedRows)
 }
 
 // A rendered view of the box and sphere from the first pose, every `dropout_every`-th depth pixel emptied.
-View viewWithDropouts(Vec2i size, bool colour, int dropout_every) {
+View viewWithDropouts(Vec2i size, bool color, int dropout_every) {
     static const synth::SyntheticScene world = synth::SyntheticScene::boxAndSphere();
-    View view = test::renderView(world, test::kinectIntrinsics(size.x, size.y), poses()[0], colour);
+    View view = test::renderView(world, test::kinectIntrinsics(size.x, size.y), poses()[0], color);
     for (int i = 0; i < int(view.depth.pixelCount()); i += dropout_every) view.depth.host()[i] = 0.f;
     return view;
 }

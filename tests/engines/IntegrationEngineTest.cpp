@@ -138,7 +138,7 @@ protected:
     void SetUp() override { VF_SKIP_IF_UNAVAILABLE(GetParam()); }
 };
 
-TEST_P(IntegrationColorTest, ColourOfAUniformWallIsFused) {
+TEST_P(IntegrationColorTest, ColorOfAUniformWallIsFused) {
     const SceneParams params = smallSceneParams();
     Scene<VoxelSRgb, PlainVoxelArray> scene(params, PlainVoxelArray({-40, -30, 0}, {80, 60, 140}), GetParam());
     View view;

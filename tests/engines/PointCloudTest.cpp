@@ -82,7 +82,7 @@ TEST(PointCloudExtraction, GivesTheMeshVerticesWithoutTriangles) {
     }
 }
 
-TEST(PointCloudExtraction, VoxelTypesWithoutColourGiveNoColours) {
+TEST(PointCloudExtraction, VoxelTypesWithoutColorGiveNoColors) {
     Scene<VoxelF, VoxelBlockHash> scene(params(), VoxelBlockHash(smallHash()), Device::CPU);
     fillSphere(scene);
     PointCloud cloud;
@@ -141,7 +141,7 @@ TEST(PointCloudDownsampling, CellsSmallerThanThePointSpacingKeepEveryPoint) {
     }
 }
 
-TEST(PointCloudDownsampling, CloudsWithoutNormalsOrColoursAndBadPoints) {
+TEST(PointCloudDownsampling, CloudsWithoutNormalsOrColorsAndBadPoints) {
     PointCloud in;
     in.points = {{0.f, 0.f, 0.f},
                  {std::numeric_limits<float>::quiet_NaN(), 0.f, 0.f},

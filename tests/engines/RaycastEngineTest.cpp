@@ -157,25 +157,25 @@ TEST_P(RaycastSphereTest, RendersShowTheSphere) {
 
 // The rgbd tracker's reference: at every hit the luma of the fused colour (what a frame's pixel of
 // that colour gives), -1 where nothing was hit and where the voxels never saw colour.
-TEST_P(RaycastSphereTest, IntensityIsTheFusedColoursLumaAndMinusOneWithoutColour) {
+TEST_P(RaycastSphereTest, IntensityIsTheFusedColorsLumaAndMinusOneWithoutColor) {
     fuseViewsAround({1.0f, 0.f, 0.f});
     const RenderState rs = raycast(test::lookAt({1.0f, 0.f, 0.f}, Eigen::Vector3f::Zero()));
     Image<float> intensity;
-    Image<Vec4u8> colour;
+    Image<Vec4u8> color;
     raycast_->renderIntensity(*scene_, rs, intensity);
     intensity.memory().updateHost();
-    raycast_->render(*scene_, rs, RenderMode::Color, colour);
+    raycast_->render(*scene_, rs, RenderMode::Color, color);
     ASSERT_EQ(intensity.size(), intr_.size());
-    int hits = 0, silhouette_without_colour = 0;
+    int hits = 0, silhouette_without_color = 0;
     for (std::size_t i = 0; i < intensity.pixelCount(); ++i) {
         if (rs.points_world.host()[i].w <= 0.f) {
             ASSERT_EQ(intensity.host()[i], -1.f) << "pixel " << i << " hit nothing";
             continue;
         }
         ++hits;
-        const Vec4u8 c = colour.host()[i];
+        const Vec4u8 c = color.host()[i];
         if (intensity.host()[i] == -1.f) {  // a hit at the silhouette whose voxels saw no colour: black in the render
-            ++silhouette_without_colour;
+            ++silhouette_without_color;
             ASSERT_EQ(int(c.x) + c.y + c.z, 0) << "pixel " << i;
             continue;
         }
@@ -183,18 +183,18 @@ TEST_P(RaycastSphereTest, IntensityIsTheFusedColoursLumaAndMinusOneWithoutColour
         ASSERT_GT(intensity.host()[i], 0.05f) << "pixel " << i << ": the sphere is not black";
     }
     EXPECT_GT(hits, 1000);
-    EXPECT_LT(silhouette_without_colour, hits / 50);
+    EXPECT_LT(silhouette_without_color, hits / 50);
 
     fillAnalyticSdf();  // an SDF whose voxels never saw colour
     const RenderState uncoloured = raycast(test::lookAt({1.0f, 0.f, 0.f}, Eigen::Vector3f::Zero()));
     raycast_->renderIntensity(*scene_, uncoloured, intensity);
     intensity.memory().updateHost();
-    int uncoloured_hits = 0;
+    int uncolored_hits = 0;
     for (std::size_t i = 0; i < intensity.pixelCount(); ++i) {
-        uncoloured_hits += uncoloured.points_world.host()[i].w > 0.f;
+        uncolored_hits += uncoloured.points_world.host()[i].w > 0.f;
         ASSERT_EQ(intensity.host()[i], -1.f) << "pixel " << i;
     }
-    EXPECT_GT(uncoloured_hits, 1000);
+    EXPECT_GT(uncolored_hits, 1000);
 }
 
 INSTANTIATE_TEST_SUITE_P(Devices, RaycastSphereTest, test::kAllDevices, test::DeviceName());

@@ -187,7 +187,7 @@ Mat4f halfTurn(const Mat4f& T_world_camera) {
     return toMat4f(turn * toEigen(T_world_camera));
 }
 
-class ColourRelocalisationTest : public ::testing::TestWithParam<Device> {
+class ColorRelocalisationTest : public ::testing::TestWithParam<Device> {
 protected:
     void SetUp() override { VF_SKIP_IF_UNAVAILABLE(GetParam()); }
 
@@ -241,9 +241,9 @@ protected:
 // Depth alone takes the other end for the seen one (the first frame there is "found" at the pose the
 // camera was lost at); the colours do not agree, so with the colour test the frames there stay lost,
 // and the camera is found on coming back.
-TEST_P(ColourRelocalisationTest, APlaceShapedLikeASeenOneButColouredOtherwiseIsNotTakenForIt) {
+TEST_P(ColorRelocalisationTest, APlaceShapedLikeASeenOneButColoredOtherwiseIsNotTakenForIt) {
     RelocalisationSettings depth_only;
-    depth_only.min_colour_correlation = -1.f;
+    depth_only.min_color_correlation = -1.f;
     const std::vector<TrackingStatus> fooled = run(depth_only);
     EXPECT_NE(std::find(fooled.begin(), fooled.begin() + 4, TrackingStatus::Relocalised), fooled.begin() + 4)
         << "the scene no longer fools depth alone: the test shows nothing";
@@ -255,7 +255,7 @@ TEST_P(ColourRelocalisationTest, APlaceShapedLikeASeenOneButColouredOtherwiseIsN
     for (int i = 5; i < 8; ++i) EXPECT_EQ(statuses[std::size_t(i)], TrackingStatus::Tracking);
 }
 
-INSTANTIATE_TEST_SUITE_P(Devices, ColourRelocalisationTest, test::kAllDevices, test::DeviceName());
+INSTANTIATE_TEST_SUITE_P(Devices, ColorRelocalisationTest, test::kAllDevices, test::DeviceName());
 
 TEST(RelocalisationSettingsTest, OffKeepsNoKeyframesAndNeverRelocalises) {
     RelocalisationSettings off;

@@ -33,7 +33,7 @@ TEST(RelocaliserTest, DepthAgreementCountsOverlapAndPixelsWithinTheTolerance) {
 
 // A depth camera of 160x120 (16 x 12 cells of 10 pixels) whose colour camera is the same (registered
 // frames), the frame's depth 1 m everywhere and its colours a pattern with no two rows alike.
-View colourView(int rgb_scale = 1) {
+View colorView(int rgb_scale = 1) {
     View view;
     view.calib.depth = Intrinsics{160, 120, 160.f, 160.f, 79.5f, 59.5f};
     view.calib.rgb = view.calib.depth;
@@ -51,20 +51,20 @@ View colourView(int rgb_scale = 1) {
 
 // The model's colours: `grey(frame grey)` at each depth pixel.
 template <class F>
-Image<Vec4u8> modelColour(const View& registered, F grey) {
-    Image<Vec4u8> colour(registered.depth.size());
-    for (int v = 0; v < colour.height(); ++v)
-        for (int u = 0; u < colour.width(); ++u) {
+Image<Vec4u8> modelColor(const View& registered, F grey) {
+    Image<Vec4u8> color(registered.depth.size());
+    for (int v = 0; v < color.height(); ++v)
+        for (int u = 0; u < color.width(); ++u) {
             const unsigned char g = (unsigned char)grey(int(registered.rgb.at(u, v).x));
-            colour.at(u, v) = Vec4u8{g, g, g, 255};
+            color.at(u, v) = Vec4u8{g, g, g, 255};
         }
-    return colour;
+    return color;
 }
 
 // What RaycastEngine::renderIntensity gives for a map of these colours.
-Image<float> intensities(const Image<Vec4u8>& colour) {
-    Image<float> grey(colour.size());
-    for (std::size_t i = 0; i < colour.pixelCount(); ++i) grey.host()[i] = intensityFromRgb(colour.host()[i]);
+Image<float> intensities(const Image<Vec4u8>& color) {
+    Image<float> grey(color.size());
+    for (std::size_t i = 0; i < color.pixelCount(); ++i) grey.host()[i] = intensityFromRgb(color.host()[i]);
     return grey;
 }
 
@@ -74,46 +74,46 @@ Image<float> constantDepth(float depth_m) {
     return depth;
 }
 
-TEST(RelocaliserTest, ColourAgreementIsTheCorrelationOfIntensitiesWhereDepthsAgree) {
-    const View view = colourView();
+TEST(RelocaliserTest, ColorAgreementIsTheCorrelationOfIntensitiesWhereDepthsAgree) {
+    const View view = colorView();
     Image<float> model_depth = constantDepth(1.005f);
     // Another exposure of the same surface: gain and offset do not count.
-    ColourAgreement a =
-        compareColour(view, model_depth, intensities(modelColour(view, [](int g) { return g / 2 + 30; })), 0.02f, 0.f);
+    ColorAgreement a =
+        compareColor(view, model_depth, intensities(modelColor(view, [](int g) { return g / 2 + 30; })), 0.02f, 0.f);
     ASSERT_TRUE(a.compared);
     EXPECT_EQ(a.cells, 16 * 12);
     EXPECT_EQ(a.pixels, 160 * 120);
     EXPECT_GT(a.correlation, 0.99f);
-    a = compareColour(view, model_depth, intensities(modelColour(view, [](int g) { return 250 - g; })), 0.02f, 0.f);
+    a = compareColor(view, model_depth, intensities(modelColor(view, [](int g) { return 250 - g; })), 0.02f, 0.f);
     ASSERT_TRUE(a.compared);
     EXPECT_LT(a.correlation, -0.99f) << "the negative";
     // Pixels whose depths disagree (an occluder) are not compared, whatever their colour.
-    Image<Vec4u8> spoilt = modelColour(view, [](int g) { return g; });
+    Image<Vec4u8> spoilt = modelColor(view, [](int g) { return g; });
     for (int v = 0; v < 120; ++v)
         for (int u = 0; u < 40; ++u) {
             model_depth.at(u, v) = 1.1f;
             spoilt.at(u, v) = Vec4u8{(unsigned char)(u * v % 7 * 30), 0, 255, 255};
         }
-    a = compareColour(view, model_depth, intensities(spoilt), 0.02f, 0.f);
+    a = compareColor(view, model_depth, intensities(spoilt), 0.02f, 0.f);
     ASSERT_TRUE(a.compared);
     EXPECT_EQ(a.pixels, 120 * 120);
     EXPECT_GT(a.correlation, 0.99f);
     // Colour at twice the calibrated resolution is the same camera, sampled at its pixels.
-    a = compareColour(colourView(2), model_depth, intensities(spoilt), 0.02f, 0.f);
+    a = compareColor(colorView(2), model_depth, intensities(spoilt), 0.02f, 0.f);
     ASSERT_TRUE(a.compared);
     EXPECT_GT(a.correlation, 0.99f);
 }
 
-TEST(RelocaliserTest, ColourFinerThanTheMapIsAveragedOverTheMapsFootprint) {
+TEST(RelocaliserTest, ColorFinerThanTheMapIsAveragedOverTheMapsFootprint) {
     // Colour at 4x the depth's resolution (fx 640): each depth pixel's 4x4 colour pixels hold the
     // map's colour plus texture finer than the map, +-60 grey levels in pairs that cancel. Voxels
     // of 1 / (1.5 * 160) m make the footprint at 1 m those 4x4 pixels.
-    View view = colourView(4);
-    Image<Vec4u8> map_colour(view.depth.size());
+    View view = colorView(4);
+    Image<Vec4u8> map_color(view.depth.size());
     for (int y = 0; y < 120; ++y)
         for (int x = 0; x < 160; ++x) {
             const int g = (x * 37 + y * y * 11) % 120 + 68;
-            map_colour.at(x, y) = Vec4u8{(unsigned char)g, (unsigned char)g, (unsigned char)g, 255};
+            map_color.at(x, y) = Vec4u8{(unsigned char)g, (unsigned char)g, (unsigned char)g, 255};
             for (int dy = 0; dy < 4; ++dy)
                 for (int dx = 0; dx < 4; ++dx) {
                     // (dx, dy) and (3 - dx, 3 - dy) are a pair; the sign of each pair from a hash.
@@ -127,53 +127,53 @@ TEST(RelocaliserTest, ColourFinerThanTheMapIsAveragedOverTheMapsFootprint) {
                         Vec4u8{(unsigned char)fine, (unsigned char)fine, (unsigned char)fine, 255};
                 }
         }
-    const ColourAgreement points = compareColour(view, constantDepth(1.f), intensities(map_colour), 0.02f, 0.f);
+    const ColorAgreement points = compareColor(view, constantDepth(1.f), intensities(map_color), 0.02f, 0.f);
     ASSERT_TRUE(points.compared);
     EXPECT_LT(points.correlation, 0.7f)
         << "a colour pixel on its own carries the finer texture: the test shows something";
-    const ColourAgreement footprint =
-        compareColour(view, constantDepth(1.f), intensities(map_colour), 0.02f, 1.f / (1.5f * 160.f));
+    const ColorAgreement footprint =
+        compareColor(view, constantDepth(1.f), intensities(map_color), 0.02f, 1.f / (1.5f * 160.f));
     ASSERT_TRUE(footprint.compared);
     EXPECT_GT(footprint.correlation, 0.99f);
     EXPECT_EQ(footprint.pixels, 160 * 120);
 }
 
-TEST(RelocaliserTest, ColourIsSampledThroughTheDepthToColourExtrinsics) {
+TEST(RelocaliserTest, ColorIsSampledThroughTheDepthToColorExtrinsics) {
     // A colour camera 2.5 cm to the right of the depth camera (fx 160: 4 pixels at 1 m). It sees the
     // depth pixel u at its own u - 4; the model's colours sit at the depth pixels.
-    View view = colourView();
-    const Image<Vec4u8> at_depth_pixels = modelColour(view, [](int g) { return g; });
+    View view = colorView();
+    const Image<Vec4u8> at_depth_pixels = modelColor(view, [](int g) { return g; });
     view.calib.T_depth_rgb = Mat4f::identity();
     view.calib.T_depth_rgb.m[3] = 0.025f;  // rgb -> depth: x + 2.5 cm
     for (int v = 0; v < 120; ++v)
         for (int u = 0; u < 160; ++u)
             view.rgb.at(u, v) = u + 4 < 160 ? at_depth_pixels.at(u + 4, v) : Vec4u8{0, 0, 0, 255};
-    ColourAgreement a = compareColour(view, constantDepth(1.f), intensities(at_depth_pixels), 0.02f, 0.f);
+    ColorAgreement a = compareColor(view, constantDepth(1.f), intensities(at_depth_pixels), 0.02f, 0.f);
     ASSERT_TRUE(a.compared);
     EXPECT_GT(a.correlation, 0.99f);
     EXPECT_EQ(a.pixels, 156 * 120) << "the 4 right columns lie outside the colour image";
     view.calib.T_depth_rgb.m[3] = -0.025f;  // the extrinsics taken the wrong way round
-    a = compareColour(view, constantDepth(1.f), intensities(at_depth_pixels), 0.02f, 0.f);
+    a = compareColor(view, constantDepth(1.f), intensities(at_depth_pixels), 0.02f, 0.f);
     ASSERT_TRUE(a.compared);
     EXPECT_LT(a.correlation, 0.5f);
 }
 
-TEST(RelocaliserTest, MapPixelsWithoutColourAreNotCompared) {
+TEST(RelocaliserTest, MapPixelsWithoutColorAreNotCompared) {
     // Voxels that never saw colour have no intensity (-1): half of each cell so, and the rest agreeing.
-    const View view = colourView();
-    Image<float> half = intensities(modelColour(view, [](int g) { return g; }));
+    const View view = colorView();
+    Image<float> half = intensities(modelColor(view, [](int g) { return g; }));
     for (int v = 0; v < 120; ++v)
         for (int u = 0; u < 160; u += 2) half.at(u, v) = -1.f;
-    const ColourAgreement a = compareColour(view, constantDepth(1.f), half, 0.02f, 0.f);
+    const ColorAgreement a = compareColor(view, constantDepth(1.f), half, 0.02f, 0.f);
     ASSERT_TRUE(a.compared);
     EXPECT_EQ(a.pixels, 80 * 120);
     EXPECT_GT(a.correlation, 0.99f);
 }
 
-TEST(RelocaliserTest, ColourComparesTextureNotWhereBrightAndDarkRegionsLie) {
+TEST(RelocaliserTest, ColorComparesTextureNotWhereBrightAndDarkRegionsLie) {
     // The same layout of a bright and a dark half, with unrelated texture in each: a place of the
     // same shape under other colours. The image-wide correlation would be high; the cells' is not.
-    View view = colourView();
+    View view = colorView();
     Image<Vec4u8> other(view.depth.size());
     for (int v = 0; v < 120; ++v)
         for (int u = 0; u < 160; ++u) {
@@ -183,29 +183,29 @@ TEST(RelocaliserTest, ColourComparesTextureNotWhereBrightAndDarkRegionsLie) {
             const int h = (u * u * 13 + v * 29) % 50 + (bright ? 180 : 20);
             other.at(u, v) = Vec4u8{(unsigned char)h, (unsigned char)h, (unsigned char)h, 255};
         }
-    const ColourAgreement a = compareColour(view, constantDepth(1.f), intensities(other), 0.02f, 0.f);
+    const ColorAgreement a = compareColor(view, constantDepth(1.f), intensities(other), 0.02f, 0.f);
     ASSERT_TRUE(a.compared);
     EXPECT_LT(std::fabs(a.correlation), 0.3f);
 }
 
-TEST(RelocaliserTest, ColourGivesNoVerdictWithoutColourOrTexture) {
-    const View view = colourView();
+TEST(RelocaliserTest, ColorGivesNoVerdictWithoutColorOrTexture) {
+    const View view = colorView();
     const Image<float> model_depth = constantDepth(1.f);
-    const Image<float> same = intensities(modelColour(view, [](int g) { return g; }));
-    EXPECT_TRUE(compareColour(view, model_depth, same, 0.02f, 0.f).compared);
-    EXPECT_FALSE(compareColour(view, model_depth, same, 0.02f, 0.f, 16 * 12 + 1).compared)
+    const Image<float> same = intensities(modelColor(view, [](int g) { return g; }));
+    EXPECT_TRUE(compareColor(view, model_depth, same, 0.02f, 0.f).compared);
+    EXPECT_FALSE(compareColor(view, model_depth, same, 0.02f, 0.f, 16 * 12 + 1).compared)
         << "fewer cells than asked for";
-    const Image<float> plain = intensities(modelColour(view, [](int) { return 128; }));
-    EXPECT_FALSE(compareColour(view, model_depth, plain, 0.02f, 0.f, 0).compared)
+    const Image<float> plain = intensities(modelColor(view, [](int) { return 128; }));
+    EXPECT_FALSE(compareColor(view, model_depth, plain, 0.02f, 0.f, 0).compared)
         << "no textured cell: no verdict, whatever the least asked for";
     EXPECT_FALSE(
-        compareColour(view, model_depth, intensities(modelColour(view, [](int) { return 128; })), 0.02f, 0.f).compared)
+        compareColor(view, model_depth, intensities(modelColor(view, [](int) { return 128; })), 0.02f, 0.f).compared)
         << "a plain surface correlates with nothing";
-    View grey = colourView();
+    View grey = colorView();
     grey.rgb = Image<Vec4u8>();
-    EXPECT_FALSE(compareColour(grey, model_depth, same, 0.02f, 0.f).compared) << "a frame without colour";
-    EXPECT_FALSE(compareColour(view, model_depth, Image<float>(), 0.02f, 0.f).compared) << "a map without colour";
-    EXPECT_THROW(compareColour(view, model_depth, Image<float>(Vec2i{20, 15}), 0.02f, 0.f), ConfigError);
+    EXPECT_FALSE(compareColor(grey, model_depth, same, 0.02f, 0.f).compared) << "a frame without colour";
+    EXPECT_FALSE(compareColor(view, model_depth, Image<float>(), 0.02f, 0.f).compared) << "a map without colour";
+    EXPECT_THROW(compareColor(view, model_depth, Image<float>(Vec2i{20, 15}), 0.02f, 0.f), ConfigError);
 }
 
 RelocalisationCheck passingCheck() {
@@ -235,11 +235,11 @@ TEST(RelocaliserTest, ACandidateIsTakenOnlyWhenEveryMeasurePasses) {
          [](RelocalisationCheck& c) { c.refined.residual_m = std::numeric_limits<float>::quiet_NaN(); }},
         {"other colours",
          [](RelocalisationCheck& c) {
-             c.colour = ColourAgreement{true, 0.3f, 40, 5000};
+             c.color = ColorAgreement{true, 0.3f, 40, 5000};
          }},
         {"NaN colour",
          [](RelocalisationCheck& c) {
-             c.colour = ColourAgreement{true, std::numeric_limits<float>::quiet_NaN(), 40, 5000};
+             c.color = ColorAgreement{true, std::numeric_limits<float>::quiet_NaN(), 40, 5000};
          }},
     };
     for (const auto& [what, spoil] : spoilers) {
@@ -251,9 +251,9 @@ TEST(RelocaliserTest, ACandidateIsTakenOnlyWhenEveryMeasurePasses) {
     c.depth.agreement = nan;
     EXPECT_FALSE(acceptRelocalisation(s, c));
     c = passingCheck();
-    c.colour = ColourAgreement{false, -1.f, 1, 10};
+    c.color = ColorAgreement{false, -1.f, 1, 10};
     EXPECT_TRUE(acceptRelocalisation(s, c)) << "colours not compared: no colour test";
-    c.colour = ColourAgreement{true, 0.8f, 40, 5000};
+    c.color = ColorAgreement{true, 0.8f, 40, 5000};
     EXPECT_TRUE(acceptRelocalisation(s, c));
 }
 
@@ -316,7 +316,7 @@ TEST(RelocaliserTest, RejectsSettingsItCannotUse) {
     EXPECT_THROW(Relocaliser(s, {640, 480}), ConfigError) << "checked when made, not at the first frame";
     for (float correlation : {-1.5f, 1.1f, std::numeric_limits<float>::quiet_NaN()}) {
         s = RelocalisationSettings();
-        s.min_colour_correlation = correlation;
+        s.min_color_correlation = correlation;
         EXPECT_THROW(Relocaliser(s, {640, 480}), ConfigError) << correlation;
     }
     for (float speed : {-1.f, std::numeric_limits<float>::quiet_NaN()}) {

@@ -129,7 +129,7 @@ TEST(TeddyTrackingTest, StretchedStepsReachTheSamePosesInFewerIterations) {
 // fixed weight 1e-3 too, 7.05 mm with the previous frame's colours (frame to frame,
 // `color_from_map = false`) and 7.17 mm for ren (depth alone); InfiniTAM v3's CPU build 6.61 mm on the
 // same frames (DESIGN_NOTES).
-TEST(TeddyTrackingTest, DefaultPipelineAlignedToTheMapsColoursBeatsDepthAlone) {
+TEST(TeddyTrackingTest, DefaultPipelineAlignedToTheMapsColorsBeatsDepthAlone) {
     if (!std::filesystem::exists(teddyDir() + "/rgb.txt"))
         GTEST_SKIP() << "../shared/data not found at " << teddyDir() << ": skipping the teddy test";
     auto source = openImageSource(teddyDir());

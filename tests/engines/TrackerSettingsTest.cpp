@@ -114,7 +114,7 @@ TEST(TrackerSettingsTest, BadLinesNameFileLineAndReason) {
     expectParseError("tracker = icp\n# later\ntracker = ren\n", 3, "'tracker' is set twice (first on line 1)");
 }
 
-TEST(TrackerSettingsTest, ColourWeightIsAutomaticOrANumber) {
+TEST(TrackerSettingsTest, ColorWeightIsAutomaticOrANumber) {
     EXPECT_TRUE(parseTrackerSettings("color_weight = auto\n", "test.txt").color_weight_auto);
     const TrackerSettings fixed = parseTrackerSettings("color_weight = 2e-3\n", "test.txt");
     EXPECT_FALSE(fixed.color_weight_auto);

@@ -180,7 +180,7 @@ TEST(FrameUndistorter, UndistortingThroughAScratchAllocatesNoImagesAfterTheFirst
 
 // Labels follow the colour camera at their own resolution (here half), nearest-neighbour: only ids
 // that were there (or kNoLabel outside the raw image), and a class patch lands where the pinhole sees it.
-TEST(FrameUndistorter, LabelsAreUndistortedLikeColourAtTheirOwnResolution) {
+TEST(FrameUndistorter, LabelsAreUndistortedLikeColorAtTheirOwnResolution) {
     const Intrinsics half = kCamera.resized(kCamera.width / 2, kCamera.height / 2);
     const Vec2f ideal{35.f, 30.f};  // (70, 60) at full resolution, where the lens moves pixels a lot
     const Vec2f raw = distortPixel(half, kLens, ideal);
@@ -201,7 +201,7 @@ TEST(FrameUndistorter, LabelsAreUndistortedLikeColourAtTheirOwnResolution) {
     EXPECT_EQ(frame.labels.at(35, 30), 9);
 }
 
-TEST(FrameUndistorter, WithoutAColourCameraLabelsFollowTheDepthCamerasLens) {
+TEST(FrameUndistorter, WithoutAColorCameraLabelsFollowTheDepthCamerasLens) {
     RGBDCalib depth_only;
     depth_only.depth = kCamera;
     depth_only.depth_distortion = kLens;

@@ -148,7 +148,7 @@ TEST(ImageIO, BadNetpbmFilesGiveReasons) {
         {"no_data.ppm", "P6\n2 2\n255", false, "truncated"},
         {"huge.ppm", "P6\n100000 100000\n255\n" + std::string(10, 'x'), false, "truncated"},
         {"ascii.ppm", "P3\n1 1\n255\n1 2 3\n", false, "wrong magic 'P3': expected 'P6'"},
-        {"colour_as_depth.pgm", "P6\n1 1\n255\n" + std::string(3, 'x'), true, "wrong magic 'P6': expected 'P5'"},
+        {"color_as_depth.pgm", "P6\n1 1\n255\n" + std::string(3, 'x'), true, "wrong magic 'P6': expected 'P5'"},
         {"png_as_ppm.ppm", "\x89PNG\r\n\x1a\n", false, "wrong magic"},
         {"empty.ppm", "", false, "wrong magic: the file is too short"},
         {"bad_width.ppm", "P6\nx 2\n255\n", false, "bad header: expected the width"},
@@ -181,7 +181,7 @@ TEST(ImageIO, MissingFilesSayNoSuchFile) {
     expectIoError([](const std::string& p) { readDepthPNG(p); }, path + ".png", "no such file");
 }
 
-TEST(ImageIO, PngColourRoundTrip) {
+TEST(ImageIO, PngColorRoundTrip) {
     ScratchDir dir;
     const Image<Vec4u8> rgb = makeRgb({6, 4}, 1);
     const std::string path = dir.file("c.png");
@@ -290,7 +290,7 @@ TEST(ImageIO, DamagedJpegIsAnErrorNamingTheFile) {
     expectIoError([](const std::string& p) { readColorImage(p); }, header_only, "corrupt JPEG");
 }
 
-TEST(ImageIO, ADamagedJpegColourFrameNamesItsFileAndFrameAndTheSequenceGoesOn) {
+TEST(ImageIO, ADamagedJpegColorFrameNamesItsFileAndFrameAndTheSequenceGoesOn) {
     ScratchDir dir;
     cv::Mat bgr(3, 4, CV_8UC3, cv::Scalar(10, 20, 30));
     for (int number : {0, 1, 2}) {
@@ -478,9 +478,9 @@ TEST(ImageIO, LabelImagesKeepTheirIdsWhereDecodersWouldRescale) {
 TEST(ImageIO, LabelImageErrors) {
     ScratchDir dir;
     const auto read = [](const std::string& p) { readLabelImage(p, 0); };
-    const std::string colour = dir.file("colour.png");
-    writePNG(colour, makeRgb({4, 4}, 1));
-    expectIoError(read, colour, "label images must be single-channel 8- or 16-bit class ids; this one has 3 channels");
+    const std::string color = dir.file("colour.png");
+    writePNG(color, makeRgb({4, 4}, 1));
+    expectIoError(read, color, "label images must be single-channel 8- or 16-bit class ids; this one has 3 channels");
     expectIoError(read, dir.file("missing.png"), "no such file");
     const std::string garbage = dir.file("garbage.png");
     writeBytes(garbage, "not a png at all");

@@ -223,9 +223,9 @@ TEST(LabelledImageSource, TimestampMatchingTakesNearestWithinTolerance) {
 
     // Where the source knows when the colour image was taken (TUM pairs depth with a colour image up
     // to 0.02 s apart), the labels, computed from colour, are matched to that time.
-    LabelledImageSource by_colour(std::make_unique<FakeSource>(std::vector<FakeFrame>{{0, 100.045, 100.064}}),
-                                  optionsFor(dir.path()));
-    EXPECT_EQ(readIds(by_colour), (std::vector<int>{3}));
+    LabelledImageSource by_color(std::make_unique<FakeSource>(std::vector<FakeFrame>{{0, 100.045, 100.064}}),
+                                 optionsFor(dir.path()));
+    EXPECT_EQ(readIds(by_color), (std::vector<int>{3}));
 
     // A wider tolerance lets frame 3 take #3.
     LabelStreamOptions wide = optionsFor(dir.path(), Match::Timestamp);
@@ -347,17 +347,17 @@ TEST(LabelledImageSource, WrongAspectRatioNamesFileAndFrame) {
     EXPECT_EQ(source.labelErrors(), 1);
 }
 
-TEST(LabelledImageSource, ColourCodedLabelImageIsRejected) {
+TEST(LabelledImageSource, ColorCodedLabelImageIsRejected) {
     ScratchDir dir;
-    const std::string colour = dir.file("0.png");
-    ASSERT_TRUE(cv::imwrite(colour, cv::Mat(6, 8, CV_8UC3, cv::Scalar(10, 20, 30))));
+    const std::string color = dir.file("0.png");
+    ASSERT_TRUE(cv::imwrite(color, cv::Mat(6, 8, CV_8UC3, cv::Scalar(10, 20, 30))));
     LabelledImageSource source(FakeSource::sequence(1), optionsFor(dir.path()));
     RGBDFrame frame;
     try {
         source.next(frame);
         ADD_FAILURE() << "no IoError for a 3-channel label image";
     } catch (const IoError& e) {
-        EXPECT_EQ(e.file(), colour);
+        EXPECT_EQ(e.file(), color);
         EXPECT_EQ(e.frame(), 0);
         EXPECT_NE(e.reason().find("this one has 3 channels"), std::string::npos) << e.reason();
     }

@@ -92,7 +92,7 @@ PlyContents readPly(const std::string& path) {
     return c;
 }
 
-TEST(MeshIO, PlyRoundTripWithNormalsAndColours) {
+TEST(MeshIO, PlyRoundTripWithNormalsAndColors) {
     ScratchDir dir;
     const Mesh m = tetrahedron(true, true);
     writeMeshPly(dir.file("mesh.ply"), m);
@@ -116,7 +116,7 @@ TEST(MeshIO, PlyRoundTripWithNormalsAndColours) {
     EXPECT_EQ(c.trailing_bytes, 0u);
 }
 
-TEST(MeshIO, PlyWithoutNormalsOrColoursDeclaresOnlyPositions) {
+TEST(MeshIO, PlyWithoutNormalsOrColorsDeclaresOnlyPositions) {
     ScratchDir dir;
     const Mesh m = tetrahedron(false, false);
     writeMesh(dir.file("plain.PLY"), m);  // chosen by extension, any case
@@ -150,7 +150,7 @@ TEST(MeshIO, PointCloudPlyHasVerticesOnly) {
 }
 
 // Classes as ScanNet's labelled meshes store them: "property ushort label" after the colours.
-TEST(MeshIO, PlyWithLabelsHasAUshortLabelAfterTheColours) {
+TEST(MeshIO, PlyWithLabelsHasAUshortLabelAfterTheColors) {
     ScratchDir dir;
     Mesh m = tetrahedron(true, true);
     m.labels = {3, 0, kNoLabel, 0x1234};  // 0x1234 tells the byte order
@@ -221,7 +221,7 @@ std::vector<std::string> lines(const std::string& text) {
     return out;
 }
 
-TEST(MeshIO, ObjHasColouredVerticesNormalsAndOneBasedFaces) {
+TEST(MeshIO, ObjHasColoredVerticesNormalsAndOneBasedFaces) {
     ScratchDir dir;
     writeMeshObj(dir.file("mesh.obj"), tetrahedron(true, true));
     const std::vector<std::string> l = lines(readBytes(dir.file("mesh.obj")));
@@ -239,7 +239,7 @@ TEST(MeshIO, ObjHasColouredVerticesNormalsAndOneBasedFaces) {
     EXPECT_EQ(l[12], "f 2//2 3//3 4//4");
 }
 
-TEST(MeshIO, ObjWithoutNormalsOrColours) {
+TEST(MeshIO, ObjWithoutNormalsOrColors) {
     ScratchDir dir;
     writeMesh(dir.file("mesh.obj"), tetrahedron(false, false));
     const std::vector<std::string> l = lines(readBytes(dir.file("mesh.obj")));

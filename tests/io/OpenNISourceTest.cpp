@@ -92,8 +92,8 @@ std::unique_ptr<OpenNISource> openDummyCamera() {
     }
 }
 
-TEST(OpenNISource, ALiveCameraStreamsDepthWithTheNearestColour) {
-    Watchdog watchdog(60s, "ALiveCameraStreamsDepthWithTheNearestColour");
+TEST(OpenNISource, ALiveCameraStreamsDepthWithTheNearestColor) {
+    Watchdog watchdog(60s, "ALiveCameraStreamsDepthWithTheNearestColor");
     auto camera = openDummyCamera();
     if (!camera) GTEST_SKIP() << "no OpenNI2 or no Dummy driver";
     EXPECT_TRUE(camera->isLive());
@@ -103,7 +103,7 @@ TEST(OpenNISource, ALiveCameraStreamsDepthWithTheNearestColour) {
     EXPECT_NE(camera->description().find("OpenNI2 camera Dummy"), std::string::npos) << camera->description();
     RGBDFrame frame;
     double previous = -1.0;
-    int with_colour = 0;
+    int with_color = 0;
     for (int i = 0; i < 6; ++i) {
         ASSERT_TRUE(camera->next(frame));
         EXPECT_EQ(frame.index, i);
@@ -113,10 +113,10 @@ TEST(OpenNISource, ALiveCameraStreamsDepthWithTheNearestColour) {
         previous = frame.timestamp_s;
         if (!frame.rgb.empty()) {
             EXPECT_EQ(frame.rgb.size(), (Vec2i{320, 240}));
-            ++with_colour;
+            ++with_color;
         }
     }
-    EXPECT_GE(with_colour, 4);  // the first depth frame may come before any colour
+    EXPECT_GE(with_color, 4);  // the first depth frame may come before any colour
 }
 
 TEST(OpenNISource, ALiveCameraDropsFramesWhenTheEngineLagsAndStopsCleanly) {

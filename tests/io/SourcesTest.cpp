@@ -225,7 +225,7 @@ TEST(TumSource, CorruptFrameThrowsThenContinues) {
 
 // The colour decodes on a thread of its own beside the depth: either failing is the frame's error,
 // named by its file, and the depth's when both fail.
-TEST(TumSource, ABadColourImageOrBothBadNameTheFile) {
+TEST(TumSource, ABadColorImageOrBothBadNameTheFile) {
     HandMadeTumFolder folder;
     writeBytes(folder.dir.file("rgb/1.033000.png"), "not a png");
     writeBytes(folder.dir.file("rgb/1.067000.png"), "not a png either");
@@ -294,7 +294,7 @@ TEST(PpmPgmSource, AMissingFrameIsReportedAndTheSequenceGoesOn) {
     EXPECT_TRUE(source.groundTruth().empty());
 }
 
-TEST(PpmPgmSource, AMissingColourFileIsThatFramesError) {
+TEST(PpmPgmSource, AMissingColorFileIsThatFramesError) {
     PpmPgmFolder folder({0, 1, 2});
     std::filesystem::remove(folder.dir.path() + "/rgb/0001.ppm");
     PpmPgmSource source(folder.rgbPattern(), folder.depthPattern(), folder.calib);
@@ -415,14 +415,14 @@ TEST(PpmPgmSource, GroundTruthMatchedByCount) {
 // ----------------------------------------------------------------------------------------------
 // Per-frame folders
 
-TEST(FrameFolderSource, SortsByNumberAndScalesColourIntrinsics) {
+TEST(FrameFolderSource, SortsByNumberAndScalesColorIntrinsics) {
     ScratchDir dir;
-    const Vec2i colour_size{8, 6};
+    const Vec2i color_size{8, 6};
     for (int number : {10, 3, 7}) {
         char stem[32];
         std::snprintf(stem, sizeof stem, "frame-%06d", number);
         writeDepthPNG(dir.file(std::string(stem) + ".depth.png"), makeDepth(kSmall, number));
-        writePNG(dir.file(std::string(stem) + ".color.png"), makeRgb(colour_size, number));
+        writePNG(dir.file(std::string(stem) + ".color.png"), makeRgb(color_size, number));
     }
     writeBytes(dir.file("frame-000003.pose.txt"), "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n");
     writeBytes(dir.file("frame-000007.pose.txt"), "1 0 0 0.5\n0 1 0 0\n0 0 1 0\n0 0 0 1\n");
@@ -437,7 +437,7 @@ TEST(FrameFolderSource, SortsByNumberAndScalesColourIntrinsics) {
     EXPECT_EQ(calib.depth.size(), kSmall);
     EXPECT_FLOAT_EQ(calib.depth.fx, 5.f);
     EXPECT_FLOAT_EQ(calib.depth.fy, 6.f);
-    EXPECT_EQ(calib.rgb.size(), colour_size);
+    EXPECT_EQ(calib.rgb.size(), color_size);
     EXPECT_FLOAT_EQ(calib.rgb.fx, 10.f);
     EXPECT_FLOAT_EQ(calib.rgb.cx, 3.5f);  // (1.5 + 0.5) * 2 - 0.5
     EXPECT_FLOAT_EQ(calib.disparity.a, 0.001f);
@@ -452,7 +452,7 @@ TEST(FrameFolderSource, SortsByNumberAndScalesColourIntrinsics) {
         EXPECT_EQ(frame.index, i);
         EXPECT_DOUBLE_EQ(frame.timestamp_s, numbers[i] / 30.0);
         EXPECT_TRUE(samePixels(frame.depth_raw, makeDepth(kSmall, numbers[i])));
-        EXPECT_TRUE(samePixels(frame.rgb, makeRgb(colour_size, numbers[i])));
+        EXPECT_TRUE(samePixels(frame.rgb, makeRgb(color_size, numbers[i])));
         EXPECT_EQ(frame.has_ground_truth, numbers[i] != 10);
     }
     EXPECT_FALSE(source.next(frame));

@@ -28,7 +28,7 @@ constexpr int kVideoWidth = 160, kVideoHeight = 120;  // 4:3 like the iPhone's 1
 constexpr int kDepthWidth = 32, kDepthHeight = 24;    // 4:3 like the iPhone's 256x192
 
 // Each frame's colour is uniform and different, so a frame shows which video frame it got.
-Vec4u8 colourOf(int frame) { return Vec4u8{std::uint8_t(30 + 50 * frame), std::uint8_t(200 - 40 * frame), 90, 255}; }
+Vec4u8 colorOf(int frame) { return Vec4u8{std::uint8_t(30 + 50 * frame), std::uint8_t(200 - 40 * frame), 90, 255}; }
 // A tilted plane, in millimetres, moving 1 mm per frame.
 std::uint16_t planeDepth(int x, int y, int frame) { return std::uint16_t(1000 + 10 * x + 5 * y + frame); }
 std::uint8_t confidenceAt(int x, int y) { return std::uint8_t((x + y) % 3); }
@@ -90,7 +90,7 @@ struct StrayCapture {
         video_written = writer.isOpened();
         if (!video_written) return;
         for (int i = 0; i < count; ++i) {
-            const Vec4u8 c = colourOf(i);
+            const Vec4u8 c = colorOf(i);
             writer.write(cv::Mat(size, CV_8UC3, cv::Scalar(c.z, c.y, c.x)));  // BGR
         }
     }
@@ -99,13 +99,13 @@ struct StrayCapture {
     bool video_written = false;
 };
 
-SourceOptions colourWidth(int width) {
+SourceOptions colorWidth(int width) {
     SourceOptions options;
-    options.max_colour_width = width;
+    options.max_color_width = width;
     return options;
 }
 
-void expectColourNear(const Image<Vec4u8>& rgb, Vec4u8 expected, int frame) {
+void expectColorNear(const Image<Vec4u8>& rgb, Vec4u8 expected, int frame) {
     ASSERT_FALSE(rgb.empty());
     const Vec4u8 c = rgb.at(rgb.width() / 2, rgb.height() / 2);
     EXPECT_NEAR(c.x, expected.x, 12) << "frame " << frame;
@@ -128,7 +128,7 @@ void expectIoError(Call call, const std::string& file, const std::string& reason
 TEST(StrayScannerSource, ReadsFramesCalibrationAndArkitPoses) {
     StrayCapture capture(4);
     ASSERT_TRUE(capture.video_written) << "OpenCV cannot write mp4v here";
-    StrayScannerSource source(capture.path(), colourWidth(80));
+    StrayScannerSource source(capture.path(), colorWidth(80));
     EXPECT_EQ(source.frameCount(), 4);
     EXPECT_FALSE(source.isLive());
 
@@ -157,7 +157,7 @@ TEST(StrayScannerSource, ReadsFramesCalibrationAndArkitPoses) {
             for (int x = 0; x < kDepthWidth; ++x)  // low confidence (0) is dropped by default
                 ASSERT_EQ(frame.depth_raw.at(x, y), confidenceAt(x, y) >= 1 ? planeDepth(x, y, i) : 0) << x << "," << y;
         EXPECT_EQ(frame.rgb.size(), (Vec2i{80, 60}));
-        expectColourNear(frame.rgb, colourOf(i), i);
+        expectColorNear(frame.rgb, colorOf(i), i);
         ASSERT_TRUE(frame.has_ground_truth);
         const Pose& p = kPoses[std::size_t(i)];
         const Mat4f expected = poseFromArkit(p.position, p.q);
@@ -172,9 +172,9 @@ TEST(StrayScannerSource, ReadsFramesCalibrationAndArkitPoses) {
     EXPECT_FLOAT_EQ(T1(2, 2), -1.f);
 }
 
-TEST(StrayScannerSource, FullResolutionColourWhenTheWidthIsNotLimited) {
+TEST(StrayScannerSource, FullResolutionColorWhenTheWidthIsNotLimited) {
     StrayCapture capture(1);
-    StrayScannerSource source(capture.path(), colourWidth(0));
+    StrayScannerSource source(capture.path(), colorWidth(0));
     EXPECT_EQ(source.calib().rgb.size(), (Vec2i{kVideoWidth, kVideoHeight}));
     EXPECT_FLOAT_EQ(source.calib().rgb.fx, 130.f);
     EXPECT_FLOAT_EQ(source.calib().rgb.cx, 79.5f);
@@ -205,7 +205,7 @@ TEST(StrayScannerSource, AGapInTheDepthMapsTakesTheMatchingVideoFrame) {
     RGBDFrame frame;
     for (int number : {0, 1, 3}) {
         ASSERT_TRUE(source.next(frame));
-        expectColourNear(frame.rgb, colourOf(number), number);
+        expectColorNear(frame.rgb, colorOf(number), number);
         EXPECT_EQ(frame.depth_raw.at(0, 1), planeDepth(0, 1, number));
     }
 }
@@ -232,7 +232,7 @@ TEST(StrayScannerSource, AMissingOrBrokenConfidenceMapIsThatFramesError) {
     expectIoError([&] { source.next(frame); }, missing, "missing confidence map", 1);
     ASSERT_TRUE(source.next(frame));
     EXPECT_EQ(frame.index, 2);
-    expectColourNear(frame.rgb, colourOf(2), 2);
+    expectColorNear(frame.rgb, colorOf(2), 2);
 }
 
 TEST(StrayScannerSource, MissingPartsAreNamed) {
@@ -373,7 +373,7 @@ TEST(StrayScannerSource, OpenImageSourceRecognisesACaptureAndTheInputThreadReads
     int count = 0;
     while (threaded.next(frame)) {
         EXPECT_EQ(frame.index, count);
-        expectColourNear(frame.rgb, colourOf(count), count);
+        expectColorNear(frame.rgb, colorOf(count), count);
         ++count;
     }
     EXPECT_EQ(count, 4);
@@ -391,7 +391,7 @@ TEST(StrayScannerSource, DecodesH264AndHevcVideos) {
         RGBDFrame frame;
         for (int i = 0; i < 3; ++i) {
             ASSERT_TRUE(source.next(frame)) << fourcc;
-            expectColourNear(frame.rgb, colourOf(i), i);
+            expectColorNear(frame.rgb, colorOf(i), i);
         }
     }
 }

@@ -560,14 +560,14 @@ std::vector<std::pair<std::string, std::string>> readTumList(const fs::path& pat
 }
 
 // Bit depth and colour type from a PNG's IHDR chunk (colour type 0: greyscale).
-void readPngFormat(const fs::path& path, int& bitDepth, int& colourType) {
+void readPngFormat(const fs::path& path, int& bitDepth, int& colorType) {
     std::ifstream in(path, std::ios::binary);
     unsigned char header[26] = {};
     in.read(reinterpret_cast<char*>(header), sizeof(header));
     ASSERT_TRUE(in.good()) << path;
     ASSERT_EQ(std::string(reinterpret_cast<char*>(header) + 12, 4), "IHDR") << path;
     bitDepth = header[24];
-    colourType = header[25];
+    colorType = header[25];
 }
 
 }  // namespace
@@ -582,7 +582,7 @@ TEST(VoxfuseSynthTool, TumLabelImagesAreTheExactClasses) {
     const fs::path dir = fs::path(::testing::TempDir()) / "voxfuse_synth_tum_labels";
     fs::remove_all(dir);
     const std::string command = std::string("\"") + VOXFUSE_SYNTH_EXE + "\" --out \"" + dir.string() +
-                                "\" --frames 2 --width 160 --height 120 --colour-samples 1 > /dev/null";
+                                "\" --frames 2 --width 160 --height 120 --color-samples 1 > /dev/null";
     ASSERT_EQ(std::system(command.c_str()), 0) << command;
 
     const SyntheticScene scene = SyntheticScene::read((dir / "scene.txt").string());
@@ -618,10 +618,10 @@ TEST(VoxfuseSynthTool, TumLabelImagesAreTheExactClasses) {
         EXPECT_EQ(labels[f].second, "labels/" + labels[f].first + ".png");
         const fs::path labelPath = dir / labels[f].second;
         ASSERT_TRUE(fs::exists(labelPath)) << labelPath;
-        int bitDepth = 0, colourType = -1;
-        readPngFormat(labelPath, bitDepth, colourType);
+        int bitDepth = 0, colorType = -1;
+        readPngFormat(labelPath, bitDepth, colorType);
         EXPECT_EQ(bitDepth, 8);
-        EXPECT_EQ(colourType, 0) << "single-channel greyscale";
+        EXPECT_EQ(colorType, 0) << "single-channel greyscale";
 
         const voxfuse::Image<voxfuse::Vec4u8> image = voxfuse::readColorImage(labelPath.string());
         const voxfuse::Image<std::uint16_t> depthImage = voxfuse::readDepthPNG((dir / depth[f].second).string());
@@ -646,7 +646,7 @@ TEST(VoxfuseSynthTool, TumLabelImagesAreTheExactClasses) {
     // --no-labels leaves them out.
     fs::remove_all(dir);
     ASSERT_EQ(std::system((std::string("\"") + VOXFUSE_SYNTH_EXE + "\" --out \"" + dir.string() +
-                           "\" --frames 1 --width 80 --height 60 --colour-samples 1 --no-labels > /dev/null")
+                           "\" --frames 1 --width 80 --height 60 --color-samples 1 --no-labels > /dev/null")
                               .c_str()),
               0);
     EXPECT_TRUE(fs::exists(dir / "depth.txt"));
@@ -662,7 +662,7 @@ TEST(VoxfuseSynthTool, TumLabelImagesAreTheExactClasses) {
         return count;
     };
     const std::string twoFrames = std::string("\"") + VOXFUSE_SYNTH_EXE + "\" --out \"" + dir.string() +
-                                  "\" --frames 2 --width 80 --height 60 --colour-samples 1 --no-labels";
+                                  "\" --frames 2 --width 80 --height 60 --color-samples 1 --no-labels";
     EXPECT_NE(std::system((twoFrames + " > /dev/null 2>&1").c_str()), 0);
     EXPECT_EQ(frameLines(), 1);
     EXPECT_EQ(std::system((twoFrames + " --overwrite > /dev/null").c_str()), 0);

@@ -61,7 +61,7 @@ int main(int argc, char** argv) {
         };
         bool ok = true;
         for (const Named& panel : {Named{"model", layout.model}, Named{"live depth", layout.live_depth},
-                                   Named{"live colour", layout.live_colour}}) {
+                                   Named{"live colour", layout.live_color}}) {
             const PanelStats s = measure(shot, panel.rect);
             const bool varied = s.variance > kMinLumaVariance;
             std::printf("%-12s %4dx%-4d at (%d,%d): luma variance %.1f%s, non-background %.0f%%\n", panel.name,

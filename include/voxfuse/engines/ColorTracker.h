@@ -6,7 +6,7 @@
 // Where the model's intensities come from: InfiniTAM reads them from the voxels; VoxFuse colours the
 // raycast points with the PREVIOUS frame's colour image (projected at the previous frame's tracked
 // pose, remembered by the tracker at the end of each track() call). It works with every voxel type
-// (colourless ones included) and samples at image resolution instead of voxel resolution; the price
+// (colorless ones included) and samples at image resolution instead of voxel resolution; the price
 // is frame-to-frame photometric drift, which the depth terms of the rgbd tracker keep in check.
 //
 // Host side: src/engines/ColorTracker.cpp (LM loop) and PhotometricFrames (pyramids, model colours);

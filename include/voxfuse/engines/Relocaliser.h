@@ -47,9 +47,9 @@ struct RelocalisationSettings {
     float max_refinement_step_m = 0.01f;  // the second refinement moves the pose less than this: it had converged
     float max_refinement_step_deg = 1.f;
     // Where the map and the frame have colour: the correlation of the frame's intensities with the
-    // model's fused colours, over the pixels whose depths agree (compareColour). Geometry alone takes
+    // model's fused colours, over the pixels whose depths agree (compareColor). Geometry alone takes
     // a mirror-symmetric or repeating place for another; its colours tell them apart.
-    float min_colour_correlation = 0.5f;
+    float min_color_correlation = 0.5f;
 };
 
 // How a frame's depth agrees with the model's depth seen from the same pose (both in metres, 0 = none).
@@ -60,7 +60,7 @@ struct DepthAgreement {
 DepthAgreement compareDepth(const Image<float>& frame_depth_m, const Image<float>& model_depth_m, float tolerance_m);
 
 // How a frame's colours agree with the model's fused colours seen from the same pose. The depth
-// image is cut into cells (kColourCellsAcross across); in each, the normalised cross-correlation
+// image is cut into cells (kColorCellsAcross across); in each, the normalised cross-correlation
 // (zero mean, so that exposure and gain do not count) of the two intensities over the frame's depth
 // pixels whose depth agrees with the model's within `tolerance_m` (no occluders), which the colour
 // camera sees and where the map has colour; then the mean over the cells, weighed by their pixels.
@@ -70,30 +70,30 @@ DepthAgreement compareDepth(const Image<float>& frame_depth_m, const Image<float
 // the raycast that gave `model_depth_m`, in the depth camera; -1 where no voxel saw colour. It holds
 // no detail finer than the map's voxels (`voxel_size_m`; 0 compares single colour pixels): the
 // render interpolates between voxels. So the frame's intensity is its mean over the footprint of
-// kColourFootprintVoxels voxels at the pixel's depth (the nearest colour pixel where that is
+// kColorFootprintVoxels voxels at the pixel's depth (the nearest colour pixel where that is
 // narrower than one), and texture that only the frame resolves (a colour camera finer than the map)
 // is not taken for disagreement. No verdict (`compared` false) without colour on either side, or
 // with fewer than `min_textured_cells` cells that have both pixels and texture on both sides (plain
 // walls correlate with nothing).
-constexpr int kColourCellsAcross = 16;
-constexpr int kColourCellMinPixels = 8;
-constexpr float kColourFootprintVoxels = 1.5f;  // a trilinear read's spread, as a box
-struct ColourAgreement {
+constexpr int kColorCellsAcross = 16;
+constexpr int kColorCellMinPixels = 8;
+constexpr float kColorFootprintVoxels = 1.5f;  // a trilinear read's spread, as a box
+struct ColorAgreement {
     bool compared = false;
     float correlation = 0.f;  // in [-1, 1] when compared
     int cells = 0;            // that had their say
     int pixels = 0;           // in them
 };
-ColourAgreement compareColour(const View& view, const Image<float>& model_depth_m, const Image<float>& model_intensity,
-                              float tolerance_m, float voxel_size_m, int min_textured_cells = 8);
+ColorAgreement compareColor(const View& view, const Image<float>& model_depth_m, const Image<float>& model_intensity,
+                            float tolerance_m, float voxel_size_m, int min_textured_cells = 8);
 
 // What acceptance looks at for one candidate.
 struct RelocalisationCheck {
     TrackingState refined;  // the second refinement's verdict and pose
     float step_m = 0.f;     // how far the second refinement moved the pose
     float step_deg = 0.f;
-    DepthAgreement depth;    // at the first refinement's pose, against the raycast from there
-    ColourAgreement colour;  // the same, for colour (not compared: no colour test)
+    DepthAgreement depth;  // at the first refinement's pose, against the raycast from there
+    ColorAgreement color;  // the same, for colour (not compared: no colour test)
 };
 bool acceptRelocalisation(const RelocalisationSettings& settings, const RelocalisationCheck& check);
 

@@ -38,7 +38,7 @@ private:
         int number;
         std::string stem;  // folder/frame-XXXXXX, as spelled on disk
         std::string depth_path;
-        std::string colour_path;  // empty when there is none
+        std::string color_path;  // empty when there is none
         bool has_pose = false;
         Mat4f T_world_camera = Mat4f::identity();
     };

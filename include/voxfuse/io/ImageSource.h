@@ -48,7 +48,7 @@ struct SourceOptions {
     // intrinsics scaled to match); 0 keeps the full resolution. A 1920x1440 video frame costs 11 MB
     // as RGBA, and the engine samples colour at depth resolution (256x192) anyway. Other sources
     // deliver colour as recorded.
-    int max_colour_width = 640;
+    int max_color_width = 640;
 };
 
 // Opens `path` as whatever it is: a TUM RGB-D folder (rgb.txt + depth.txt), a per-frame folder

@@ -25,7 +25,7 @@ struct RGBDFrame {
     std::size_t depth_samples_out_of_range = 0;
     Image<Vec4u8> rgb;  // RGBA; empty when the source has no colour
     // Colour samples above the maximum the colour file declares (a PPM's maxval): read as full intensity.
-    std::size_t colour_samples_out_of_range = 0;
+    std::size_t color_samples_out_of_range = 0;
     bool has_ground_truth = false;
     Mat4f T_world_camera_gt = Mat4f::identity();  // ground-truth pose when has_ground_truth
     std::string depth_path;                       // where the depth came from, for error messages

@@ -22,7 +22,7 @@ public:
     // Frames are the depth maps sorted by number; depth frame N pairs with video frame N.
     // Calibration: options.calib_path if given (its colour camera size is then the size colour frames
     // are delivered at), else K from camera_matrix.csv for the colour camera, scaled to the colour
-    // size delivered (options.max_colour_width) and to the depth maps' size for the depth camera
+    // size delivered (options.max_color_width) and to the depth maps' size for the depth camera
     // (ARKit registers depth to colour: identity extrinsics), depth in millimetres.
     // Depth samples with confidence below options.min_depth_confidence become 0.
     // Ground truth: the odometry poses, converted to our camera axes (ArkitPose.h); frame timestamps
@@ -55,7 +55,7 @@ private:
     };
 
     void findFrames();
-    void calibrate(const std::string& calib_path, int max_colour_width);
+    void calibrate(const std::string& calib_path, int max_color_width);
     void loadPoses();
     void dropLowConfidence(Image<std::uint16_t>& depth, const FrameFiles& files, int index) const;
 

@@ -55,9 +55,9 @@ struct RGBDCalib {
 
     // Semantic label images show what the colour camera sees (segmentations are computed from colour),
     // or what the depth camera sees in a calibration without colour.
-    bool labelsFromColour() const { return rgb.valid(); }
-    const Intrinsics& labelCamera() const { return labelsFromColour() ? rgb : depth; }
-    const LensDistortion& labelDistortion() const { return labelsFromColour() ? rgb_distortion : depth_distortion; }
+    bool labelsFromColor() const { return rgb.valid(); }
+    const Intrinsics& labelCamera() const { return labelsFromColor() ? rgb : depth; }
+    const LensDistortion& labelDistortion() const { return labelsFromColor() ? rgb_distortion : depth_distortion; }
 };
 
 }  // namespace voxfuse

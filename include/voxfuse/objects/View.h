@@ -25,7 +25,7 @@ struct View {
     // The colour camera as the colour image sees it: an image of another size than calibrated is the
     // same camera at that resolution. Integration, the colour trackers and relocalisation all use it.
     // For a view with a colour image.
-    Intrinsics colourCamera() const {
+    Intrinsics colorCamera() const {
         return rgb.size() == calib.rgb.size() ? calib.rgb : calib.rgb.resized(rgb.width(), rgb.height());
     }
 };
