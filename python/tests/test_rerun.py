@@ -74,3 +74,22 @@ def test_the_entry_point_saves_an_rrd_headless(tmp_path, rr):
     assert rows.get("/world/camera") == 4
     assert rows.get("/world/mesh") == 3  # frames 0 and 2, and the final map
     assert np.loadtxt(out / "trajectory.txt").shape == (4, 8)
+
+
+def test_a_colour_camera_apart_from_the_depth_camera_gets_its_own_frustum(tmp_path, room_frames, rr):
+    source, frames = room_frames
+    calib = source.calib
+    calib.rgb = voxfuse.Intrinsics(320, 240, 262.5, 262.5, 159.75, 119.75)
+    T = np.eye(4)
+    T[0, 3] = 0.025
+    calib.T_depth_rgb = T
+    frame = voxfuse.Frame(frames[0].depth, frames[0].rgb[::2, ::2], calib=calib)
+    pipeline = voxfuse.Pipeline(calib, voxel_size=0.01)
+    recording = rr.RecordingStream("voxfuse_test")
+    path = tmp_path / "two_cameras.rrd"
+    recording.save(str(path))
+    pipeline.log_to_rerun(pipeline.process_frame(frame), frame, recording=recording, mesh_every=0)
+    recording.flush()
+    del recording
+    rows = rows_per_entity(path)
+    assert rows.get("/world/camera/colour/rgb") == 1 and "/world/camera/image/rgb" not in rows

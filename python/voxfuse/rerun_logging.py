@@ -30,8 +30,16 @@ def _import_rerun():
     return rr
 
 
-def _camera_matrix(k):
-    return np.array([[k.fx, 0.0, k.cx], [0.0, k.fy, k.cy], [0.0, 0.0, 1.0]])
+def _pinhole(rr, k):
+    """A camera's frustum: its intrinsics, x right, y down, z forward."""
+    K = np.array([[k.fx, 0.0, k.cx], [0.0, k.fy, k.cy], [0.0, 0.0, 1.0]])
+    return rr.Pinhole(image_from_camera=K, resolution=[k.width, k.height], camera_xyz=rr.ViewCoordinates.RDF)
+
+
+def _transform(rr, T):
+    """A 4x4 rigid transform (child to parent) as Rerun's."""
+    T = np.asarray(T)
+    return rr.Transform3D(translation=T[:3, 3], mat3x3=T[:3, :3])
 
 
 def _same_camera(a, b):
@@ -78,17 +86,8 @@ def log_to_rerun(
     rr.set_time("time", duration=float(result.timestamp), recording=recording)
     log("world", rr.ViewCoordinates.RDF, static=True)
     if result.status != "lost":  # a lost frame has no pose of its own
-        pose = np.asarray(result.pose)
-        log("world/camera", rr.Transform3D(translation=pose[:3, 3], mat3x3=pose[:3, :3]))
-    log(
-        "world/camera/image",
-        rr.Pinhole(
-            image_from_camera=_camera_matrix(calib.depth),
-            resolution=[calib.depth.width, calib.depth.height],
-            camera_xyz=rr.ViewCoordinates.RDF,
-        ),
-        static=True,
-    )
+        log("world/camera", _transform(rr, result.pose))
+    log("world/camera/image", _pinhole(rr, calib.depth), static=True)
     if depth is not None:
         depth = np.asarray(depth)
         meter = 1.0 / calib.depth_scale if depth.dtype == np.uint16 else 1.0
@@ -97,17 +96,8 @@ def log_to_rerun(
         if calib.rgb.width <= 0 or _same_camera(calib.rgb, calib.depth):
             log("world/camera/image/rgb", image(rgb))
         else:
-            T = np.asarray(calib.T_depth_rgb)
-            log("world/camera/colour", rr.Transform3D(translation=T[:3, 3], mat3x3=T[:3, :3]), static=True)
-            log(
-                "world/camera/colour",
-                rr.Pinhole(
-                    image_from_camera=_camera_matrix(calib.rgb),
-                    resolution=[calib.rgb.width, calib.rgb.height],
-                    camera_xyz=rr.ViewCoordinates.RDF,
-                ),
-                static=True,
-            )
+            log("world/camera/colour", _transform(rr, calib.T_depth_rgb), static=True)
+            log("world/camera/colour", _pinhole(rr, calib.rgb), static=True)
             log("world/camera/colour/rgb", image(rgb))
     if raycast:
         log("world/camera/image/raycast", image(pipeline.render(raycast)))
