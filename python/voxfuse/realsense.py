@@ -37,7 +37,7 @@ from . import _voxfuse
 ALIGN_MODES = ("none", "color", "depth")
 _LIVE_PREFIX = "realsense:"
 _RECORDING_SUFFIXES = (".bag", ".db3")
-_COLOUR_CHANNELS = {"rgb8": (3, False), "bgr8": (3, True), "rgba8": (4, False), "bgra8": (4, True)}
+_COLOR_FORMATS = {"rgb8": False, "bgr8": True, "rgba8": False, "bgra8": True}  # format: channels in BGR order
 # Sources still open when the interpreter exits are closed first: a player thread left inside its
 # callback while Python finalises aborts the process.
 _open_sources = weakref.WeakSet()
@@ -136,6 +136,7 @@ class RealSenseSource:
         self.dropped_color_frames = 0
         self.unreadable_frames = 0
         self._aligner = None
+        self._pairing = self._paired = self._pair = None  # recordings' frame sets for rs.align (_aligned)
         if align != "none":
             self._aligner = self._rs.align(self._rs.stream.color if align == "color" else self._rs.stream.depth)
         self._live = self._path.startswith(_LIVE_PREFIX)
@@ -200,10 +201,8 @@ class RealSenseSource:
             raise _voxfuse.IoError(f"{path}: the recording has no depth stream (Z16)")
         if color_profile is not None:
             fmt = str(color_profile.format()).split(".")[-1]
-            if fmt not in _COLOUR_CHANNELS:
-                raise _voxfuse.IoError(
-                    f"{path}: colour is recorded as {fmt}; VoxFuse reads {', '.join(_COLOUR_CHANNELS)}"
-                )
+            if fmt not in _COLOR_FORMATS:
+                raise _voxfuse.IoError(f"{path}: colour is recorded as {fmt}; VoxFuse reads {', '.join(_COLOR_FORMATS)}")
         elif self._align_mode != "none":
             raise _voxfuse.ConfigError(f"{path}: align={self._align_mode!r} needs a colour stream; it has none")
         try:
@@ -240,9 +239,9 @@ class RealSenseSource:
         for name, k in used:
             if k is not None:
                 _warn_distortion(name, k, self._align_mode)
-        self._color_channels = None
-        if color_profile is not None:
-            self._color_channels = _COLOUR_CHANNELS.get(str(color_profile.format()).split(".")[-1], (3, False))
+        self._color_is_bgr = color_profile is not None and _COLOR_FORMATS.get(
+            str(color_profile.format()).split(".")[-1], False
+        )
         self._has_color = color_profile is not None
 
     # --- reading ---------------------------------------------------------------------------------
@@ -335,11 +334,16 @@ class RealSenseSource:
         """rs.align on a frame set made of the pair (recordings deliver the streams separately)."""
         rs = self._rs
         if not isinstance(depth, rs.composite_frame):
-            made = rs.frame_queue(1, keep_frames=True)
-            block = rs.processing_block(lambda f, src: src.frame_ready(src.allocate_composite_frame([depth, color])))
-            block.start(made)
-            block.invoke(depth)
-            depth = made.wait_for_frame(1000)
+            if self._pairing is None:  # made once: a processing block that joins self._pair into a frame set
+                self._paired = rs.frame_queue(1, keep_frames=True)
+                self._pairing = rs.processing_block(
+                    lambda f, src: src.frame_ready(src.allocate_composite_frame(list(self._pair)))
+                )
+                self._pairing.start(self._paired)
+            self._pair = (depth, color)
+            self._pairing.invoke(depth)
+            depth = self._paired.wait_for_frame(1000)
+            self._pair = None
         frames = self._aligner.process(depth.as_frameset())
         return frames.get_depth_frame(), frames.get_color_frame()
 
@@ -353,9 +357,8 @@ class RealSenseSource:
         depth_array = np.asanyarray(depth.get_data())
         rgb = None
         if color is not None:
-            _, bgr = self._color_channels
             rgb = np.asanyarray(color.get_data())
-            if bgr:
+            if self._color_is_bgr:
                 rgb = rgb[..., [2, 1, 0]]
         index = self._next_index
         self._next_index += 1
