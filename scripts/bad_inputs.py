@@ -164,7 +164,7 @@ def cases():
         "--frames": ["-1", "x", "99999999999"],
         "--skip": ["-1"],
         "--render-every": ["-1", "99999999999"],
-        "--active-blocks": ["0", "-5", "2147483647"],
+        "--active-blocks": ["-5", "2147483647"],
         "--relocalise-candidates": ["0", "100000"],
         "--max-blocks": ["-1", "999999999"],
         "--hash-buckets": ["0", "-1"],
@@ -504,6 +504,9 @@ def cases():
     # ---- swapping budgets at their limits: the run goes on, says what did not fit
     c.append(Case("swapping", "one active block", ["{tum}", "--active-blocks", "1", "--frames", "2", "--render-every", "0", "--out", OUT],
                   ["the map is full", "--active-blocks"], ok_exit=True))
+    c.append(Case("swapping", "--active-blocks 0: as many as --max-blocks", ["{tum}", "--active-blocks", "0", "--frames", "2",
+                                                                          "--render-every", "0", "--out", OUT],
+                  ["swapping", "blocks stored in memory"], ok_exit=True))
     c.append(Case("swapping", "one block moved per frame", ["{tum}", "--active-blocks", "3000", "--swap-blocks-per-frame", "1", "--frames", "3",
                                                              "--render-every", "0", "--out", OUT], ["--active-blocks"], ok_exit=True))
 
@@ -608,7 +611,7 @@ def cases():
     py("a timestamp of NaN", "p.process(f.depth, timestamp=float('nan'))", "ValueError", "timestamp")
     py("an unknown setting", "voxfuse.Pipeline(source.calib, voxel_sise=0.01)", "TypeError", "voxel_sise")
     py("a setting of the wrong type", "voxfuse.Pipeline(source.calib, voxel_size='fine')", "TypeError", "voxel_size")
-    py("a setting out of range", "voxfuse.Pipeline(source.calib, voxel_size=-1.0)", "ConfigError", "voxel size")
+    py("a setting out of range", "voxfuse.Pipeline(source.calib, voxel_size=-1.0)", "ConfigError", "voxel_size")
     py("an unknown render mode", "p.process(f.depth)\np.render('sparkly')", "ConfigError", "sparkly")
     py("calls after an error go on",
        "try:\n    p.process(f.depth[:10])\nexcept ValueError:\n    pass\n"
@@ -635,7 +638,7 @@ def cases():
         c.append(Case("bench", what, ["synthetic:5"] + json_arg + args, list(expect), program="bench"))
     for option, values in {"--frames": ["-1", "x"], "--warmup": ["-1"], "--voxel-size": ["nan", "0", "1e39", "-1", "1e-50"],
                            "--mu": ["nan", "-1"], "--repeats": ["0", "1000"], "--cloud-voxel": ["1e-12", "nan"],
-                           "--occupancy": ["1e-9", "nan", "inf"], "--active-blocks": ["0"], "--label-ignore": ["-5"]}.items():
+                           "--occupancy": ["1e-9", "nan", "inf"], "--active-blocks": ["-1"], "--label-ignore": ["-5"]}.items():
         for v in values:
             bench(f"{option} {v}", [option, v], option, v)
     bench("--occupancy-pixel-step 0", ["--occupancy", "0.05", "--occupancy-pixel-step", "0"], "--occupancy-pixel-step")

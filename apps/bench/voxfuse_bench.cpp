@@ -99,16 +99,13 @@ int main(int argc, char** argv) {
     std::string source_path, json_path = "voxfuse_bench.json", timings_path, trajectory_path, mesh_path;
     app::EngineOptions o;  // the map and tracking options voxfuse takes
 #if VOXFUSE_WITH_IO
-    app::LabelInputOptions labels;  // and --voxel
-#else
-    std::string voxel = "s_rgb";
+    app::LabelInputOptions labels;
 #endif
     int max_frames = 0, warmup = 3, repeats = 3;
     bool mesh = false, cloud = false, render = false;
     float cloud_voxel_m = 0.f;
     OccupancySettings occupancy_settings;
     occupancy_settings.resolution_m = 0.f;  // off unless --occupancy
-    MainEngineSettings& s = o.engine;
     cli.add_option("source", source_path,
                    "sequence (default: ../shared/data/tum_fr3_teddy_200, else the bundled data), or synthetic[:N] for "
                    "N frames of the "
@@ -117,15 +114,10 @@ int main(int argc, char** argv) {
     cli.add_option("--warmup", warmup, "frames left out of the statistics")
         ->capture_default_str()
         ->check(app::nonNegativeInt());
-#if VOXFUSE_WITH_IO
-    app::addVoxelAndLabelOptions(cli, labels,
-                                 "s_rgb");  // voxfuse's default: the rgbd tracker aligns to the map's colours
-#else
-    cli.add_option("--voxel", voxel, "voxel type")
-        ->capture_default_str()
-        ->check(CLI::IsMember({"s", "f", "s_rgb", "f_rgb", "s_label", "s_rgb_label"}));
-#endif
     app::addMapOptions(cli, o);
+#if VOXFUSE_WITH_IO
+    app::addLabelOptions(cli, labels);
+#endif
     app::addTrackingOptions(cli, o);
     cli.add_flag(
         "--render", render,
@@ -174,13 +166,11 @@ int main(int argc, char** argv) {
         if (source_path.empty()) source_path = defaultSource();
         std::unique_ptr<ImageSource> source = openSource(source_path);
 #if VOXFUSE_WITH_IO
-        app::attachLabelInput(source, source_path, labels, s, "voxfuse_bench");
+        app::attachLabelInput(source, source_path, labels, o.settings, o.wasGiven("--voxel"), "voxfuse_bench");
         source = framesForEngine(std::move(source), false);
-#else
-        s.voxel_type = parseVoxelType(voxel);
 #endif
-        app::applyDeviceAndIndex(o, s);
-        auto engine = MainEngine::create(s, source->calib());
+        auto engine = MainEngine::create(o.settings.toEngineSettings(), source->calib());
+        const MainEngineSettings& s = engine->settings();
         std::unique_ptr<OccupancyMapper> occupancy;
         if (occupancy_settings.resolution_m > 0.f) occupancy = std::make_unique<OccupancyMapper>(occupancy_settings);
         app::RunRecord record;

@@ -1,43 +1,30 @@
 #pragma once
 // How the map is built and how the camera is tracked: the options every program that runs the engine
-// takes (voxfuse, voxfuse_viewer, voxfuse_bench), defined once with their checks. They need no image
-// I/O, so the GPU bundle's voxfuse_bench (built without it) takes the same ones. The voxel type is
-// not among them: with image I/O it comes with the label options (LabelInput.h).
+// takes (voxfuse, voxfuse_viewer, voxfuse_bench), made from the settings table (engines/
+// PipelineSettings.h) so that they are Python's settings by the same names, defaults and checks. They
+// need no image I/O, so the GPU bundle's voxfuse_bench (built without it) takes the same ones.
 
 #include <string>
 #include <vector>
 
 #include <CLI/CLI.hpp>
 
-#include "voxfuse/engines/MainEngine.h"
+#include "voxfuse/engines/PipelineSettings.h"
 
 namespace voxfuse::app {
 
 struct EngineOptions {
-    // The map.
-    std::string index = "hash";
-    std::string device = "cpu";
-    int active_blocks = 0;  // > 0: swapping with an active voxel array of this many blocks
-    std::vector<int> dense_size{512, 512, 512};
-    std::vector<int> dense_offset{-256, -256, 0};
-    // The camera.
-    std::string poses = "track";
-    std::string tracker;         // overrides of the tracker settings, applied in this order:
-    std::string tracker_config;  //   the settings file, then the single options
-    std::string tracker_levels;
-    std::vector<int> tracker_iterations;
-    std::vector<float> tracker_max_distance;
-
-    MainEngineSettings engine;
+    PipelineSettings settings;       // one option per row of the table
+    std::string poses = "track";     // or "groundtruth": the source's poses, no tracker
     std::vector<std::string> given;  // options given on the command line, by their long names ("source" for SOURCE)
     bool wasGiven(const char* option) const;
 };
 
-// --voxel-size, --mu, --max-weight, --min-depth, --max-depth, --depth-gap-tolerance, --index,
-// --max-blocks, --hash-buckets, --hash-excess, --volume-size, --volume-offset, --device and the
-// swapping options.
+// One option per setting of `group`, bound to o.settings, with the row's default, range and help.
+void addSettingOptions(CLI::App& cli, PipelineSettings& settings, SettingGroup group);
+// The map's settings (voxel type, index, voxel size, depth range, swapping, ...).
 void addMapOptions(CLI::App& cli, EngineOptions& o);
-// --poses, the tracker options and the relocalisation options.
+// --poses and the tracking and relocalisation settings.
 void addTrackingOptions(CLI::App& cli, EngineOptions& o);
 // After parsing: which options the command line gave (checks and --load-map need to know).
 void noteGivenOptions(const CLI::App& cli, EngineOptions& o);
@@ -45,8 +32,5 @@ void noteGivenOptions(const CLI::App& cli, EngineOptions& o);
 // (ConfigError). With `index_from_map` (a map file decides the index) the dense volume's options are
 // left to the map's own checks.
 void checkEngineOptions(const EngineOptions& o, bool index_from_map = false);
-// The engine settings the options make, beside those the options write directly: the index, the
-// device, swapping, the dense volume and the tracker. The voxel type is the caller's.
-void applyDeviceAndIndex(const EngineOptions& o, MainEngineSettings& s);
 
 }  // namespace voxfuse::app

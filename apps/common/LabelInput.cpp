@@ -10,10 +10,7 @@ namespace fs = std::filesystem;
 
 namespace voxfuse::app {
 
-void addVoxelAndLabelOptions(CLI::App& cli, LabelInputOptions& o, const std::string& default_voxel) {
-    o.default_voxel = default_voxel;
-    cli.add_option("--voxel", o.voxel, "voxel type (default " + default_voxel + "; s_rgb_label with --labels)")
-        ->check(CLI::IsMember({"s", "f", "s_rgb", "f_rgb", "s_label", "s_rgb_label"}));
+void addLabelOptions(CLI::App& cli, LabelInputOptions& o) {
     cli.add_option("--labels", o.path,
                    "semantic label images (one class id per pixel; PNG, PGM or TIFF): a folder, or a list file of "
                    "'timestamp path' lines "
@@ -25,12 +22,6 @@ void addVoxelAndLabelOptions(CLI::App& cli, LabelInputOptions& o, const std::str
     cli.add_option("--label-ignore", o.ignore_id, "class id that means 'no label' in the label images (-1: none)")
         ->capture_default_str()
         ->check(intIn(-1, 65535));
-    cli.add_option(
-           "--label-update", o.update,
-           "class update on disagreement: switch with probability 1/(count+1) (probabilistic, the report's rule) or "
-           "majority vote (vote: more robust to noisy segmentations)")
-        ->capture_default_str()
-        ->check(CLI::IsMember({"probabilistic", "vote"}));
 }
 
 namespace {
@@ -46,12 +37,13 @@ std::string labelsBeside(const std::string& source_path) {
 }  // namespace
 
 LabelledImageSource* attachLabelInput(std::unique_ptr<ImageSource>& source, const std::string& source_path,
-                                      const LabelInputOptions& o, MainEngineSettings& s, const char* program) {
-    s.scene.label_update = o.update == "vote" ? LabelUpdate::Vote : LabelUpdate::Probabilistic;
-    s.voxel_type = parseVoxelType(!o.voxel.empty() ? o.voxel : !o.path.empty() ? "s_rgb_label" : o.default_voxel);
-    if (!o.path.empty() && !voxelTypeHasLabels(s.voxel_type))
-        throw ConfigError("--labels needs a voxel type with classes (s_label or s_rgb_label), not --voxel " + o.voxel);
-    if (!voxelTypeHasLabels(s.voxel_type)) return nullptr;
+                                      const LabelInputOptions& o, PipelineSettings& s, bool voxel_given,
+                                      const char* program) {
+    if (!voxel_given && !o.path.empty()) s.voxel = "s_rgb_label";
+    const VoxelType type = parseVoxelType(s.voxel);
+    if (!o.path.empty() && !voxelTypeHasLabels(type))
+        throw ConfigError("--labels needs a voxel type with classes (s_label or s_rgb_label), not --voxel " + s.voxel);
+    if (!voxelTypeHasLabels(type)) return nullptr;
     const std::string path = !o.path.empty() ? o.path : labelsBeside(source_path);
     if (path.empty()) {
         std::cerr << program << ": warning: no label images (--labels, or labels.txt / labels/ beside the source): "

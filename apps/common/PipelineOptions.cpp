@@ -37,7 +37,7 @@ void addSourceOptions(CLI::App& cli, PipelineOptions& o) {
 
 void addMapOptions(CLI::App& cli, PipelineOptions& o) {
     addMapOptions(cli, static_cast<EngineOptions&>(o));
-    addVoxelAndLabelOptions(cli, o.labels, "s_rgb");
+    addLabelOptions(cli, o.labels);
 }
 
 void checkPipelineOptions(const PipelineOptions& o) {
@@ -55,28 +55,33 @@ void checkPipelineOptions(const PipelineOptions& o) {
 }
 
 void adoptMapSettings(PipelineOptions& o, const MapFileInfo& map) {
-    MainEngineSettings adopted = settingsForMap(map, o.engine);
-    if (o.wasGiven("--max-blocks")) adopted.hash.max_block_count = o.engine.hash.max_block_count;
+    PipelineSettings& s = o.settings;
     auto conflict = [&](const char* option, const std::string& what) {
         throw ConfigError(o.load_map + ": the map has " + what + "; " + option +
                           " cannot change it (leave the option out)");
     };
-    if (!o.labels.voxel.empty() && o.labels.voxel != map.voxel_type)
-        conflict("--voxel", "'" + map.voxel_type + "' voxels");
-    if (o.wasGiven("--index") && o.index != (map.hash ? "hash" : "dense"))
+    if (o.wasGiven("--voxel") && s.voxel != map.voxel_type) conflict("--voxel", "'" + map.voxel_type + "' voxels");
+    if (o.wasGiven("--index") && s.index != (map.hash ? "hash" : "dense"))
         conflict("--index", std::string("the ") + (map.hash ? "hash" : "dense") + " index");
-    if (o.wasGiven("--voxel-size") && o.engine.scene.voxel_size_m != map.scene.voxel_size_m)
+    if (o.wasGiven("--voxel-size") && s.voxel_size != map.scene.voxel_size_m)
         conflict("--voxel-size", std::to_string(map.scene.voxel_size_m) + " m voxels");
-    if (o.wasGiven("--mu") && o.engine.scene.mu_m != map.scene.mu_m)
-        conflict("--mu", "mu " + std::to_string(map.scene.mu_m) + " m");
+    if (o.wasGiven("--mu") && s.mu != map.scene.mu_m) conflict("--mu", "mu " + std::to_string(map.scene.mu_m) + " m");
     if (o.wasGiven("--max-blocks") && !map.hash) conflict("--max-blocks", "the dense index");
     for (const char* option : {"--hash-buckets", "--hash-excess", "--volume-size", "--volume-offset"})
         if (o.wasGiven(option)) conflict(option, "its own index settings");
-    o.labels.voxel = map.voxel_type;
-    o.index = map.hash ? "hash" : "dense";
-    o.engine = adopted;
-    o.dense_size = {adopted.dense_size.x, adopted.dense_size.y, adopted.dense_size.z};
-    o.dense_offset = {adopted.dense_offset.x, adopted.dense_offset.y, adopted.dense_offset.z};
+    const int max_blocks = s.max_blocks;
+    o.map = map;
+    s.adopt(map);
+    if (o.wasGiven("--max-blocks")) s.max_blocks = max_blocks;
+}
+
+MainEngineSettings engineSettings(const PipelineOptions& o) {
+    MainEngineSettings s = o.settings.toEngineSettings();
+    if (o.load_map.empty()) return s;
+    const int max_blocks = s.hash.max_block_count;  // the map's, unless --max-blocks gave one (adoptMapSettings)
+    s = settingsForMap(o.map, s);
+    s.hash.max_block_count = max_blocks;
+    return s;
 }
 
 void listCameras() {
@@ -101,11 +106,10 @@ Pipeline openPipeline(PipelineOptions& o, const char* program) {
     Pipeline p;
     p.source = openSource(o, program);
     // Label images are decoded on the reader thread too: the stream goes inside it.
-    p.labels = attachLabelInput(p.source, o.source, o.labels, o.engine, program);
+    p.labels = attachLabelInput(p.source, o.source, o.labels, o.settings, o.wasGiven("--voxel"), program);
     p.source = framesForEngine(std::move(p.source), o.threaded);
     std::cerr << program << ": " << p.source->description() << "\n";
-    applyDeviceAndIndex(o, o.engine);
-    p.engine = MainEngine::create(o.engine, p.source->calib());
+    p.engine = MainEngine::create(engineSettings(o), p.source->calib());
     if (!o.load_map.empty()) p.engine->loadMap(o.load_map);
     return p;
 }

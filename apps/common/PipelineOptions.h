@@ -29,13 +29,14 @@ struct PipelineOptions : EngineOptions {
     bool threaded = false;  // decode (and undistort) on a reader thread ahead of the engine
     int skip_frames = 0;    // dropped from the start of the source
     // The map, beside EngineOptions.
-    LabelInputOptions labels;  // and --voxel
-    std::string load_map;      // continue this map (its voxel type, index and voxel size); each program adds --load-map
+    LabelInputOptions labels;
+    std::string load_map;  // continue this map (its voxel type, index and voxel size); each program adds --load-map
+    MapFileInfo map;       // its header, read by adoptMapSettings
 };
 
 // SOURCE, --live, --device-uri, --list-devices, --threaded, --min-confidence, --rgb, --depth, --calib, --skip.
 void addSourceOptions(CLI::App& cli, PipelineOptions& o);
-// The engine's map options (EngineOptions.h), then the voxel and label options.
+// The engine's map options (EngineOptions.h), then the label options.
 void addMapOptions(CLI::App& cli, PipelineOptions& o);
 
 // Options that would be silently ignored in this combination are errors instead (ConfigError):
@@ -48,6 +49,10 @@ void adoptMapSettings(PipelineOptions& o, const MapFileInfo& map);
 // --list-devices: prints the OpenNI2 cameras on stdout.
 void listCameras();
 
+// The engine's settings the options make: o.settings, with a loaded map's index settings as the map has
+// them (also those no option sets, such as a library user's entries per bucket).
+MainEngineSettings engineSettings(const PipelineOptions& o);
+
 // What the options make, the same in every program that takes them.
 struct Pipeline {
     std::unique_ptr<ImageSource> source;    // the frames as the engine takes them
@@ -57,7 +62,7 @@ struct Pipeline {
 // Opens the source the options name (a live camera, a synthetic sequence, a recording, or the bundled
 // sequence when nothing is named) with its labels, undistorted and read ahead with --threaded (always
 // for a camera, so that the engine never makes the driver wait), says it on stderr, settles the
-// voxel type and the engine settings in o.engine and makes the engine. After adoptMapSettings.
+// voxel type in o.settings and makes the engine. After adoptMapSettings.
 Pipeline openPipeline(PipelineOptions& o, const char* program);
 
 }  // namespace voxfuse::app

@@ -5,10 +5,12 @@
 #include <cstdio>
 #include <map>
 #include <sstream>
+#include <variant>
 
 #include "JsonFile.h"
 #include "Statistics.h"
 #include "voxfuse/core/Error.h"
+#include "voxfuse/engines/PipelineSettings.h"
 
 namespace voxfuse::app {
 namespace {
@@ -193,33 +195,32 @@ void writeSummaryJson(const std::string& path, const RunRecord& run) {
     }
     if (!run.map_loaded.empty()) j["map_loaded"] = run.map_loaded;
     if (!run.map_saved.empty()) j["map_saved"] = run.map_saved;
+    // Every setting of the table by its name, as the engine used it (an automatic block ceiling as the
+    // value chosen, the tracker written out level by level), and what a tracker settings file changed
+    // that the table does not hold but the poses depend on.
     Json& settings = j["settings"];
-    settings["voxel"] = toString(run.settings.voxel_type);
-    settings["index"] = toString(run.settings.index_type);
-    // The ceiling the engine chose (or was given): the blocks this map could have grown to.
-    if (run.settings.index_type == IndexType::Hash) settings["max_blocks"] = run.settings.hash.max_block_count;
-    settings["device"] = deviceName(run.settings.device);
+    const PipelineSettings used = PipelineSettings::of(run.settings);
+    for (const SettingRow& row : pipelineSettingRows())
+        std::visit(
+            [&](auto member) {
+                const auto& value = used.*member;
+                using T = std::decay_t<decltype(value)>;
+                if constexpr (std::is_same_v<T, float>) {
+                    settings[row.name] = floatAsDecimal(value);
+                } else if constexpr (std::is_same_v<T, std::vector<float>>) {
+                    Json& list = settings[row.name] = Json::array();
+                    for (const float v : value) list.push_back(floatAsDecimal(v));
+                } else {
+                    settings[row.name] = value;
+                }
+            },
+            row.member);
+    settings["poses"] = run.tracked ? "track" : "groundtruth";
     if (run.settings.device == Device::CUDA) settings["gpu"] = device_memory::cudaDescription();
-    settings["voxel_size_m"] = double(run.settings.scene.voxel_size_m);
-    settings["mu_m"] = double(run.settings.scene.mu_m);
-    settings["max_weight"] = run.settings.scene.max_weight;
-    settings["min_depth_m"] = double(run.settings.scene.view_frustum_min_m);
-    settings["max_depth_m"] = double(run.settings.scene.view_frustum_max_m);
-    settings["depth_gap_tolerance"] = double(run.settings.depth_gap_tolerance);
-    if (voxelTypeHasLabels(run.settings.voxel_type))
-        settings["label_update"] = run.settings.scene.label_update == LabelUpdate::Vote ? "vote" : "probabilistic";
-    if (run.tracked) {
-        settings["tracker"] = toString(run.settings.tracker.kind);
-        std::string levels;
-        for (const auto& l : run.settings.tracker.levels) levels += char(l.motion);
-        settings["tracker_levels"] = levels;
-        // It changes the poses without changing max_depth_m: a run must say which depths it tracked on.
-        settings["max_tracking_depth_m"] = double(run.settings.tracker.max_tracking_depth_m);
-        // rgbd reads depths beyond max_depth_m too (its far field): 0 keyframes means it did not.
-        if (run.settings.tracker.kind == TrackerKind::Rgbd)
-            settings["far_field_keyframes"] = run.settings.tracker.far_field_keyframes;
-        settings["relocalisation"] = run.settings.relocalisation.enabled;
-    }
+    // It changes the poses without changing max_depth: a run must say which depths it tracked on.
+    settings["max_tracking_depth_m"] = floatAsDecimal(run.settings.tracker.max_tracking_depth_m);
+    // rgbd reads depths beyond max_depth too (its far field): 0 keyframes means it did not.
+    settings["far_field_keyframes"] = run.settings.tracker.far_field_keyframes;
     j["outputs"] = run.outputs;
     writeJsonFile(path, j);
 }

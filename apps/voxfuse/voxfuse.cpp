@@ -205,9 +205,7 @@ void saveMapIfAsked(MainEngine& engine, const CliOptions& o, app::RunRecord& rec
 int runOnMapAlone(CliOptions& o, const MapFileInfo& map) {
     const app::PipelineOptions& p = o.pipeline;
     if (!map.camera.valid()) throw ConfigError(p.load_map + ": the map has no camera to render from; give a SOURCE");
-    MainEngineSettings s = p.engine;
-    s.voxel_type = parseVoxelType(map.voxel_type);
-    app::applyDeviceAndIndex(p, s);
+    const MainEngineSettings s = app::engineSettings(p);
     RGBDCalib calib;
     calib.depth = calib.rgb = map.camera;
     std::unique_ptr<MainEngine> engine = MainEngine::create(s, calib);
@@ -250,7 +248,7 @@ int run(CliOptions& o) {
     ImageSource* source = pipeline.source.get();
     MainEngine* engine = pipeline.engine.get();
     // Before the run, not after it: a run must not end without its outputs over an option it cannot honour.
-    if ((o.mesh_per_class || !o.exclude_classes.empty()) && !voxelTypeHasLabels(p.engine.voxel_type))
+    if ((o.mesh_per_class || !o.exclude_classes.empty()) && !voxelTypeHasLabels(engine->settings().voxel_type))
         throw ConfigError(
             "--mesh-per-class and --exclude-classes need a voxel type with classes (s_label, s_rgb_label)");
     const auto* threaded = dynamic_cast<const ThreadedImageSource*>(source);

@@ -1,5 +1,5 @@
 #pragma once
-// The Python pipeline: a MainEngine built from settings with the command line's names and defaults,
+// The Python pipeline: a MainEngine built from the settings table (the command line's names and defaults),
 // fed NumPy frames, keeping what a script asks afterwards (trajectory, per-stage timings, summary).
 
 #include <map>
@@ -9,46 +9,12 @@
 #include <vector>
 
 #include "voxfuse/engines/MainEngine.h"
+#include "voxfuse/engines/PipelineSettings.h"
 #include "voxfuse/io/TrajectoryIO.h"
 
 namespace voxfuse::python {
 
-// `voxfuse --help` names, same defaults (the voxel type too: s_rgb).
-struct PipelineSettings {
-    std::string voxel = "s_rgb";
-    std::string index = "hash";
-    std::string device = "cpu";
-    float voxel_size = SceneParams{}.voxel_size_m;
-    float mu = SceneParams{}.mu_m;
-    int max_weight = SceneParams{}.max_weight;
-    float min_depth = SceneParams{}.view_frustum_min_m;
-    float max_depth = SceneParams{}.view_frustum_max_m;
-    float depth_gap_tolerance = MainEngineSettings{}.depth_gap_tolerance;
-    int max_blocks = kAutomaticBlockCount;  // 0: the engine chooses (automaticMaxBlockCount)
-    int hash_buckets = VoxelBlockHashSettings{}.bucket_count;
-    int hash_excess = VoxelBlockHashSettings{}.excess_entry_count;
-    std::vector<int> volume_size{512, 512, 512};
-    std::vector<int> volume_offset{-256, -256, 0};
-    std::string tracker;  // "" = the default (ren)
-    std::string tracker_config;
-    std::string tracker_levels;
-    std::vector<int> tracker_iterations;
-    std::vector<float> tracker_max_distance;
-    std::string label_update = "probabilistic";
-    bool swap = false;
-    int active_blocks = 0;
-    std::string swap_file;
-    int swap_blocks_per_frame = SwapSettings{}.blocks_per_frame;
-    bool relocalise = RelocalisationSettings{}.enabled;
-    int relocalise_candidates = RelocalisationSettings{}.candidates;
-    float relocalise_max_speed = RelocalisationSettings{}.max_speed_m_per_s;
-    float relocalise_min_color_correlation = RelocalisationSettings{}.min_color_correlation;
-
-    // The engine's settings; ConfigError naming the setting when one is not valid.
-    MainEngineSettings toEngineSettings() const;
-    // The settings a map file fixes (voxel type, index and its settings, voxel size, mu), from `info`.
-    void adopt(const MapFileInfo& info);
-};
+using voxfuse::PipelineSettings;  // the settings table (engines/PipelineSettings.h)
 
 struct StageTimes {
     std::vector<double> ms;

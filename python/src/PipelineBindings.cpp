@@ -5,9 +5,11 @@
 #include <pybind11/stl.h>
 
 #include <algorithm>
+#include <climits>
 #include <cmath>
 #include <cstring>
 #include <optional>
+#include <sstream>
 
 #include "Bindings.h"
 #include "MapOutputs.h"
@@ -27,28 +29,126 @@ struct FrameOutcome {
     double timestamp_s = 0.0;
 };
 
-// Settings from keyword arguments over `base`: unknown names and values of the wrong type are TypeErrors.
+std::string typeText(const SettingRow& row) {
+    return std::visit(
+        [](auto member) -> std::string {
+            using T = std::decay_t<decltype(PipelineSettings{}.*member)>;
+            if constexpr (std::is_same_v<T, bool>) return "bool";
+            if constexpr (std::is_same_v<T, int>) return "int";
+            if constexpr (std::is_same_v<T, float>) return "float";
+            if constexpr (std::is_same_v<T, std::string>) return "str";
+            if constexpr (std::is_same_v<T, std::vector<int>>) return "list of int";
+            return "list of float";
+        },
+        row.member);
+}
+
+bool isInteger(const py::handle& v) { return PyIndex_Check(v.ptr()) && !PyBool_Check(v.ptr()); }
+// Python and NumPy numbers alike (numpy.float32 is no float subclass); not text, not a bool.
+bool isNumber(const py::handle& v) {
+    return PyNumber_Check(v.ptr()) && !PyBool_Check(v.ptr()) && !py::isinstance<py::str>(v);
+}
+
+// `value` as the row's type: TypeError when it is of another kind; numbers too large for their type
+// are out of range (ConfigError from the row's check).
+void setSetting(const SettingRow& row, PipelineSettings& s, const py::handle& value) {
+    const auto wrong = [&] {
+        return py::type_error("setting '" + std::string(row.name) + "' cannot be " + std::string(py::repr(value)) +
+                              " (a " + typeText(row) + "; see help(voxfuse.Settings))");
+    };
+    auto number = [&](const py::handle& v, auto zero) {
+        using T = decltype(zero);
+        if constexpr (std::is_same_v<T, int>) {
+            if (!isInteger(v)) throw wrong();
+            const long long wide = py::int_(py::reinterpret_borrow<py::object>(v)).cast<long long>();
+            if (wide < INT_MIN || wide > INT_MAX)
+                throw ConfigError("setting '" + std::string(row.name) + "': " + std::to_string(wide) +
+                                  " is out of range");
+            return int(wide);
+        } else {
+            if (!isNumber(v)) throw wrong();
+            return float(py::float_(py::reinterpret_borrow<py::object>(v)).cast<double>());  // 1e39: inf, refused
+        }
+    };
+    PipelineSettings changed = s;
+    std::visit(
+        [&](auto member) {
+            auto& field = changed.*member;
+            using T = std::decay_t<decltype(field)>;
+            if constexpr (std::is_same_v<T, bool>) {
+                if (!PyBool_Check(value.ptr()) && !py::isinstance(value, py::module_::import("numpy").attr("bool_")))
+                    throw wrong();
+                field = PyObject_IsTrue(value.ptr()) == 1;
+            } else if constexpr (std::is_same_v<T, int> || std::is_same_v<T, float>) {
+                field = number(value, T());
+            } else if constexpr (std::is_same_v<T, std::string>) {
+                py::object text = py::reinterpret_borrow<py::object>(value);
+                if (py::hasattr(text, "__fspath__")) text = text.attr("__fspath__")();  // a pathlib.Path
+                if (!py::isinstance<py::str>(text)) throw wrong();
+                field = text.cast<std::string>();
+            } else {
+                if (py::isinstance<py::str>(value) || !py::isinstance<py::sequence>(value)) throw wrong();
+                T values;
+                for (const py::handle item : py::reinterpret_borrow<py::sequence>(value))
+                    values.push_back(number(item, typename T::value_type()));
+                field = std::move(values);
+            }
+        },
+        row.member);
+    if (std::string why = settingProblem(row, changed); !why.empty())
+        throw ConfigError("setting '" + std::string(row.name) + "': " + why);
+    s = std::move(changed);
+}
+
+// Floats as the decimals they were given as (0.005, not 0.004999999888).
+py::object settingValue(const SettingRow& row, const PipelineSettings& s) {
+    return std::visit(
+        [&](auto member) -> py::object {
+            const auto& value = s.*member;
+            using T = std::decay_t<decltype(value)>;
+            if constexpr (std::is_same_v<T, float>) {
+                return py::float_(floatAsDecimal(value));
+            } else if constexpr (std::is_same_v<T, std::vector<float>>) {
+                py::list list;
+                for (const float v : value) list.append(floatAsDecimal(v));
+                return list;
+            } else {
+                return py::cast(value);
+            }
+        },
+        row.member);
+}
+
+// The row for a keyword: its name, or a former spelling (with a DeprecationWarning); TypeError otherwise.
+const SettingRow& rowForKeyword(const std::string& name) {
+    if (const SettingRow* row = findSettingRow(name)) return *row;
+    for (const SettingRow& row : pipelineSettingRows())
+        if (name == row.former_name) {
+            const std::string text = name + " is now " + row.name;
+            if (PyErr_WarnEx(PyExc_DeprecationWarning, text.c_str(), 1) < 0) throw py::error_already_set();
+            return row;
+        }
+    throw py::type_error("unknown setting '" + name + "' (see voxfuse.Settings)");
+}
+
+// Settings from keyword arguments over `base`.
 PipelineSettings withOverrides(PipelineSettings base, const py::kwargs& overrides) {
-    if (!overrides || overrides.empty()) return base;
-    py::object obj = py::cast(base);
-    for (const auto& item : overrides) {
-        std::string name = py::str(item.first);
-        if (name == "relocalise_min_colour_correlation") {  // the former spelling, kept for a release
-            if (PyErr_WarnEx(PyExc_DeprecationWarning,
-                             "relocalise_min_colour_correlation is now relocalise_min_color_correlation", 1) < 0)
-                throw py::error_already_set();
-            name = "relocalise_min_color_correlation";
-        }
-        if (name.empty() || name[0] == '_' || !py::hasattr(obj, name.c_str()) || name == "to_dict")
-            throw py::type_error("unknown setting '" + name + "' (see voxfuse.Settings)");
-        try {
-            obj.attr(name.c_str()) = item.second;
-        } catch (const py::error_already_set&) {
-            throw py::type_error("setting '" + name + "' cannot be " + std::string(py::repr(item.second)) +
-                                 " (see help(voxfuse.Settings))");
-        }
+    if (!overrides) return base;
+    for (const auto& item : overrides) setSetting(rowForKeyword(py::str(item.first)), base, item.second);
+    return base;
+}
+
+// The docstring of a setting: what it does, its type, range or choices, and default.
+std::string settingDoc(const SettingRow& row) {
+    std::string doc = settingDescription(row) + ".\n" + typeText(row);
+    if (*row.choices) doc += ": one of " + std::string(row.choices);
+    const std::string type = typeText(row);
+    if (type != "bool" && type != "str") {
+        std::ostringstream range;
+        range << ", in " << (row.min_open ? "(" : "[") << row.min << ", " << row.max << "]";
+        doc += range.str();
     }
-    return obj.cast<PipelineSettings>();
+    return doc + "; default " + std::string(py::repr(settingValue(row, PipelineSettings{}))) + ".";
 }
 
 void checkShape(const py::array& a, const char* what, py::ssize_t h, py::ssize_t w, const char* channels_text,
@@ -249,98 +349,46 @@ py::dict summary(Pipeline& p) {
 void bindPipeline(py::module_& m) {
     py::class_<PipelineSettings> settings(
         m, "Settings",
-        "Pipeline settings, with the names (underscores for dashes) and defaults of `voxfuse --help`.\n"
+        "Pipeline settings, with the names (underscores for dashes), defaults and checks of `voxfuse --help`:\n"
+        "both are made from one table (Settings.table()).\n"
         "Settings(voxel_size=0.01, tracker='rgbd'); any of them can also be given to Pipeline(...).");
-    settings.def(py::init([](const py::kwargs& kwargs) { return withOverrides(PipelineSettings{}, kwargs); }))
-        .def_readwrite("voxel", &PipelineSettings::voxel,
-                       "s | f | s_rgb | f_rgb | s_label | s_rgb_label (SDF int16 or float, colour, classes)")
-        .def_readwrite("index", &PipelineSettings::index,
-                       "hash (voxel block hash, grows with the scene) | dense (one box of voxels)")
-        .def_readwrite("device", &PipelineSettings::device, "cpu | cuda")
-        .def_readwrite("voxel_size", &PipelineSettings::voxel_size, "voxel edge (m)")
-        .def_readwrite("mu", &PipelineSettings::mu, "truncation band (m)")
-        .def_readwrite("max_weight", &PipelineSettings::max_weight, "cap on the per-voxel weight")
-        .def_readwrite("min_depth", &PipelineSettings::min_depth, "depth below this (m) is ignored")
-        .def_readwrite("max_depth", &PipelineSettings::max_depth, "depth beyond this (m) is ignored")
-        .def_readwrite("depth_gap_tolerance", &PipelineSettings::depth_gap_tolerance,
-                       "a pixel without depth between two neighbours agreeing within this fraction of their depth gets "
-                       "their mean (0 = never)")
-        .def_readwrite(
-            "max_blocks", &PipelineSettings::max_blocks,
-            "hash: most 8^3 voxel blocks (memory grows on demand up to this); 0 = automatic (as many as the hash has "
-            "entries and 3/4 of the device's free memory holds; on the GPU with room for the copy a growth makes)")
-        .def_readwrite("hash_buckets", &PipelineSettings::hash_buckets, "hash: ordered buckets")
-        .def_readwrite("hash_excess", &PipelineSettings::hash_excess, "hash: entries of the excess list")
-        .def_readwrite("volume_size", &PipelineSettings::volume_size, "dense: the box's size in voxels [x, y, z]")
-        .def_readwrite("volume_offset", &PipelineSettings::volume_offset,
-                       "dense: the box's first voxel [x, y, z] (grid units)")
-        .def_readwrite("tracker", &PipelineSettings::tracker,
-                       "icp | color | ren | rgbd ('' = rgbd, robust ICP plus colour aligned to the map's colours and, "
-                       "beyond max_depth, to keyframes of the far depths)")
-        .def_readwrite("tracker_config", &PipelineSettings::tracker_config,
-                       "a tracker settings file ('key = value' lines)")
-        .def_readwrite("tracker_levels", &PipelineSettings::tracker_levels,
-                       "pyramid levels coarse to fine: r rotation, t translation, b both")
-        .def_readwrite("tracker_iterations", &PipelineSettings::tracker_iterations,
-                       "iterations per level, coarse to fine")
-        .def_readwrite("tracker_max_distance", &PipelineSettings::tracker_max_distance,
-                       "ICP outlier distance per level (m), coarse to fine")
-        .def_readwrite("label_update", &PipelineSettings::label_update,
-                       "probabilistic | vote (class update on disagreement)")
-        .def_readwrite("swap", &PipelineSettings::swap, "swapping: only the map near the view stays in the voxel array")
-        .def_readwrite("active_blocks", &PipelineSettings::active_blocks,
-                       "swapping: blocks the active voxel array holds at most (> 0 implies swap)")
-        .def_readwrite("swap_file", &PipelineSettings::swap_file,
-                       "swapping: keep the swapped-out map in this file (implies swap)")
-        .def_readwrite("swap_blocks_per_frame", &PipelineSettings::swap_blocks_per_frame,
-                       "swapping: blocks moved each way per frame at most")
-        .def_readwrite("relocalise", &PipelineSettings::relocalise,
-                       "once tracking is lost, find the camera again from keyframes (nothing is fused until then)")
-        .def_readwrite("relocalise_candidates", &PipelineSettings::relocalise_candidates,
-                       "relocalisation: keyframes tried per lost frame, most alike first")
-        .def_readwrite("relocalise_max_speed", &PipelineSettings::relocalise_max_speed,
-                       "relocalisation: m/s the camera may have moved since the last good frame; poses farther away "
-                       "are not taken (0: no limit)")
-        .def_readwrite("relocalise_min_color_correlation", &PipelineSettings::relocalise_min_color_correlation,
-                       "relocalisation: how well a found pose's view must correlate with the map's colours (colour "
-                       "voxels; -1: no colour test)")
+    settings.def(py::init([](const py::kwargs& kwargs) { return withOverrides(PipelineSettings{}, kwargs); }));
+    for (const SettingRow& row : pipelineSettingRows())
+        settings.def_property(
+            row.name, [&row](const PipelineSettings& s) { return settingValue(row, s); },
+            [&row](PipelineSettings& s, const py::object& value) { setSetting(row, s, value); },
+            settingDoc(row).c_str());
+    settings
         .def(
             "to_dict",
             [](const PipelineSettings& s) {
                 py::dict d;
-                py::object obj = py::cast(s);
-                for (const char* name : {"voxel",
-                                         "index",
-                                         "device",
-                                         "voxel_size",
-                                         "mu",
-                                         "max_weight",
-                                         "min_depth",
-                                         "max_depth",
-                                         "depth_gap_tolerance",
-                                         "max_blocks",
-                                         "hash_buckets",
-                                         "hash_excess",
-                                         "volume_size",
-                                         "volume_offset",
-                                         "tracker",
-                                         "tracker_config",
-                                         "tracker_levels",
-                                         "tracker_iterations",
-                                         "tracker_max_distance",
-                                         "label_update",
-                                         "swap",
-                                         "active_blocks",
-                                         "swap_file",
-                                         "swap_blocks_per_frame",
-                                         "relocalise",
-                                         "relocalise_candidates",
-                                         "relocalise_max_speed",
-                                         "relocalise_min_color_correlation"})
-                    d[name] = obj.attr(name);
+                for (const SettingRow& row : pipelineSettingRows()) d[row.name] = settingValue(row, s);
                 return d;
             },
             "Every setting by name.")
+        .def_static(
+            "table",
+            [] {
+                py::list rows;
+                for (const SettingRow& row : pipelineSettingRows()) {
+                    py::dict r;
+                    r["name"] = row.name;
+                    r["option"] = optionName(row);
+                    r["type"] = typeText(row);
+                    r["default"] = settingValue(row, PipelineSettings{});
+                    r["unit"] = row.unit;
+                    r["min"] = row.min;
+                    r["max"] = row.max;
+                    r["min_open"] = row.min_open;
+                    r["choices"] = row.choices;
+                    r["help"] = row.help;
+                    rows.append(r);
+                }
+                return rows;
+            },
+            "The settings table: per setting its name, command-line option, type, default, unit, range, choices "
+            "and help.")
         .def("__repr__", [](const py::object& self) {
             return "voxfuse.Settings(**" + std::string(py::repr(self.attr("to_dict")())) + ")";
         });

@@ -53,14 +53,14 @@ def test_library_errors_carry_the_message(room_frames, tmp_path):
     with pytest.raises(voxfuse.IoError, match="nowhere") as e:
         voxfuse.open_source(str(tmp_path / "nowhere"))
     assert isinstance(e.value, OSError) and isinstance(e.value, voxfuse.Error)
-    with pytest.raises(voxfuse.ConfigError, match="unknown voxel type 'x'") as e:
+    with pytest.raises(voxfuse.ConfigError, match="setting 'voxel': 'x' is not one of s, f, s_rgb") as e:
         voxfuse.Pipeline(calib, voxel="x")
     assert isinstance(e.value, ValueError)
     with pytest.raises(TypeError, match="unknown setting 'voxelsize'"):
         voxfuse.Pipeline(calib, voxelsize=0.01)
     with pytest.raises(TypeError, match="setting 'voxel_size' cannot be 'big'"):
         voxfuse.Settings(voxel_size="big")
-    with pytest.raises(voxfuse.Error, match="Pipeline settings: iterations: expected 1 or 3 values"):
+    with pytest.raises(voxfuse.Error, match="tracker settings: iterations: expected 1 or 3 values"):
         voxfuse.Pipeline(calib, tracker_iterations=[5, 5])
     with pytest.raises(voxfuse.ConfigError, match="render mode"):
         voxfuse.Pipeline(calib, voxel_size=0.01).render("fancy")

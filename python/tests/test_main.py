@@ -41,7 +41,7 @@ def test_bad_settings_and_sources_are_refused_with_the_reason(tmp_path):
     wrong_type = voxfuse_py(SYNTHETIC_ROOM, "--out", tmp_path, "--set", "voxel_size=fine")
     assert wrong_type.returncode == 2 and "takes a float" in wrong_type.stderr
     out_of_range = voxfuse_py(SYNTHETIC_ROOM, "--out", tmp_path, "--set", "voxel_size=-1")
-    assert out_of_range.returncode == 2 and "voxel size" in out_of_range.stderr
+    assert out_of_range.returncode == 2 and "setting 'voxel_size': -1 is not in (0, 1]" in out_of_range.stderr
     missing = voxfuse_py(tmp_path / "nothing_here", "--out", tmp_path)
     assert missing.returncode == 2 and "no such file or folder" in missing.stderr
     rerun_target = voxfuse_py(SYNTHETIC_ROOM, "--out", tmp_path, "--frames", 1, "--rerun", "run.txt")
