@@ -31,6 +31,8 @@ inline std::optional<int> parseCommandLine(CLI::App& cli, int argc, char** argv,
         return cli.exit(e);
     } catch (const CLI::CallForVersion& e) {
         return cli.exit(e);
+    } catch (const CLI::Success&) {  // an option that printed what was asked (--tracker-keys)
+        return 0;
     } catch (const CLI::ParseError& e) {
         std::cerr << program << ": error: " << e.what() << " (see " << program << " --help)\n";
         return 2;

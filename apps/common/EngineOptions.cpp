@@ -5,6 +5,7 @@
 
 #include "OptionChecks.h"
 #include "voxfuse/core/Error.h"
+#include "voxfuse/engines/TrackerSettings.h"
 
 namespace voxfuse::app {
 
@@ -104,6 +105,14 @@ void addTrackingOptions(CLI::App& cli, EngineOptions& o) {
         ->capture_default_str()
         ->check(CLI::IsMember({"track", "groundtruth"}));
     addSettingOptions(cli, o.settings, SettingGroup::Tracking);
+    cli.add_flag_callback(
+        "--tracker-keys",
+        [] {
+            std::cout << trackerSettingKeys();
+            throw CLI::Success();
+        },
+        "print every key a --tracker-config file may set, with its default and meaning (as a settings file), and "
+        "exit");
 }
 
 void noteGivenOptions(const CLI::App& cli, EngineOptions& o) {

@@ -3,9 +3,11 @@
 #include "voxfuse/engines/TrackerSettings.h"
 
 #include <algorithm>
+#include <charconv>
 #include <climits>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <map>
 #include <sstream>
 
@@ -27,6 +29,87 @@ std::string formatNumber(double v) {
     return out.str();
 }
 
+using T = TrackerSettings;
+constexpr double kNoLimit = std::numeric_limits<double>::infinity();
+
+// key, field, min, max, min_open, max_open, help
+const std::vector<TrackerSettingRow> kRows = {
+    {"max_normal_angle_deg", &T::max_normal_angle_deg, 0, 180, true, false,
+     "frame and model normals further apart reject the pair (degrees; 180: no test)"},
+    {"min_rotation_step_rad", &T::min_rotation_step_rad, 0, kNoLimit, false, false,
+     "a level stops iterating once an update rotates less than this and translates less than "
+     "min_translation_step_m (coarser levels: 2^k times both)"},
+    {"min_translation_step_m", &T::min_translation_step_m, 0, kNoLimit, false, false,
+     "see min_rotation_step_rad (metres)"},
+    {"bilateral_filter", &T::bilateral_filter, 0, 0, false, false,
+     "edge-preserving smoothing of the depth before the pyramid is built"},
+    {"predict_motion", &T::predict_motion, 0, 0, false, false,
+     "start from the pose the last two frames' motion predicts, not the last pose"},
+    {"extrapolate_steps", &T::extrapolate_steps, 0, 0, false, false,
+     "stretch a Gauss-Newton step that continues the one before it"},
+    {"max_normal_edge_m", &T::max_normal_edge_m, 0, kNoLimit, true, false,
+     "frame normals only between neighbours closer than this (metres at full resolution; larger gaps are edges)"},
+    {"max_tracking_depth_m", &T::max_tracking_depth_m, 0, kNoLimit, false, false,
+     "frame depths beyond this take no part in depth tracking but are fused (metres; 0: no limit)"},
+    {"robust_kernel", &T::robust_kernel, 0, 0, false, false, "ren and rgbd: the robust cost of the depth terms"},
+    {"robust_scale_m", &T::robust_scale_m, 0, kNoLimit, true, false,
+     "its scale: Tukey gives residuals beyond this no weight (metres)"},
+    {"color_point_step", &T::color_point_step, 1, 16, false, false,
+     "color and rgbd: model points every this many pixels in x and y"},
+    {"color_kernel", &T::color_kernel, 0, 0, false, false, "the robust cost of the photometric terms"},
+    {"color_kernel_scale", &T::color_kernel_scale, 0, kNoLimit, true, false, "its scale (intensities are in [0, 1])"},
+    {"color_from_map", &T::color_from_map, 0, 0, false, false,
+     "rgbd: align to the map's fused colours (false: the previous frame's)"},
+    {"far_field_keyframes", &T::far_field_keyframes, 0, 16, false, false,
+     "rgbd: keyframes of the depths beyond the map whose points join the photometric terms (0: off)"},
+    {"far_field_spacing_m", &T::far_field_spacing_m, 0, kNoLimit, false, false,
+     "camera motion between two far-field keyframes (metres)"},
+    {"far_field_spacing_deg", &T::far_field_spacing_deg, 0, kNoLimit, false, false, "or turn between them (degrees)"},
+    {"far_field_point_share", &T::far_field_point_share, 0, 1, true, false,
+     "share of a keyframe's points kept, where its image is most textured"},
+    {"good_inlier_ratio", &T::good_inlier_ratio, 0, 1, false, false, "inlier ratio below this: poor"},
+    {"failed_inlier_ratio", &T::failed_inlier_ratio, 0, 1, false, false, "inlier ratio below this: failed"},
+    {"good_condition", &T::good_condition, 0, 1, false, false,
+     "smallest / largest eigenvalue of the scaled normal matrix below this: poor"},
+    {"failed_condition", &T::failed_condition, 0, 1, false, false, "below this: failed"},
+    // Above 1/3 even normals pointing evenly everywhere would be poor.
+    {"poor_translation_constraint", &T::poor_translation_constraint, 0, 1.0 / 3.0, false, true,
+     "share of the depth terms' weight along the least constrained translation below this: poor"},
+    {"poor_residual_m", &T::poor_residual_m, 0, kNoLimit, true, false,
+     "RMS point-to-plane residual above this: poor (metres)"},
+    {"failed_color_residual", &T::failed_color_residual, 0, kNoLimit, true, false,
+     "color tracker: RMS intensity error above this: failed"},
+    {"min_inliers", &T::min_inliers, 6, INT_MAX, false, false,
+     "fewer full-resolution inliers: failed (a pose has 6 parameters)"},
+    {"max_motion_m", &T::max_motion_m, 0, kNoLimit, true, false,
+     "a frame-to-frame motion beyond this is not believed: failed (metres)"},
+    {"max_motion_deg", &T::max_motion_deg, 0, 180, true, false, "a turn beyond this is not believed: failed (degrees)"},
+};
+
+// "must be in (0, 180]", "must be > 0", "must be in 0..16": the row's range, "" when `v` is in it.
+std::string rangeProblem(const TrackerSettingRow& row, double v, bool is_int) {
+    const bool in =
+        std::isfinite(v) && (row.min_open ? v > row.min : v >= row.min) && (row.max_open ? v < row.max : v <= row.max);
+    if (in) return {};
+    if (is_int)
+        return row.max >= INT_MAX ? "must be >= " + formatNumber(row.min)
+                                  : "must be in " + formatNumber(row.min) + ".." + formatNumber(row.max);
+    if (std::isinf(row.max)) return std::string("must be ") + (row.min_open ? "> " : ">= ") + formatNumber(row.min);
+    return std::string("must be in ") + (row.min_open ? "(" : "[") + formatNumber(row.min) + ", " +
+           formatNumber(row.max) + (row.max_open ? ")" : "]");
+}
+
+std::string rowProblem(const TrackerSettingRow& row, const TrackerSettings& s) {
+    return std::visit(
+        [&](auto field) -> std::string {
+            using V = std::decay_t<decltype(s.*field)>;
+            if constexpr (std::is_same_v<V, float> || std::is_same_v<V, int>)
+                return rangeProblem(row, double(s.*field), std::is_same_v<V, int>);
+            return {};
+        },
+        row.field);
+}
+
 // The first setting out of range: the keys involved (settings-file names) and why; false when all are fine.
 bool findInvalidSetting(const TrackerSettings& s, std::vector<std::string>& keys, std::string& reason) {
     auto fail = [&](std::vector<std::string> k, std::string r) {
@@ -44,43 +127,14 @@ bool findInvalidSetting(const TrackerSettings& s, std::vector<std::string>& keys
             return fail({"max_distance_m"}, "distance thresholds must be > 0");
         if (l.pixel_step < 1 || l.pixel_step > 8) return fail({"pixel_step"}, "pixel steps must be in 1..8");
     }
-    if (!(s.max_normal_angle_deg > 0.f && s.max_normal_angle_deg <= 180.f))
-        return fail({"max_normal_angle_deg"}, "must be in (0, 180]");
-    if (!(s.min_rotation_step_rad >= 0.f)) return fail({"min_rotation_step_rad"}, "must be >= 0");
-    if (!(s.min_translation_step_m >= 0.f)) return fail({"min_translation_step_m"}, "must be >= 0");
-    if (!(s.max_normal_edge_m > 0.f)) return fail({"max_normal_edge_m"}, "must be > 0");
-    if (!(s.max_tracking_depth_m >= 0.f && std::isfinite(s.max_tracking_depth_m)))
-        return fail({"max_tracking_depth_m"}, "must be >= 0 (0: no limit)");
-    // A share above 1/3 would call even normals pointing evenly everywhere poor.
-    if (!(s.poor_translation_constraint >= 0.f && s.poor_translation_constraint < 1.f / 3.f))
-        return fail({"poor_translation_constraint"}, "must be in [0, 1/3)");
-    if (!(s.robust_scale_m > 0.f)) return fail({"robust_scale_m"}, "must be > 0");
-    if (s.color_point_step < 1 || s.color_point_step > 16) return fail({"color_point_step"}, "must be in 1..16");
-    if (!(s.color_kernel_scale > 0.f)) return fail({"color_kernel_scale"}, "must be > 0");
+    for (const TrackerSettingRow& row : kRows)
+        if (std::string why = rowProblem(row, s); !why.empty()) return fail({row.key}, why);
     if (!(s.color_weight >= 0.f && std::isfinite(s.color_weight))) return fail({"color_weight"}, "must be >= 0");
-    if (s.far_field_keyframes < 0 || s.far_field_keyframes > 16)
-        return fail({"far_field_keyframes"}, "must be in 0..16 (0: off)");
-    if (!(s.far_field_spacing_m >= 0.f && std::isfinite(s.far_field_spacing_m)))
-        return fail({"far_field_spacing_m"}, "must be >= 0");
-    if (!(s.far_field_spacing_deg >= 0.f && std::isfinite(s.far_field_spacing_deg)))
-        return fail({"far_field_spacing_deg"}, "must be >= 0");
-    if (!(s.far_field_point_share > 0.f && s.far_field_point_share <= 1.f))
-        return fail({"far_field_point_share"}, "must be in (0, 1]");
-    for (auto [key, v] : {std::pair{"good_inlier_ratio", s.good_inlier_ratio},
-                          {"failed_inlier_ratio", s.failed_inlier_ratio},
-                          {"good_condition", s.good_condition},
-                          {"failed_condition", s.failed_condition}})
-        if (!(v >= 0.f && v <= 1.f)) return fail({key}, "must be in [0, 1]");
     if (s.failed_inlier_ratio > s.good_inlier_ratio)
         return fail({"failed_inlier_ratio", "good_inlier_ratio"},
                     "failed_inlier_ratio must not exceed good_inlier_ratio");
     if (s.failed_condition > s.good_condition)
         return fail({"failed_condition", "good_condition"}, "failed_condition must not exceed good_condition");
-    if (!(s.poor_residual_m > 0.f)) return fail({"poor_residual_m"}, "must be > 0");
-    if (!(s.failed_color_residual > 0.f)) return fail({"failed_color_residual"}, "must be > 0");
-    if (s.min_inliers < 6) return fail({"min_inliers"}, "must be >= 6 (a pose has 6 parameters)");
-    if (!(s.max_motion_m > 0.f)) return fail({"max_motion_m"}, "must be > 0");
-    if (!(s.max_motion_deg > 0.f && s.max_motion_deg <= 180.f)) return fail({"max_motion_deg"}, "must be in (0, 180]");
     return false;
 }
 
@@ -129,6 +183,63 @@ TrackerKind parseTrackerKind(const std::string& name) {
     if (name == "ren") return TrackerKind::Ren;
     if (name == "rgbd") return TrackerKind::Rgbd;
     throw ConfigError("unknown tracker '" + name + "' (expected icp, color, ren or rgbd)");
+}
+
+const std::vector<TrackerSettingRow>& trackerSettingRows() { return kRows; }
+
+namespace {
+
+const char* kernelName(RobustKernel k) {
+    return k == RobustKernel::None ? "none" : k == RobustKernel::Huber ? "huber" : "tukey";
+}
+
+// The shortest text that reads back as `v`.
+std::string floatText(float v) {
+    char text[32];
+    return std::string(text, std::to_chars(text, text + sizeof text, v).ptr);
+}
+
+}  // namespace
+
+std::string trackerSettingKeys() {
+    const TrackerSettings d;
+    std::string levels, iterations, distances, steps;
+    for (const TrackerLevel& l : d.levels) {
+        levels += char(l.motion);
+        iterations += " " + std::to_string(l.max_iterations);
+        distances += " " + floatText(l.max_distance_m);
+        steps += " " + std::to_string(l.pixel_step);
+    }
+    // Lines of a settings file: printed, they read back as the defaults.
+    std::ostringstream out;
+    auto line = [&](const std::string& key_value, const std::string& help) {
+        out << key_value << std::string(key_value.size() < 36 ? 36 - key_value.size() : 1, ' ') << "# " << help << "\n";
+    };
+    line(std::string("tracker = ") + toString(d.kind), "icp | color | ren | rgbd");
+    line("levels = " + levels, "pyramid levels coarse to fine: r rotation, t translation, b both");
+    line("iterations =" + iterations, "per level, coarse to fine (one value: every level)");
+    line("max_distance_m =" + distances, "ICP outlier distance per level (metres)");
+    line("pixel_step =" + steps, "ICP terms from every n-th row and column, per level");
+    line(d.color_weight_auto ? "color_weight = auto" : "color_weight = " + floatText(d.color_weight),
+         "rgbd: weight of colour against depth, auto (by their noise) or m^2 per squared intensity");
+    for (const TrackerSettingRow& row : kRows) {
+        const std::string value = std::visit(
+            [&](auto field) -> std::string {
+                const auto& v = d.*field;
+                using V = std::decay_t<decltype(v)>;
+                if constexpr (std::is_same_v<V, float>)
+                    return floatText(v);
+                else if constexpr (std::is_same_v<V, int>)
+                    return std::to_string(v);
+                else if constexpr (std::is_same_v<V, bool>)
+                    return v ? "true" : "false";
+                else
+                    return kernelName(v);
+            },
+            row.field);
+        line(std::string(row.key) + " = " + value, row.help);
+    }
+    return out.str();
 }
 
 void validateTrackerSettings(const TrackerSettings& settings) {
@@ -203,7 +314,7 @@ TrackerSettings parseTrackerSettingsText(const std::string& text, const std::str
         };
     };
 
-    const std::map<std::string, std::function<std::string(const std::string&)>> setters = {
+    std::map<std::string, std::function<std::string(const std::string&)>> setters = {
         {"tracker",
          [&](const std::string& v) -> std::string {
              try {
@@ -225,19 +336,6 @@ TrackerSettings parseTrackerSettingsText(const std::string& text, const std::str
         {"iterations", setList(iterations)},
         {"max_distance_m", setList(distances)},
         {"pixel_step", setList(pixel_steps)},
-        {"max_normal_angle_deg", setFloat(s.max_normal_angle_deg)},
-        {"min_rotation_step_rad", setFloat(s.min_rotation_step_rad)},
-        {"min_translation_step_m", setFloat(s.min_translation_step_m)},
-        {"bilateral_filter", setBool(s.bilateral_filter)},
-        {"predict_motion", setBool(s.predict_motion)},
-        {"extrapolate_steps", setBool(s.extrapolate_steps)},
-        {"max_normal_edge_m", setFloat(s.max_normal_edge_m)},
-        {"max_tracking_depth_m", setFloat(s.max_tracking_depth_m)},
-        {"robust_kernel", setKernel(s.robust_kernel)},
-        {"robust_scale_m", setFloat(s.robust_scale_m)},
-        {"color_point_step", setInt(s.color_point_step)},
-        {"color_kernel", setKernel(s.color_kernel)},
-        {"color_kernel_scale", setFloat(s.color_kernel_scale)},
         {"color_weight",
          [&](const std::string& v) -> std::string {
              double d;
@@ -251,22 +349,22 @@ TrackerSettings parseTrackerSettingsText(const std::string& text, const std::str
              }
              return {};
          }},
-        {"color_from_map", setBool(s.color_from_map)},
-        {"far_field_keyframes", setInt(s.far_field_keyframes)},
-        {"far_field_spacing_m", setFloat(s.far_field_spacing_m)},
-        {"far_field_spacing_deg", setFloat(s.far_field_spacing_deg)},
-        {"far_field_point_share", setFloat(s.far_field_point_share)},
-        {"good_inlier_ratio", setFloat(s.good_inlier_ratio)},
-        {"failed_inlier_ratio", setFloat(s.failed_inlier_ratio)},
-        {"good_condition", setFloat(s.good_condition)},
-        {"failed_condition", setFloat(s.failed_condition)},
-        {"poor_translation_constraint", setFloat(s.poor_translation_constraint)},
-        {"poor_residual_m", setFloat(s.poor_residual_m)},
-        {"failed_color_residual", setFloat(s.failed_color_residual)},
-        {"min_inliers", setInt(s.min_inliers)},
-        {"max_motion_m", setFloat(s.max_motion_m)},
-        {"max_motion_deg", setFloat(s.max_motion_deg)},
     };
+    for (const TrackerSettingRow& row : kRows)
+        setters[row.key] = std::visit(
+            [&](auto field) -> std::function<std::string(const std::string&)> {
+                auto& value = s.*field;
+                using V = std::decay_t<decltype(value)>;
+                if constexpr (std::is_same_v<V, float>)
+                    return setFloat(value);
+                else if constexpr (std::is_same_v<V, int>)
+                    return setInt(value);
+                else if constexpr (std::is_same_v<V, bool>)
+                    return setBool(value);
+                else
+                    return setKernel(value);
+            },
+            row.field);
 
     std::istringstream in(text);
     std::string line;

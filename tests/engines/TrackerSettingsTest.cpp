@@ -5,6 +5,9 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
+#include <variant>
+#include <cmath>
 
 #include "voxfuse/core/Error.h"
 #include "voxfuse/engines/Tracker.h"
@@ -19,6 +22,59 @@ TEST(TrackerSettingsTest, DefaultsAreValidAndDocumented) {
     EXPECT_EQ(s.levels.back().motion, LevelMotion::Both);
     EXPECT_TRUE(s.color_weight_auto);
     EXPECT_EQ(s.far_field_keyframes, 3) << "rgbd aligns to the far field too";
+}
+
+// --tracker-keys prints a settings file of the defaults: it names every key and reads back as the defaults.
+TEST(TrackerSettingsTest, TheKeyListIsASettingsFileOfTheDefaults) {
+    const std::string keys = trackerSettingKeys();
+    for (const TrackerSettingRow& row : trackerSettingRows())
+        EXPECT_NE(keys.find(std::string("\n") + row.key + " = "), std::string::npos) << row.key;
+    const TrackerSettings parsed = parseTrackerSettings(keys, "keys"), defaults;
+    for (const TrackerSettingRow& row : trackerSettingRows())
+        std::visit([&](auto field) { EXPECT_EQ(parsed.*field, defaults.*field) << row.key; }, row.field);
+    ASSERT_EQ(parsed.levels.size(), defaults.levels.size());
+    for (std::size_t i = 0; i < parsed.levels.size(); ++i) {
+        EXPECT_EQ(parsed.levels[i].pixel_step, defaults.levels[i].pixel_step);
+        EXPECT_EQ(parsed.levels[i].max_distance_m, defaults.levels[i].max_distance_m);
+    }
+    EXPECT_EQ(parsed.color_weight_auto, defaults.color_weight_auto);
+}
+
+// Every numeric row's range is what the file accepts: its closed ends in, a step beyond either end out.
+TEST(TrackerSettingsTest, EveryKeyIsCheckedAgainstItsRange) {
+    for (const TrackerSettingRow& row : trackerSettingRows()) {
+        const bool is_int = std::holds_alternative<int TrackerSettings::*>(row.field);
+        if (!is_int && !std::holds_alternative<float TrackerSettings::*>(row.field)) continue;
+        auto text = [&](double v) {
+            std::ostringstream out;
+            out.precision(9);
+            out << (is_int ? double(std::llround(v)) : v);
+            return out.str();
+        };
+        // The quality pairs must stay ordered (failed <= good): the other of a pair at its widest.
+        std::string others;
+        for (const auto& [key, value] : {std::pair{"good_inlier_ratio", "1"},
+                                         {"failed_inlier_ratio", "0"},
+                                         {"good_condition", "1"},
+                                         {"failed_condition", "0"}})
+            if (key != std::string(row.key)) others += std::string(key) + " = " + value + "\n";
+        auto parses = [&](double v) {
+            try {
+                parseTrackerSettings(others + row.key + " = " + text(v) + "\n", "t.cfg");
+                return true;
+            } catch (const ParseError& e) {
+                EXPECT_NE(std::string(e.what()).find(row.key), std::string::npos) << e.what();
+                return false;
+            }
+        };
+        const double step = is_int ? 1.0 : 1e-3;
+        EXPECT_FALSE(parses(row.min - step)) << row.key;
+        if (!row.min_open) EXPECT_TRUE(parses(row.min)) << row.key;
+        if (std::isfinite(row.max) && row.max < 1e9) {
+            EXPECT_FALSE(parses(row.max + step)) << row.key;
+            if (!row.max_open) EXPECT_TRUE(parses(row.max)) << row.key;
+        }
+    }
 }
 
 TEST(TrackerSettingsTest, ParsesEveryKindOfValue) {
@@ -106,7 +162,7 @@ TEST(TrackerSettingsTest, BadLinesNameFileLineAndReason) {
     expectParseError("color_weight =\n", 1, "no value");
     expectParseError("color_weight = automatic\n", 1, "expected auto or a number, got 'automatic'");
     expectParseError("good_inlier_ratio = 0.3\n\nfailed_inlier_ratio = 0.5\n", 3, "must not exceed");
-    expectParseError("poor_translation_constraint = 0.34\n", 1, "must be in [0, 1/3)");
+    expectParseError("poor_translation_constraint = 0.34\n", 1, "must be in [0, 0.333333)");
     expectParseError("max_tracking_depth_m = -1\n", 1, "must be >= 0");
     expectParseError("far_field_keyframes = -1\n", 1, "must be in 0..16");
     expectParseError("far_field_spacing_m = -0.1\n", 1, "must be >= 0");

@@ -3,6 +3,7 @@
 // overrides them (see parseTrackerSettingsFile for the keys).
 
 #include <string>
+#include <variant>
 #include <vector>
 
 #include "voxfuse/shared/RobustKernel.h"
@@ -146,18 +147,31 @@ struct TrackerSettings {
 // Throws ConfigError naming the setting when one is out of range.
 void validateTrackerSettings(const TrackerSettings& settings);
 
+// A key of the settings file that sets one field: the field, its range and what it means. The file's
+// parser, the checks and `voxfuse --tracker-keys` are made from these rows; a field is added with its
+// row. The keys of a list per level (levels, iterations, max_distance_m, pixel_step), tracker and
+// color_weight (auto or a number) have parsers of their own (trackerSettingKeys lists them all).
+using TrackerField = std::variant<float TrackerSettings::*, int TrackerSettings::*, bool TrackerSettings::*,
+                                  RobustKernel TrackerSettings::*>;
+struct TrackerSettingRow {
+    const char* key;
+    TrackerField field;
+    double min = 0.0, max = 0.0;  // numbers: accepted range; max may be infinity
+    bool min_open = false, max_open = false;
+    const char* help = "";
+};
+const std::vector<TrackerSettingRow>& trackerSettingRows();
+// Every key with its default and help, one per line, as `voxfuse --tracker-keys` prints them.
+std::string trackerSettingKeys();
+
 // Reads "key = value" lines ('#' starts a comment, blank lines are skipped) over the defaults:
 //   tracker = icp | color | ren | rgbd
 //   levels = rbb                    one letter per level, coarse to fine: r rotation, t translation, b both
 //   iterations = 10 10 10           per level, coarse to fine (one value: every level)
 //   max_distance_m = 0.1 0.05 0.02  per level, coarse to fine (one value: every level)
 //   pixel_step = 1 1 1              per level, coarse to fine (one value: every level)
-//   max_normal_angle_deg, min_rotation_step_rad, min_translation_step_m, max_normal_edge_m, max_tracking_depth_m,
-//   predict_motion, extrapolate_steps and bilateral_filter (true/false/on/off/1/0), robust_kernel (none/huber/tukey),
-//   robust_scale_m, color_point_step, color_kernel, color_kernel_scale, color_weight (auto or a number), color_from_map
-//   (true/false), far_field_keyframes, far_field_spacing_m, far_field_spacing_deg, far_field_point_share,
-//   good_inlier_ratio, failed_inlier_ratio, good_condition, failed_condition, poor_translation_constraint,
-//   poor_residual_m, failed_color_residual, min_inliers, max_motion_m, max_motion_deg
+//   color_weight = auto             or a number
+//   and one line per row of trackerSettingRows(); booleans are true/false/on/off/1/0, kernels none/huber/tukey.
 // Throws IoError when the file cannot be read and ParseError(file, line, reason) for an unknown key,
 // a malformed line, a bad value or a per-level list whose length does not match `levels`.
 TrackerSettings parseTrackerSettingsFile(const std::string& path);
