@@ -12,6 +12,7 @@
 #include <memory>
 
 #include "core/DeviceScratch.h"
+#include "cpu/AllocationShapes_CPU.h"
 #include "engines/DeviceImages.h"
 #include "voxfuse/engines/AllocationEngine.h"
 #include "voxfuse/engines/IntegrationEngine.h"

@@ -11,6 +11,7 @@
 #include <type_traits>
 
 #include "core/DeviceScratch.h"
+#include "cpu/IntegrationShapes_CPU.h"
 #include "engines/DeviceImages.h"
 #include "voxfuse/core/Error.h"
 #include "voxfuse/engines/IntegrationEngine.h"
@@ -98,7 +99,8 @@ public:
         const IntegrationFrame frame =
             inputs_.frame(kDevice, scene.params(), view, T_world_camera, scene.takeIntegrationNumber());
         const int blocks = keepBlocksToUpdate(hash, scene.params(), view.calib.depth, frame);
-        using Body = IntegrateHashVoxels<TVoxel, TDevice::kOneThreadPerItem ? 1 : kBlockVoxelCount>;
+        using Body =
+            std::conditional_t<TDevice::kOneThreadPerItem, IntegrateHashVoxels<TVoxel, 1>, IntegrateHashBlocks<TVoxel>>;
         // At most 2^30 elements per launch (element indices are ints).
         const int blocks_per_launch = (1 << 30) / Body::kElementsPerBlock;
         for (int first = 0; first < blocks; first += blocks_per_launch) {

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "core/DeviceScratch.h"
+#include "cpu/LowLevelShapes_CPU.h"
 #include "engines/DeviceImages.h"
 #include "voxfuse/engines/LowLevelEngine.h"
 #include "voxfuse/shared/LowLevel.h"

@@ -18,6 +18,7 @@
 #include "voxfuse/engines/IntegrationEngine.h"
 #include "voxfuse/objects/Voxel.h"
 #include "core/CpuDevice.h"
+#include "cpu/AllocationShapes_CPU.h"
 #include "voxfuse/core/CpuThreads.h"
 #include "voxfuse/shared/Allocation.h"
 #include "voxfuse/shared/HashAccess.h"

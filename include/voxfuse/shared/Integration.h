@@ -192,12 +192,8 @@ struct UsableDepth {
 };
 
 // The voxel block hash: element i updates `VoxelsPerElement` consecutive voxels (a divisor of 512) of
-// the visible blocks, taken in visible-list order: the CPU layer runs whole blocks (the block's entry
-// is read once), the CUDA layer a voxel per thread.
-//
-// A CPU thread takes neighbouring blocks one after the other, and each block's 4 KiB (s_rgb) lie
-// wherever the allocator put them: while it fuses a block it prefetches the next one's voxels, row by
-// row, and the entry of the one after, so that the loads of a block do not wait on memory.
+// the visible blocks, taken in visible-list order; the CUDA layer takes a voxel per thread. The CPU
+// layer takes whole blocks in its own shape (cpu/IntegrationShapes_CPU.h: IntegrateHashBlocks).
 template <class TVoxel, int VoxelsPerElement>
 struct IntegrateHashVoxels {
     static_assert(kBlockVoxelCount % VoxelsPerElement == 0, "elements must not straddle blocks");
@@ -214,47 +210,12 @@ struct IntegrateHashVoxels {
         TVoxel* block = voxels + (long long)e.ptr * kBlockVoxelCount;
         const Vec3i corner{e.pos.x * kBlockSide, e.pos.y * kBlockSide, e.pos.z * kBlockSide};
         const Vec3f corner_cam = blockCornerInDepthCamera(frame, corner);
-        if constexpr (VoxelsPerElement == kBlockVoxelCount) {
-            // A copy the voxel stores cannot alias: byte stores may alias any member of *this, which
-            // would reload every frame constant after each voxel of the block.
-            const IntegrationFrame f = frame;
-            if (i + 2 < block_count) VF_PREFETCH_FOR_READ(&entries[visible_entries[i + 2]]);
-            const char* next_block =
-                i + 1 < block_count ? reinterpret_cast<const char*>(
-                                          voxels + (long long)entries[visible_entries[i + 1]].ptr * kBlockVoxelCount)
-                                    : nullptr;
-            constexpr int kRowBytes = kBlockSide * int(sizeof(TVoxel));
-            for (int z = 0; z < kBlockSide; ++z)
-                for (int y = 0; y < kBlockSide; ++y) {
-                    if (next_block != nullptr) {
-                        const char* next_row = next_block + (y + z * kBlockSide) * kRowBytes;
-                        VF_PREFETCH_FOR_WRITE(next_row);
-                        VF_PREFETCH_FOR_WRITE(next_row + kRowBytes - 1);
-                    }
-                    const Vec3f row = blockRowOffset(f, y, z);
-                    TVoxel* line = block + (y + z * kBlockSide) * kBlockSide;
-                    // The row's voxel positions and depth pixels first, a loop the compiler vectorises.
-                    float px[kBlockSide], py[kBlockSide], pz[kBlockSide];
-                    int pixel[kBlockSide];
-                    for (int x = 0; x < kBlockSide; ++x) {
-                        const Vec3f p = blockVoxelInDepthCamera(f, corner_cam, row, x);
-                        px[x] = p.x;
-                        py[x] = p.y;
-                        pz[x] = p.z;
-                        pixel[x] = depthPixelOfVoxel(p, f);
-                    }
-                    for (int x = 0; x < kBlockSide; ++x)
-                        integrateVoxelAtPixel(line[x], corner + Vec3i{x, y, z}, Vec3f{px[x], py[x], pz[x]}, pixel[x],
-                                              f);
-                }
-        } else {
-            const IntegrationFrame& f = frame;
-            const int first = (i % kElementsPerBlock) * VoxelsPerElement;
-            for (int v = first; v < first + VoxelsPerElement; ++v) {
-                const int x = v & 7, y = (v >> 3) & 7, z = v >> 6;
-                integrateVoxelAt(block[v], corner + Vec3i{x, y, z},
-                                 blockVoxelInDepthCamera(f, corner_cam, blockRowOffset(f, y, z), x), f);
-            }
+        const IntegrationFrame& f = frame;
+        const int first = (i % kElementsPerBlock) * VoxelsPerElement;
+        for (int v = first; v < first + VoxelsPerElement; ++v) {
+            const int x = v & 7, y = (v >> 3) & 7, z = v >> 6;
+            integrateVoxelAt(block[v], corner + Vec3i{x, y, z},
+                             blockVoxelInDepthCamera(f, corner_cam, blockRowOffset(f, y, z), x), f);
         }
     }
 };
@@ -346,29 +307,6 @@ struct IntegrateDenseVoxel {
         const int x = lo.x + i % box.x, y = lo.y + (i / box.x) % box.y, z = lo.z + z_first + i / (box.x * box.y);
         integrateVoxel(voxels[x + (long long)index.size.x * (y + (long long)index.size.y * z)],
                        Vec3i{x, y, z} + index.offset, frame);
-    }
-};
-
-// The dense array, one x-row of the box per element, clipped to the frustum first (frustumRowRange):
-// for the CPU, where skipping the voxels outside the frustum is what pays.
-template <class TVoxel>
-struct IntegrateDenseRow {
-    TVoxel* voxels;
-    PlainVoxelArray::Data index;
-    Vec3i lo, hi;
-    float far_m;
-    IntegrationFrame frame;
-    VF_HOST_DEVICE void operator()(int row) const {
-        const int y = lo.y + row % (hi.y - lo.y), z = lo.z + row / (hi.y - lo.y);
-        TVoxel* line = voxels + (long long)index.size.x * (y + (long long)index.size.y * z);
-        int x_begin = lo.x, x_end = hi.x;
-        const Vec3f row_origin = toFloat(Vec3i{0, y, z} + index.offset) * frame.voxel_size_m;
-        if (!frustumRowRange(frame, row_origin, Vec3f{frame.voxel_size_m, 0.f, 0.f}, frame.near_m, far_m, x_begin,
-                             x_end))
-            return;
-        x_begin = x_begin > lo.x ? x_begin : lo.x;
-        x_end = x_end < hi.x ? x_end : hi.x;
-        for (int x = x_begin; x < x_end; ++x) integrateVoxel(line[x], Vec3i{x, y, z} + index.offset, frame);
     }
 };
 
