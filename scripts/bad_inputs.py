@@ -489,6 +489,7 @@ def cases():
     # A good map (5 mm 's' voxels, hash) with the options that would change what it is (the voxel type
     # and size: under "combination").
     for args, expect in [(["--voxel", "s_label", "--labels", "{tum}/labels.txt"], ["room.vfm", "--voxel"]),
+                         (["--labels", "{tum}/labels.txt"], ["--labels needs a voxel type with classes"]),
                          (["--index", "dense"], ["room.vfm", "--index cannot change it"]), (["--mu", "0.5"], ["room.vfm", "--mu cannot change it"]),
                          (["--hash-buckets", "1024"], ["room.vfm", "--hash-buckets cannot change it"]),
                          (["--max-blocks", "1"], ["room.vfm", "more than the voxel array's maximum"]), (["--device", "cuda"], ["CUDA"])]:

@@ -106,7 +106,9 @@ Pipeline openPipeline(PipelineOptions& o, const char* program) {
     Pipeline p;
     p.source = openSource(o, program);
     // Label images are decoded on the reader thread too: the stream goes inside it.
-    p.labels = attachLabelInput(p.source, o.source, o.labels, o.settings, o.wasGiven("--voxel"), program);
+    // A loaded map's voxel type is as good as given: --labels must not turn it into another.
+    const bool voxel_given = o.wasGiven("--voxel") || !o.load_map.empty();
+    p.labels = attachLabelInput(p.source, o.source, o.labels, o.settings, voxel_given, program);
     p.source = framesForEngine(std::move(p.source), o.threaded);
     std::cerr << program << ": " << p.source->description() << "\n";
     p.engine = MainEngine::create(engineSettings(o), p.source->calib());
