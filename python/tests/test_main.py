@@ -15,7 +15,9 @@ def voxfuse_py(*args):
 
 
 def test_a_run_writes_trajectory_summary_and_mesh(tmp_path):
-    run = voxfuse_py(SYNTHETIC_ROOM, "--out", tmp_path, "--frames", 5, "--mesh", "--set", "voxel_size=0.01")
+    # A list of ints whose default is empty takes ints (the table says the type, not the default).
+    run = voxfuse_py(SYNTHETIC_ROOM, "--out", tmp_path, "--frames", 5, "--mesh", "--set", "voxel_size=0.01",
+                     "--set", "tracker_iterations=10,10,10")
     assert run.returncode == 0, run.stderr
     assert np.loadtxt(tmp_path / "trajectory.txt").shape == (5, 8)
     summary = json.loads((tmp_path / "summary.json").read_text())

@@ -22,27 +22,25 @@ BUNDLED_ROOM = pathlib.Path(__file__).resolve().parents[2] / "data" / "synthetic
 
 
 def _setting(text):
-    """NAME=VALUE, VALUE converted to the type of the setting's default."""
+    """NAME=VALUE, VALUE converted to the setting's type (voxfuse.Settings.table())."""
     name, sep, value = text.partition("=")
     if not sep or not name:
         raise argparse.ArgumentTypeError(f"--set takes NAME=VALUE, not {text!r}")
-    defaults = Settings().to_dict()
-    if name not in defaults:
-        raise argparse.ArgumentTypeError(f"unknown setting {name!r}; the settings: {', '.join(sorted(defaults))}")
-    default = defaults[name]
+    rows = {row["name"]: row for row in Settings.table()}
+    if name not in rows:
+        raise argparse.ArgumentTypeError(f"unknown setting {name!r}; the settings: {', '.join(sorted(rows))}")
+    kind, default = rows[name]["type"], rows[name]["default"]
     try:
-        if isinstance(default, bool):
+        if kind == "bool":
             if value.lower() not in ("true", "false", "1", "0", "on", "off"):
                 raise ValueError(value)
             return name, value.lower() in ("true", "1", "on")
-        if isinstance(default, (list, tuple)):
-            kind = type(default[0]) if default else float
-            return name, [kind(v) for v in value.split(",")]
-        return name, type(default)(value)
+        convert = int if kind.endswith("int") else float if kind.endswith("float") else str
+        if kind.startswith("list"):
+            return name, [convert(v) for v in value.replace(",", " ").split()]
+        return name, convert(value)
     except ValueError:
-        raise argparse.ArgumentTypeError(
-            f"setting {name} takes a {type(default).__name__} (default {default!r}), not {value!r}"
-        ) from None
+        raise argparse.ArgumentTypeError(f"setting {name} takes a {kind} (default {default!r}), not {value!r}") from None
 
 
 def _parser():
