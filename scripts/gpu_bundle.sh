@@ -18,7 +18,7 @@ limit_mib=64
 
 cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release \
   -DVOXFUSE_CUDA=ON -DVOXFUSE_IO=OFF -DCMAKE_CUDA_ARCHITECTURES=90-real \
-  -DCMAKE_DISABLE_FIND_PACKAGE_octomap=ON >/dev/null
+  -DCMAKE_DISABLE_FIND_PACKAGE_octomap=ON -DCMAKE_DISABLE_FIND_PACKAGE_Ceres=ON >/dev/null
 cmake --build "$build" -j2 --target voxfuse_core_tests voxfuse_cuda_tests voxfuse_bench
 
 rm -rf "$bundle"

@@ -24,6 +24,7 @@ packages=(
   zlib1g-dev           # checksums of map files
   libgtest-dev libgmock-dev
   liboctomap-dev       # optional: the OctoMap occupancy map (--occupancy)
+  libceres-dev         # optional: the submaps' pose graph optimisation (mapping/PoseGraph.h)
   libglfw3-dev         # optional: the voxfuse_viewer demo
   xvfb xauth libgl1-mesa-dri   # the viewer's screenshot test under a virtual display
   pybind11-dev python3-dev python3-venv python3-numpy python3-pytest  # the Python package and its tests
