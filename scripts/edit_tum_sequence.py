@@ -10,12 +10,13 @@ on recorded data, e.g. (frame numbers count the depth images on disk, from 0):
   scripts/edit_tum_sequence.py ../shared/data/tum_fr3_teddy_200 /tmp/teddy_back --frames 0-120/2,119-101/2,19-1/2 --calib calib/tum_fr3.txt
   # a covered lens for 20 frames
   scripts/edit_tum_sequence.py ../shared/data/tum_fr3_teddy_200 /tmp/teddy_covered --blank 80-99 --calib calib/tum_fr3.txt
-  # a long run: played to and fro three times (1140 frames with colour), newly timed at 30 Hz, without ground truth
+  # a long run: played to and fro three times (1140 frames with colour), newly timed at 30 Hz
   scripts/edit_tum_sequence.py ../shared/data/tum_fr3_teddy_200 /tmp/teddy_long --frames 0-192,191-1,0-192,191-1,0-192,191-1 --retime 30 --calib calib/tum_fr3.txt
   voxfuse_bench /tmp/teddy_cut
 
 A frame played twice keeps its timestamp, and a source pairs each colour image with one depth image:
-give such sequences new timestamps (--retime), which drops the ground truth.
+give such sequences new timestamps (--retime); the ground truth then goes with them (each played frame's
+pose interpolated at its original time, under its new one).
 """
 
 import argparse
@@ -87,6 +88,50 @@ def write_zero_png(path, width, height):
         f.write(chunk(b"IEND", b""))
 
 
+def read_ground_truth(path):
+    poses = []
+    with open(path) as f:
+        for line in f:
+            fields = line.split()
+            if fields and not fields[0].startswith("#") and len(fields) == 8:
+                poses.append([float(v) for v in fields])
+    poses.sort()
+    return poses
+
+
+def interpolate_pose(poses, t, max_gap_s=0.05):
+    """tx ty tz qx qy qz qw at time t: linear in position, normalised linear in the quaternion (poses a
+    few ms apart); None outside the poses or across a gap."""
+    lo, hi = 0, len(poses)
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if poses[mid][0] < t:
+            lo = mid + 1
+        else:
+            hi = mid
+    if lo == 0 or lo == len(poses):
+        return poses[lo][1:] if lo < len(poses) and abs(poses[lo][0] - t) < 1e-6 else None
+    a, b = poses[lo - 1], poses[lo]
+    if b[0] - a[0] > max_gap_s:
+        return None
+    w = (t - a[0]) / (b[0] - a[0])
+    qb = b[4:8] if sum(x * y for x, y in zip(a[4:8], b[4:8])) >= 0 else [-x for x in b[4:8]]
+    q = [(1 - w) * x + w * y for x, y in zip(a[4:8], qb)]
+    n = sum(x * x for x in q) ** 0.5
+    return [(1 - w) * x + w * y for x, y in zip(a[1:4], b[1:4])] + [x / n for x in q]
+
+
+def write_retimed_ground_truth(source, out, stamps):
+    """`stamps`: (new timestamp text, original time) per played frame."""
+    poses = read_ground_truth(source)
+    with open(out, "w") as f:
+        f.write("# ground truth of the played frames at their new times, edited by edit_tum_sequence.py\n")
+        for new, original in stamps:
+            pose = interpolate_pose(poses, original)
+            if pose is not None:
+                f.write(new + " " + " ".join(f"{v:.6f}" for v in pose) + "\n")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("source", help="TUM RGB-D folder (rgb.txt, depth.txt, optional groundtruth.txt)")
@@ -96,7 +141,7 @@ def main():
     parser.add_argument("--calib", help="calibration file to put in OUT/calib.txt (default: the source's own, if any)")
     parser.add_argument("--size", default="640x480", help="depth image size for the blank PNG (default 640x480)")
     parser.add_argument("--retime", type=float, metavar="HZ",
-                        help="new timestamps, HZ per second, for each played frame and its colour image (no ground truth then)")
+                        help="new timestamps, HZ per second, for each played frame and its colour image (the ground truth moves with them)")
     args = parser.parse_args()
     if args.retime is not None and not args.retime > 0:
         sys.exit("edit_tum_sequence: --retime needs a rate above 0")
@@ -133,6 +178,8 @@ def main():
     if args.retime is not None:
         if os.path.lexists(link):
             os.remove(link)  # an earlier edit's: its times no longer match
+        if os.path.exists(gt):
+            write_retimed_ground_truth(gt, link, [(stamp_of(k, i), float(depth[i][0])) for k, i in enumerate(frames)])
     elif os.path.exists(gt) and not os.path.lexists(link):
         os.symlink(gt, link)
     calib = args.calib or os.path.join(args.source, "calib.txt")

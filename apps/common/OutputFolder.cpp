@@ -30,8 +30,8 @@ std::string listed(const std::vector<std::string>& names) {
 }  // namespace
 
 bool isRunOutputName(const std::string& name) {
-    for (const char* exact : {"trajectory.txt", "timings.json", "summary.json", "mesh.ply", "mesh_unlabelled.ply",
-                              "cloud.ply", "occupancy.bt"})
+    for (const char* exact : {"trajectory.txt", "trajectory_online.txt", "timings.json", "summary.json", "mesh.ply",
+                              "mesh_unlabelled.ply", "cloud.ply", "occupancy.bt"})
         if (name == exact) return true;
     if ((startsWith(name, "render_") && endsWith(name, ".png")) ||
         (startsWith(name, "mesh_class_") && endsWith(name, ".ply")))

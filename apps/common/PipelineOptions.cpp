@@ -43,6 +43,8 @@ void addMapOptions(CLI::App& cli, PipelineOptions& o) {
 void checkPipelineOptions(const PipelineOptions& o) {
     auto refuse = [](const std::string& why) { throw ConfigError(why); };
     checkEngineOptions(o, !o.load_map.empty());
+    if (o.settings.submaps && !o.load_map.empty())
+        refuse("--load-map continues a single map: maps of submaps are not supported yet (give --submaps off)");
     if (!o.device_uri.empty() && !o.live) refuse("--device-uri picks a live camera: it needs --live");
     if (o.live && (!o.source.empty() || !o.source_options.depth_pattern.empty()))
         refuse("--live reads a camera: give no SOURCE, --rgb or --depth with it");

@@ -87,6 +87,15 @@ int countRelocalisationAttempts(const RunRecord& run) {
     return n;
 }
 
+std::vector<TimedPose> optimisedTrajectory(const RunRecord& run, const std::vector<Mat4f>& T_world_camera) {
+    if (T_world_camera.size() != run.frames.size()) return run.trajectory;
+    std::vector<TimedPose> trajectory;
+    for (std::size_t i = 0; i < run.frames.size(); ++i)
+        if (run.frames[i].result.status != TrackingStatus::Lost)
+            trajectory.push_back({run.frames[i].timestamp_s, T_world_camera[i]});
+    return trajectory;
+}
+
 double medianTotalMs(const RunRecord& run) {
     std::vector<double> totals;
     for (const auto& f : run.frames) totals.push_back(f.result.total_ms);
@@ -166,6 +175,22 @@ void writeSummaryJson(const std::string& path, const RunRecord& run) {
         j["rpe_pairs"] = e.rpe_pairs;
         j["ate_best_time_offset_s"] = e.best_time_offset_s;
         j["ate_rmse_at_best_time_offset_m"] = e.ate_rmse_at_best_offset_m;
+        if (run.settings.submaps.enabled) j["ate_online_rmse_m"] = run.trajectory_error_online.ate_rmse_m;
+    }
+    if (run.settings.submaps.enabled) {
+        j["submaps"] = run.submaps;
+        nlohmann::json loops = nlohmann::json::array();
+        for (const LoopClosure& l : run.loop_closures) {
+            const bool known = l.frame >= 0 && l.frame < int(run.frames.size());
+            loops.push_back({{"frame", known ? run.frames[l.frame].index : -1},
+                             {"from_submap", l.from_submap},
+                             {"to_submap", l.to_submap},
+                             {"residual_m", l.residual_m},
+                             {"inlier_ratio", l.inlier_ratio},
+                             {"chi2", l.chi2},
+                             {"rejected", l.rejected}});
+        }
+        j["loop_closures"] = loops;
     }
     j["median_ms"] = medianTotalMs(run);
     j["fps"] = framesPerSecond(run);
@@ -254,6 +279,19 @@ std::string summaryText(const RunRecord& run, const std::string& out_dir) {
         }
     } else {
         s << "  poses        ground truth\n";
+    }
+    if (run.settings.submaps.enabled) {
+        int rejected = 0;
+        for (const LoopClosure& l : run.loop_closures) rejected += l.rejected ? 1 : 0;
+        std::snprintf(line, sizeof line, "  submaps      %d, %zu loop closures (%d rejected by the pose graph)",
+                      run.submaps, run.loop_closures.size(), rejected);
+        s << line;
+        if (run.has_trajectory_error) {
+            std::snprintf(line, sizeof line, "; ATE RMSE as tracked %.1f mm",
+                          1000.0 * run.trajectory_error_online.ate_rmse_m);
+            s << line;
+        }
+        s << "\n";
     }
     if (run.has_trajectory_error) {
         const TrajectoryError& e = run.trajectory_error;

@@ -43,6 +43,12 @@ struct RunRecord {
     std::vector<std::string> outputs;  // the files this run wrote in its output folder (summary.json last)
     bool has_trajectory_error = false;
     TrajectoryError trajectory_error;  // against the source's ground truth, when it has one
+    // With submaps: `trajectory` holds the poses at the submaps' optimised poses, this one the poses as
+    // tracked (trajectory_online.txt), with its own error.
+    int submaps = 1;
+    std::vector<LoopClosure> loop_closures;  // frame: index into `frames`
+    std::vector<TimedPose> trajectory_online;
+    TrajectoryError trajectory_error_online;
 };
 
 // Frames whose tracking was poor / failed (failed frames are not fused).
@@ -56,6 +62,10 @@ int countFused(const RunRecord& run);
 // fused left it without a block, so no depth sample lay in the view frustum. Interrupted runs and runs
 // without frames (a map written out alone) are not judged.
 std::string nothingFusedReason(const RunRecord& run);
+
+// The trajectory (lost frames left out, as SequenceRunner leaves them) from the engine's optimised pose
+// of each processed frame (MainEngine::optimisedPoses); the tracked one if the counts disagree.
+std::vector<TimedPose> optimisedTrajectory(const RunRecord& run, const std::vector<Mat4f>& T_world_camera);
 
 double medianTotalMs(const RunRecord& run);
 double framesPerSecond(const RunRecord& run);

@@ -147,6 +147,8 @@ void writeRunFiles(app::RunRecord& record, app::OutputFolder& out, bool with_tim
 void checkCombinations(const CliOptions& o) {
     const app::PipelineOptions& p = o.pipeline;
     app::checkPipelineOptions(p);
+    if (!o.save_map.empty() && p.settings.submaps)
+        throw ConfigError("--save-map writes a single map: maps of submaps are not supported yet (give --submaps off)");
     if (!p.load_map.empty() && o.max_frames == 0) {
         // Only the map is read: whatever reads, tracks or fuses frames would be ignored.
         for (const char* option : {"source",
@@ -303,9 +305,18 @@ int run(CliOptions& o) {
     record.peak_rss_mb = app::peakRssMb();
     record.scene_mb = double(engine->sceneBytes()) / (1024.0 * 1024.0);
     record.allocation = engine->allocationStats();
+    record.submaps = engine->submapCount();
+    record.loop_closures = engine->loopClosures();
+    if (std::vector<Mat4f> optimised; engine->optimisedPoses(optimised)) {
+        record.trajectory_online = record.trajectory;
+        record.trajectory = app::optimisedTrajectory(record, optimised);
+        writeTumTrajectory(out.file("trajectory_online.txt"), record.trajectory_online);
+    }
     if (!source->groundTruth().empty()) {
         record.trajectory_error = evaluateTrajectory(record.trajectory, source->groundTruth());
         record.has_trajectory_error = record.trajectory_error.pairs >= 3;
+        if (!record.trajectory_online.empty())
+            record.trajectory_error_online = evaluateTrajectory(record.trajectory_online, source->groundTruth());
     }
     writeTumTrajectory(out.file("trajectory.txt"), record.trajectory);
     if (!record.frames.empty()) {

@@ -10,6 +10,7 @@
 #include "MapSwapping.h"
 #include "RelocalisingTracking.h"
 #include "StageClock.h"
+#include "SubmapEngine.h"
 #include "ViewFromFrame.h"
 #include "VoxelTypeDispatch.h"
 #include "io/TextParsing.h"
@@ -118,6 +119,10 @@ public:
         clock_.finish();
         result.total_ms = total.elapsedMs();
         return result;
+    }
+
+    bool locate(const View& view, TrackingState& found) override {
+        return relocalising_.locate({scene_, view, *raycast_, *tracker_, settings_, onGpu()}, found);
     }
 
     const MainEngineSettings& settings() const override { return settings_; }
@@ -325,6 +330,7 @@ std::unique_ptr<MainEngine> createForVoxel(const MainEngineSettings& s, const RG
 
 std::unique_ptr<MainEngine> MainEngine::create(const MainEngineSettings& requested, const RGBDCalib& calib) {
     const MainEngineSettings s = checkedMainEngineSettings(requested, calib);
+    if (s.submaps.enabled) return makeSubmapEngine(s, calib);
     try {
         return visitVoxelType(s.voxel_type,
                               [&](auto tag) { return createForVoxel<typename decltype(tag)::Voxel>(s, calib); });

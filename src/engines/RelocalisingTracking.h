@@ -106,6 +106,28 @@ public:
         c.clock.stageDone("keyframes");
     }
 
+    // Loop closure: the pose in this map of a frame that another engine converted (`c.view`), from the
+    // keyframes most like it, each refined and checked as a lost frame's candidates are. Nothing of this
+    // engine's state changes but the check's raycasts; the tracker's tries are forgotten. Returns
+    // whether a candidate passed, its state in `found`.
+    bool locate(const typename CandidatePoseCheck<TVoxel, TIndex>::Context& c, TrackingState& found) {
+        if (!relocaliser_ || relocaliser_->database().size() == 0) return false;
+        bool accepted = false;
+        for (const KeyframeMatch& m : relocaliser_->lookUp(c.view)) {
+            // Only a keyframe the frame looks like (one that would have kept it from becoming a keyframe
+            // itself): unlike a lost frame, a frame that is merely novel here has no claim to be here.
+            if (m.dissimilarity >= c.settings.relocalisation.keyframe_min_dissimilarity) continue;
+            const Mat4f& T_world_keyframe = relocaliser_->database().keyframe(m.keyframe).T_world_camera;
+            // No reach test (elapsed time unknown): the camera comes back after any time.
+            if (candidate_check_.refine(c, T_world_keyframe, nullptr, T_world_keyframe, -1.0, found)) {
+                accepted = true;
+                break;
+            }
+        }
+        c.tracker.forgetLastPose();
+        return accepted;
+    }
+
     // A new or loaded map: no keyframes, not lost, no time of a last good pose.
     void forget() {
         if (relocaliser_) relocaliser_->clear();

@@ -36,6 +36,24 @@ struct SwapSettings {
     int blocks_per_frame = 4096;  // blocks moved each way per frame at most (the transfer buffers' size)
 };
 
+// A map of local submaps (docs/DESIGN_NOTES.md, "Submaps"): each a voxel block hash with its own pose
+// in the world, the poses optimised as a pose graph (mapping/PoseGraph.h). Hash index only.
+struct SubmapSettings {
+    bool enabled = false;
+    // A new submap starts once the camera is farther than max_distance_m from the active submap's
+    // origin (the pose of the camera that started it) or turned by more than max_angle_deg from it.
+    // Odometry drifts with the path (about 1% of the distance and a degree per metre for frame-to-model
+    // RGB-D tracking): 1.5 m keeps a submap's own drift near a centimetre, about two voxels of 5 mm.
+    // 45 degrees turns a Kinect's 58-degree view two thirds onto new space.
+    float max_distance_m = 1.5f;
+    float max_angle_deg = 45.f;
+    // After a new submap starts, frames are still tracked against the old one while they are fused
+    // into both, so that the new one is tracked against only once it holds views from this many
+    // frames (a third of a second at 30 frames/s: at walking pace the camera has moved a few
+    // centimetres, and the new model covers what the camera sees).
+    int overlap_frames = 10;
+};
+
 // The default hash tables with the block ceiling left to the engine (kAutomaticBlockCount).
 inline VoxelBlockHashSettings hashWithAutomaticBlockCount() {
     VoxelBlockHashSettings s;
@@ -75,6 +93,7 @@ struct MainEngineSettings {
     SwapSettings swap;
     // Keyframes while tracking is good, and finding the camera again from them once it is lost.
     RelocalisationSettings relocalisation;
+    SubmapSettings submaps;
 };
 
 VoxelType parseVoxelType(
@@ -125,6 +144,18 @@ struct FrameResult {
 // each block counts twice.
 int automaticMaxBlockCount(Device device, std::size_t voxel_bytes, const VoxelBlockHashSettings& hash,
                            double available_bytes);
+
+// A revisit found by loop closure between submaps: at the engine's `frame`th processed frame (from 0)
+// the camera, tracked in submap `to_submap`, was found in the older submap `from_submap`.
+struct LoopClosure {
+    int frame = 0;
+    int from_submap = 0;
+    int to_submap = 0;
+    float residual_m = 0.f;  // the accepted pose's tracking residual and inlier ratio in the older submap
+    float inlier_ratio = 0.f;
+    double chi2 = 0.0;      // its edge's squared Mahalanobis residual at the pose graph's last solution
+    bool rejected = false;  // dropped by the pose graph as an outlier
+};
 
 class MainEngine {
 public:
@@ -179,6 +210,22 @@ public:
     // frame, or what a loaded map says). SequenceRunner sets it; saveMap() stores it. False if unknown.
     virtual void setSourceOrigin(const Mat4f& T_source_world) = 0;
     virtual bool sourceOrigin(Mat4f& T_source_world) const = 0;
+
+    // With submaps: the pose of every frame processed since the map began (in order; a lost frame
+    // holds the last good pose), from the submaps' poses as the pose graph last optimised them (waits
+    // for a solve in progress). Without submaps the poses as tracked are final: returns false.
+    virtual bool optimisedPoses(std::vector<Mat4f>& /*T_world_camera*/) { return false; }
+    // The submaps the map holds (1 without submaps).
+    virtual int submapCount() const { return 1; }
+    // Loop closure between submaps: the pose in this map of the frame in `view` (converted by an engine
+    // of the same settings), found from the keyframes most like it and checked as relocalisation checks
+    // its candidates (engines/Relocaliser.h); nothing is fused and the engine's pose stays. Returns
+    // whether one passed, with the tracker's verdict and pose (this map's world) in `found`. False
+    // without relocalisation (it keeps the keyframes).
+    virtual bool locate(const View& /*view*/, TrackingState& /*found*/) { return false; }
+    // With submaps: every loop closure found so far, with the pose graph's verdict (waits for a solve in
+    // progress). Empty without submaps.
+    virtual std::vector<LoopClosure> loopClosures() { return {}; }
 };
 
 // `base` with the voxel type, index, index settings, voxel size and mu of a map file, so that an engine

@@ -36,6 +36,11 @@ struct PipelineSettings {
     int active_blocks = 0;  // > 0: swapping with an active voxel array of this many blocks
     std::string swap_file;
     int swap_blocks_per_frame = SwapSettings{}.blocks_per_frame;
+    // Submaps.
+    bool submaps = SubmapSettings{}.enabled;
+    float submap_distance = SubmapSettings{}.max_distance_m;
+    float submap_angle = SubmapSettings{}.max_angle_deg;
+    int submap_overlap_frames = SubmapSettings{}.overlap_frames;
     // The camera: overrides of the tracker's settings (TrackerOverrides), empty = the defaults.
     std::string tracker;
     std::string tracker_config;

@@ -1,0 +1,438 @@
+// SubmapEngine: frames are tracked against the active submap and fused into it; when the camera has
+// left the active submap's neighbourhood (SubmapSettings) a new submap starts at the camera, and for
+// SubmapSettings::overlap_frames frames each frame is still tracked against the old submap and fused
+// into both, after which the new one is tracked against. Each submap is a MainEngine whose world is the
+// submap's frame: the camera that started it. Consecutive submaps are joined by odometry edges.
+
+#include "SubmapEngine.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "voxfuse/core/Error.h"
+#include "voxfuse/core/Timer.h"
+#include "voxfuse/mapping/PoseGraph.h"
+
+namespace voxfuse {
+namespace {
+
+// How uncertain the pose of one submap is in the previous one's frame, from the path between them:
+// RGB-D odometry drifts by about 1% of the distance and a degree per metre; at least 2 mm and 0.2
+// degrees (the tracker's own noise over the overlap frames).
+constexpr float kOdometryDriftPerMetre = 0.01f;
+constexpr float kOdometryDriftRadPerMetre = 1.f * float(M_PI) / 180.f;
+constexpr float kOdometryMinSigmaM = 0.002f;
+constexpr float kOdometryMinSigmaRad = 0.2f * float(M_PI) / 180.f;
+
+// A loop edge's standard deviations: an accepted pose tracks the frame with a residual under 6 mm and
+// moved less than 1 cm and 1 degree when refined once more (RelocalisationSettings).
+constexpr float kLoopSigmaM = 0.005f;
+constexpr float kLoopSigmaRad = 0.5f * float(M_PI) / 180.f;
+// Older submaps a novel frame is looked up in, nearest first: each costs a keyframe lookup and the
+// refinement of its candidates.
+constexpr int kLoopSubmapsPerFrame = 2;
+// A submap is searched only where the camera is within this share of its neighbourhood (the distance
+// and angle that start a new submap): a quarter of it is hysteresis.
+constexpr float kLoopSearchShare = 0.75f;
+
+constexpr int kMinSubmapBuckets = 4096;
+constexpr int kMinSubmapExcess = 1024;
+
+float rotationAngleRad(const Mat4f& T) {
+    const float c = 0.5f * (T(0, 0) + T(1, 1) + T(2, 2) - 1.f);
+    return std::acos(std::max(-1.f, std::min(1.f, c)));
+}
+float translationNormM(const Mat4f& T) { return length(T.translation()); }
+
+void toWorld(const Mat4f& T_world_submap, FrameResult& r) {
+    r.T_world_camera = T_world_submap * r.T_world_camera;
+    r.tracking.T_world_camera = T_world_submap * r.tracking.T_world_camera;
+}
+
+void transformMesh(const Mat4f& T, Mesh& mesh) {
+    for (Vec3f& v : mesh.vertices) v = transformPoint(T, v);
+    for (Vec3f& n : mesh.normals) n = transformDirection(T, n);
+}
+
+void appendMesh(const Mesh& part, Mesh& mesh) {
+    const int offset = static_cast<int>(mesh.vertices.size());
+    mesh.vertices.insert(mesh.vertices.end(), part.vertices.begin(), part.vertices.end());
+    mesh.normals.insert(mesh.normals.end(), part.normals.begin(), part.normals.end());
+    mesh.colors.insert(mesh.colors.end(), part.colors.begin(), part.colors.end());
+    mesh.labels.insert(mesh.labels.end(), part.labels.begin(), part.labels.end());
+    for (const Vec3i& t : part.triangles) mesh.triangles.push_back({t.x + offset, t.y + offset, t.z + offset});
+}
+
+class SubmapEngine final : public MainEngine {
+public:
+    SubmapEngine(const MainEngineSettings& settings, const RGBDCalib& calib)
+        : calib_(calib), submap_settings_(settings.submaps) {
+        local_settings_ = settings;
+        local_settings_.submaps.enabled = false;
+        // A submap holds the part of the scene seen from its stretch of the path: tables an eighth of
+        // the map's (2^17 buckets by default: room for about 200 m^2 of surface at 5 mm voxels), so
+        // that many submaps cost what one map does. The automatic block ceiling follows the tables.
+        local_settings_.hash.bucket_count = std::max(kMinSubmapBuckets, settings.hash.bucket_count / 8);
+        local_settings_.hash.excess_entry_count = std::max(kMinSubmapExcess, settings.hash.excess_entry_count / 8);
+        // Most submaps stay small: their voxel arrays grow in steps of a quarter of the map's.
+        local_settings_.hash.blocks_per_growth = std::max(1, settings.hash.blocks_per_growth / 4);
+        startMap();
+        // The block ceiling as the first submap's engine chose it serves every submap.
+        local_settings_ = submaps_[0].engine->settings();
+        settings_ = settings;
+        settings_.hash.max_block_count = local_settings_.hash.max_block_count;
+    }
+
+    FrameResult processFrame(const RGBDFrame& frame, const Mat4f* T_world_camera_given) override {
+        const Timer total;
+        adoptSolution();
+        Submap& active = submaps_[active_];
+        Mat4f T_submap_given;
+        if (T_world_camera_given) T_submap_given = rigidInverse(active.T_world_submap) * *T_world_camera_given;
+        FrameResult result = active.engine->processFrame(frame, T_world_camera_given ? &T_submap_given : nullptr);
+        const Mat4f T_submap_camera = result.T_world_camera;
+        toWorld(active.T_world_submap, result);
+        frame_poses_.push_back({active_, T_submap_camera});
+        last_T_world_camera_ = result.T_world_camera;
+        world_render_version_ = -1;
+
+        // A frame the active submap took as a keyframe shows what it had not seen: perhaps a place an
+        // older submap has.
+        const bool novel = result.keyframes > active.keyframes;
+        active.keyframes = result.keyframes;
+        if (result.fused && novel && !T_world_camera_given) {
+            const Timer search;
+            const bool closed = searchLoop(frame, T_submap_camera);
+            result.stages.push_back({"loop_search", search.elapsedMs()});
+            if (closed) {
+                result.total_ms = total.elapsedMs();
+                return result;
+            }
+        }
+        if (result.fused) {
+            if (building_ >= 0) {
+                const Timer fuse;
+                Submap& building = submaps_[building_];
+                const Mat4f T_building_camera = rigidInverse(building.T_world_submap) * result.T_world_camera;
+                building.engine->processFrame(frame, &T_building_camera);
+                result.stages.push_back({"submap_fuse", fuse.elapsedMs()});
+                if (--overlap_left_ <= 0) switchTo(building_);
+            } else if (translationNormM(T_submap_camera) > submap_settings_.max_distance_m ||
+                       rotationAngleRad(T_submap_camera) > submap_settings_.max_angle_deg * float(M_PI) / 180.f) {
+                const Timer start;
+                startSubmap(frame, result.T_world_camera, T_submap_camera);
+                result.stages.push_back({"submap_start", start.elapsedMs()});
+            }
+        }
+        result.total_ms = total.elapsedMs();
+        return result;
+    }
+
+    const MainEngineSettings& settings() const override { return settings_; }
+    const View& view() const override { return submaps_[active_].engine->view(); }
+    const TrackingState& trackingState() const override {
+        tracking_ = submaps_[active_].engine->trackingState();
+        tracking_.T_world_camera = last_T_world_camera_;
+        return tracking_;
+    }
+    // The active submap's raycast, in world coordinates.
+    const RenderState& renderState() const override {
+        if (world_render_version_ == static_cast<long long>(frame_poses_.size())) return world_render_;
+        const Submap& active = submaps_[active_];
+        const RenderState& local = active.engine->renderState();
+        const Mat4f& T = active.T_world_submap;
+        world_render_.intrinsics = local.intrinsics;
+        world_render_.T_world_camera = T * local.T_world_camera;
+        copyTransformed(local.points_world, T, true, world_render_.points_world);
+        copyTransformed(local.normals_world, T, false, world_render_.normals_world);
+        world_render_version_ = static_cast<long long>(frame_poses_.size());
+        return world_render_;
+    }
+    void renderLast(RenderMode mode, Image<Vec4u8>& image) override {
+        submaps_[active_].engine->renderLast(mode, image);
+    }
+    void renderFromPose(const Mat4f& T_world_camera, const Intrinsics& intrinsics, RenderMode mode,
+                        Image<Vec4u8>& image) override {
+        const Submap& active = submaps_[active_];
+        active.engine->renderFromPose(rigidInverse(active.T_world_submap) * T_world_camera, intrinsics, mode, image);
+    }
+
+    void reset() override {
+        submaps_.clear();
+        frame_poses_.clear();
+        loops_.clear();
+        loop_edges_.clear();
+        // Solutions of the old map's graph are not the new one's.
+        optimiser_.waitIdle();
+        PoseGraphResult old;
+        solutions_adopted_ = solutions_before_map_ = optimiser_.latest(old);
+        has_source_origin_ = false;
+        T_source_world_ = Mat4f::identity();
+        startMap();
+    }
+
+    std::size_t sceneBytes() const override {
+        std::size_t bytes = 0;
+        for (const Submap& s : submaps_) bytes += s.engine->sceneBytes();
+        return bytes;
+    }
+    AllocationStats allocationStats() const override { return submaps_[active_].engine->allocationStats(); }
+    const TrackerStats& trackerStats() const override { return submaps_[active_].engine->trackerStats(); }
+
+    // Every submap's surface at its optimised pose.
+    void extractMesh(Mesh& mesh) override {
+        mesh.clear();
+        const std::vector<Mat4f> T_world_submaps = optimisedSubmapPoses();
+        for (std::size_t i = 0; i < submaps_.size(); ++i) {
+            Mesh part;
+            submaps_[i].engine->extractMesh(part);
+            transformMesh(T_world_submaps[i], part);
+            appendMesh(part, mesh);
+        }
+    }
+    void extractPointCloud(PointCloud& cloud) override {
+        cloud.clear();
+        const std::vector<Mat4f> T_world_submaps = optimisedSubmapPoses();
+        for (std::size_t i = 0; i < submaps_.size(); ++i) {
+            PointCloud part;
+            submaps_[i].engine->extractPointCloud(part);
+            for (Vec3f& p : part.points) p = transformPoint(T_world_submaps[i], p);
+            for (Vec3f& n : part.normals) n = transformDirection(T_world_submaps[i], n);
+            cloud.points.insert(cloud.points.end(), part.points.begin(), part.points.end());
+            cloud.normals.insert(cloud.normals.end(), part.normals.begin(), part.normals.end());
+            cloud.colors.insert(cloud.colors.end(), part.colors.begin(), part.colors.end());
+            cloud.labels.insert(cloud.labels.end(), part.labels.begin(), part.labels.end());
+        }
+    }
+
+    void saveMap(const std::string& path) override {
+        throw ConfigError(path + ": map files of submaps are not supported yet (run with --submaps off)");
+    }
+    MapFileInfo loadMap(const std::string& path) override {
+        throw ConfigError(path + ": loading a map into submaps is not supported yet (run with --submaps off)");
+    }
+    void setSourceOrigin(const Mat4f& T_source_world) override {
+        T_source_world_ = T_source_world;
+        has_source_origin_ = true;
+    }
+    bool sourceOrigin(Mat4f& T_source_world) const override {
+        if (has_source_origin_) T_source_world = T_source_world_;
+        return has_source_origin_;
+    }
+
+    bool optimisedPoses(std::vector<Mat4f>& T_world_camera) override {
+        const std::vector<Mat4f> T_world_submaps = optimisedSubmapPoses();
+        T_world_camera.clear();
+        T_world_camera.reserve(frame_poses_.size());
+        for (const FramePose& f : frame_poses_) T_world_camera.push_back(T_world_submaps[f.submap] * f.T_submap_camera);
+        return true;
+    }
+    int submapCount() const override { return static_cast<int>(submaps_.size()); }
+
+    std::vector<LoopClosure> loopClosures() override {
+        std::vector<LoopClosure> loops = loops_;
+        if (loops.empty()) return loops;
+        optimiser_.waitIdle();
+        PoseGraphResult solved;
+        if (optimiser_.latest(solved) > solutions_before_map_)
+            for (LoopClosure& l : loops) {
+                const std::size_t e = static_cast<std::size_t>(loop_edges_[&l - loops.data()]);
+                if (e < solved.edge_chi2.size()) {
+                    l.chi2 = solved.edge_chi2[e];
+                    l.rejected = solved.edge_rejected[e];
+                }
+            }
+        return loops;
+    }
+
+private:
+    struct Submap {
+        std::unique_ptr<MainEngine> engine;
+        // As tracked, then as the pose graph last optimised it (the initial value of its next solve).
+        Mat4f T_world_submap = Mat4f::identity();
+        int parent = -1;    // the submap it started from (joined by odometry)
+        int keyframes = 0;  // its engine's, after the last frame it tracked
+    };
+    struct FramePose {
+        int submap;
+        Mat4f T_submap_camera;
+    };
+
+    // The first submap; its frame is the world.
+    void startMap() {
+        Submap first;
+        first.engine = MainEngine::create(local_settings_, calib_);
+        submaps_.push_back(std::move(first));
+        graph_ = PoseGraph();
+        graph_.addNode(Mat4f::identity());
+        active_ = 0;
+        building_ = -1;
+        overlap_left_ = 0;
+        last_T_world_camera_ = Mat4f::identity();
+        world_render_version_ = -1;
+    }
+
+    // A new submap whose frame is the camera's now; `frame` is its first.
+    void startSubmap(const RGBDFrame& frame, const Mat4f& T_world_camera, const Mat4f& T_active_camera) {
+        Submap next;
+        next.engine = MainEngine::create(local_settings_, calib_);
+        next.T_world_submap = T_world_camera;
+        next.parent = active_;
+        const Mat4f identity = Mat4f::identity();
+        next.engine->processFrame(frame, &identity);
+        submaps_.push_back(std::move(next));
+        const int index = graph_.addNode(T_world_camera);
+
+        PoseGraphEdge odometry;
+        odometry.from = active_;
+        odometry.to = index;
+        odometry.T_from_to = T_active_camera;
+        const float path_m = translationNormM(T_active_camera);
+        odometry.sigma_translation_m = std::max(kOdometryMinSigmaM, kOdometryDriftPerMetre * path_m);
+        odometry.sigma_rotation_rad = std::max(kOdometryMinSigmaRad, kOdometryDriftRadPerMetre * path_m);
+        graph_.addEdge(odometry);
+        optimiser_.submit(graph_);
+
+        building_ = index;
+        overlap_left_ = submap_settings_.overlap_frames;
+        if (overlap_left_ <= 0) switchTo(index);
+    }
+
+    // Looks the frame up in the older submaps nearest to the camera (by their poses now); on success
+    // joins the two submaps by a loop edge and makes the older one active again: the camera is tracked
+    // against the map it made there before, as it would be without submaps. Returns whether it did.
+    bool searchLoop(const RGBDFrame& frame, const Mat4f& T_active_camera) {
+        const Mat4f T_world_camera = submaps_[active_].T_world_submap * T_active_camera;
+        std::vector<std::pair<float, int>> nearest;
+        for (int j = 0; j < static_cast<int>(submaps_.size()); ++j) {
+            if (j == active_ || j == building_) continue;
+            // Only where the camera is back well inside the submap's neighbourhood by the poses now: a
+            // camera at its edge would start a new submap at once, and one hovering there would switch
+            // back and forth.
+            const Mat4f T_j_camera = rigidInverse(submaps_[j].T_world_submap) * T_world_camera;
+            if (!withinNeighbourhood(T_j_camera, kLoopSearchShare)) continue;
+            nearest.push_back({translationNormM(T_j_camera), j});
+        }
+        std::sort(nearest.begin(), nearest.end());
+        const View& view = submaps_[active_].engine->view();
+        for (std::size_t k = 0; k < nearest.size() && k < std::size_t(kLoopSubmapsPerFrame); ++k) {
+            const int j = nearest[k].second;
+            TrackingState found;
+            if (!submaps_[j].engine->locate(view, found)) continue;
+
+            PoseGraphEdge loop;
+            loop.from = j;
+            loop.to = active_;
+            loop.T_from_to = found.T_world_camera * rigidInverse(T_active_camera);
+            loop.sigma_translation_m = kLoopSigmaM;
+            loop.sigma_rotation_rad = kLoopSigmaRad;
+            loop.loop = true;
+            loop_edges_.push_back(graph_.edgeCount());
+            graph_.addEdge(loop);
+            optimiser_.submit(graph_);
+            LoopClosure report;
+            report.frame = static_cast<int>(frame_poses_.size()) - 1;
+            report.from_submap = j;
+            report.to_submap = active_;
+            report.residual_m = found.residual_m;
+            report.inlier_ratio = found.inlier_ratio;
+            loops_.push_back(report);
+
+            // The frame is fused into the older submap at the pose found there, which is tracked from here.
+            if (!withinNeighbourhood(found.T_world_camera, 1.f)) return false;
+            submaps_[j].engine->processFrame(frame, &found.T_world_camera);
+            switchTo(j);
+            return true;
+        }
+        return false;
+    }
+
+    // Whether a camera at T_submap_camera is within `share` of the distance and angle that start a new
+    // submap.
+    bool withinNeighbourhood(const Mat4f& T_submap_camera, float share) const {
+        return translationNormM(T_submap_camera) <= share * submap_settings_.max_distance_m &&
+               rotationAngleRad(T_submap_camera) <= share * submap_settings_.max_angle_deg * float(M_PI) / 180.f;
+    }
+
+    // The pose graph's newest solution becomes the submaps' poses (the camera's pose in the world moves
+    // with its submap's; within the submap tracking is undisturbed).
+    void adoptSolution() {
+        PoseGraphResult solved;
+        const int count = optimiser_.latest(solved);
+        if (count == solutions_adopted_) return;
+        solutions_adopted_ = count;
+        // Submaps started after that graph was handed over move as the submap they started from did.
+        std::vector<Mat4f> before;
+        for (const Submap& m : submaps_) before.push_back(m.T_world_submap);
+        for (std::size_t i = 0; i < submaps_.size(); ++i) {
+            Submap& m = submaps_[i];
+            if (i < solved.T_world_node.size())
+                m.T_world_submap = solved.T_world_node[i];
+            else if (m.parent >= 0)
+                m.T_world_submap = submaps_[m.parent].T_world_submap * rigidInverse(before[m.parent]) * before[i];
+            graph_.setNode(static_cast<int>(i), m.T_world_submap);
+        }
+    }
+
+    void switchTo(int submap) {
+        active_ = submap;
+        building_ = -1;
+        world_render_version_ = -1;
+    }
+
+    // The submaps' poses as the pose graph last optimised them; as tracked before any solve.
+    std::vector<Mat4f> optimisedSubmapPoses() {
+        std::vector<Mat4f> poses;
+        for (const Submap& s : submaps_) poses.push_back(s.T_world_submap);
+        if (submaps_.size() < 2) return poses;
+        optimiser_.waitIdle();
+        PoseGraphResult solved;
+        if (optimiser_.latest(solved) > solutions_before_map_)
+            for (std::size_t i = 0; i < solved.T_world_node.size() && i < poses.size(); ++i)
+                poses[i] = solved.T_world_node[i];
+        return poses;
+    }
+
+    static void copyTransformed(const Image<Vec4f>& from, const Mat4f& T, bool points, Image<Vec4f>& to) {
+        if (to.size().x != from.size().x || to.size().y != from.size().y) to.resize(from.size());
+        const Vec4f* src = from.host();
+        Vec4f* dst = to.host();
+        for (std::size_t i = 0; i < from.pixelCount(); ++i) {
+            const Vec3f p{src[i].x, src[i].y, src[i].z};
+            const Vec3f q = points ? transformPoint(T, p) : transformDirection(T, p);
+            dst[i] = {q.x, q.y, q.z, src[i].w};
+        }
+    }
+
+    RGBDCalib calib_;
+    SubmapSettings submap_settings_;
+    MainEngineSettings local_settings_;  // each submap's engine's: submaps off
+    MainEngineSettings settings_;        // as reported: submaps on, the map's tables, a submap's block ceiling
+    std::vector<Submap> submaps_;
+    int active_ = 0;        // tracked against and fused into
+    int building_ = -1;     // during an overlap: the new submap, fused into too
+    int overlap_left_ = 0;  // frames until it becomes the active one
+    std::vector<FramePose> frame_poses_;
+    std::vector<LoopClosure> loops_;
+    std::vector<int> loop_edges_;  // each loop's edge in graph_
+    int solutions_adopted_ = 0;
+    int solutions_before_map_ = 0;  // solved before the last reset()
+    Mat4f last_T_world_camera_ = Mat4f::identity();
+    mutable TrackingState tracking_;
+    mutable RenderState world_render_;
+    mutable long long world_render_version_ = -1;
+    bool has_source_origin_ = false;
+    Mat4f T_source_world_ = Mat4f::identity();
+    PoseGraph graph_;
+    PoseGraphOptimiser optimiser_;
+};
+
+}  // namespace
+
+std::unique_ptr<MainEngine> makeSubmapEngine(const MainEngineSettings& checked_settings, const RGBDCalib& calib) {
+    return std::make_unique<SubmapEngine>(checked_settings, calib);
+}
+
+}  // namespace voxfuse
