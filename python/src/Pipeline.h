@@ -34,6 +34,9 @@ public:
     const RGBDCalib& calib() const { return calib_; }
     const PipelineSettings& settings() const { return settings_; }
     const std::vector<TimedPose>& trajectory() const { return trajectory_; }
+    // With submaps: the trajectory's frames at the submaps' optimised poses (waits for the pose graph);
+    // without, the trajectory itself.
+    std::vector<TimedPose> optimisedTrajectory();
     const std::map<std::string, StageTimes>& stageTimes() const { return stage_times_; }
     int framesProcessed() const { return frames_; }
     int framesFused() const { return fused_; }
@@ -53,8 +56,9 @@ private:
     RGBDCalib calib_;
     PipelineSettings settings_;
     std::unique_ptr<MainEngine> engine_;
-    RGBDFrame frame_;                    // reused: its images keep their memory between frames
-    std::vector<TimedPose> trajectory_;  // the frames with a pose: a lost frame has none (as the CLI's trajectory.txt)
+    RGBDFrame frame_;                     // reused: its images keep their memory between frames
+    std::vector<TimedPose> trajectory_;   // the frames with a pose: a lost frame has none (as the CLI's trajectory.txt)
+    std::vector<int> trajectory_frames_;  // each one's processed frame (0 = the first since the map began)
     std::map<std::string, StageTimes> stage_times_;
     int frames_ = 0, fused_ = 0, failed_ = 0, poor_ = 0;
     int lost_ = 0, relocalisation_attempts_ = 0, relocalisations_ = 0;

@@ -614,6 +614,42 @@ void bindPipeline(py::module_& m) {
             "(timestamps (N,), camera-to-world poses (N, 4, 4)) of every processed frame that has a pose (lost frames "
             "have none).")
         .def_property_readonly(
+            "optimised_trajectory",
+            [](Pipeline& p) {
+                const auto busy = p.claim("optimised_trajectory");
+                return timedPosesToArrays(p.optimisedTrajectory());
+            },
+            "The trajectory's frames at their submaps' poses as the pose graph optimised them (submaps=True; waits "
+            "for a solve in progress); without submaps the trajectory itself.")
+        .def_property_readonly(
+            "submap_count",
+            [](Pipeline& p) {
+                const auto busy = p.claim("submap_count");
+                return p.engine().submapCount();
+            },
+            "The submaps the map holds (1 without submaps).")
+        .def(
+            "loop_closures",
+            [](Pipeline& p) {
+                const auto busy = p.claim("loop_closures");
+                py::list loops;
+                for (const LoopClosure& l : p.engine().loopClosures()) {
+                    py::dict d;
+                    d["frame"] = l.frame;
+                    d["from_submap"] = l.from_submap;
+                    d["to_submap"] = l.to_submap;
+                    d["residual_m"] = l.residual_m;
+                    d["inlier_ratio"] = l.inlier_ratio;
+                    d["chi2"] = l.chi2;
+                    d["rejected"] = l.rejected;
+                    loops.append(d);
+                }
+                return loops;
+            },
+            "Every loop closure between submaps so far, as dicts: frame (processed frames before it since the map "
+            "began), from_submap (the older one the camera was found in), to_submap, residual_m, inlier_ratio, chi2 "
+            "(its pose graph edge's squared Mahalanobis residual) and rejected (dropped by the pose graph).")
+        .def_property_readonly(
             "settings", [](const Pipeline& p) { return p.settings(); },
             "A copy of the settings the pipeline was made with: changing it changes nothing (make a new Pipeline).")
         .def_property_readonly("calib", [](const Pipeline& p) { return p.calib(); })

@@ -188,3 +188,31 @@ def test_reset_forgets_the_ground_truth_origin(room_frames):
     p.reset()
     p.process_frame(frames[6], ground_truth=True)
     assert np.allclose(p.pose, np.eye(4), atol=1e-6), p.pose
+
+
+def test_submaps_expose_their_loops_and_optimised_trajectory(room_source):
+    frames = []
+    for frame in room_source:
+        frames.append(frame)
+        if len(frames) == 30:
+            break
+    single = voxfuse.Pipeline(room_source.calib)
+    single.process_frame(frames[0])
+    assert single.submap_count == 1 and single.loop_closures() == []
+    np.testing.assert_array_equal(single.optimised_trajectory[1], single.trajectory[1])
+
+    try:
+        p = voxfuse.Pipeline(room_source.calib, voxfuse.Settings(submaps=True, submap_distance=0.1))
+    except voxfuse.ConfigError as e:
+        pytest.skip(str(e))  # a build without Ceres
+    for i in list(range(30)) + list(range(28, -1, -1)):  # there and back
+        p.process_frame(frames[i])
+    assert p.submap_count >= 3
+    loops = p.loop_closures()
+    assert len(loops) >= 1
+    assert all(not l["rejected"] and l["frame"] >= 30 and l["chi2"] < 22.46 for l in loops)
+    t, tracked = p.trajectory
+    t_opt, optimised = p.optimised_trajectory
+    np.testing.assert_array_equal(t, t_opt)
+    assert optimised.shape == tracked.shape == (59, 4, 4)
+    assert np.abs(optimised[:, :3, 3] - tracked[:, :3, 3]).max() < 0.01

@@ -120,6 +120,9 @@ class Settings:
     active_blocks: int
     swap_file: str
     swap_blocks_per_frame: int
+    submaps: bool
+    submap_distance: float
+    submap_overlap_frames: int
     relocalise: bool
     relocalise_candidates: int
     relocalise_max_speed: float
@@ -175,6 +178,11 @@ class Pipeline:
     def pose(self) -> npt.NDArray[np.float64]: ...
     @property
     def trajectory(self) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]: ...
+    @property
+    def optimised_trajectory(self) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]: ...
+    @property
+    def submap_count(self) -> int: ...
+    def loop_closures(self) -> list[dict[str, object]]: ...
     @property
     def settings(self) -> Settings: ...
     @property

@@ -121,6 +121,21 @@ public:
         return result;
     }
 
+    float modelCoverage(const View& view) override {
+        if (model_.points_world.empty() || view.depth.empty()) return 0.f;
+        if (onGpu()) model_.points_world.memory().updateHost();  // view(): its host copy is current
+        const int factor = settings_.tracking_raycast_downsample;
+        const Vec2i size = model_.points_world.size();
+        long long valid = 0, covered = 0;
+        for (int v = 0; v < size.y; ++v)
+            for (int u = 0; u < size.x; ++u) {
+                if (!(view.depth.at(u * factor, v * factor) > 0.f)) continue;
+                ++valid;
+                covered += model_.points_world.at(u, v).w > 0.f ? 1 : 0;
+            }
+        return valid > 0 ? float(covered) / float(valid) : 0.f;
+    }
+
     bool locate(const View& view, TrackingState& found) override {
         return relocalising_.locate({scene_, view, *raycast_, *tracker_, settings_, onGpu()}, found);
     }

@@ -11,6 +11,7 @@
 #include "VoxelTypeDispatch.h"
 #include "voxfuse/core/DeviceMemory.h"
 #include "voxfuse/core/Error.h"
+#include "voxfuse/mapping/PoseGraph.h"
 #include "voxfuse/objects/VoxelBlockHash.h"
 
 namespace voxfuse {
@@ -139,11 +140,14 @@ MainEngineSettings checkedMainEngineSettings(const MainEngineSettings& requested
     if (s.swap.enabled && s.index_type != IndexType::Hash)
         throw ConfigError("swapping needs the hash index (--index hash)");
     if (s.swap.enabled && s.swap.blocks_per_frame < 1) throw ConfigError("swapping moves at least one block per frame");
+    if (s.submaps.enabled && !poseGraphAvailable())
+        throw ConfigError(
+            "submaps need pose graph optimisation, which this build lacks (install libceres-dev and "
+            "rebuild)");
     if (s.submaps.enabled && s.index_type != IndexType::Hash)
         throw ConfigError("submaps need the hash index (--index hash)");
-    if (s.submaps.enabled && (!(s.submaps.max_distance_m > 0.f) || !(s.submaps.max_angle_deg > 0.f) ||
-                              !std::isfinite(s.submaps.max_distance_m) || !std::isfinite(s.submaps.max_angle_deg) ||
-                              s.submaps.overlap_frames < 0))
+    if (s.submaps.enabled &&
+        (!(s.submaps.max_distance_m > 0.f) || !std::isfinite(s.submaps.max_distance_m) || s.submaps.overlap_frames < 0))
         throw ConfigError("submaps need a positive, finite distance and angle and overlap frames >= 0");
     if (s.tracking_raycast_downsample != 1 && s.tracking_raycast_downsample != 2 && s.tracking_raycast_downsample != 4)
         throw ConfigError("the tracking raycast's downsampling must be 1, 2 or 4 (got " +

@@ -85,10 +85,9 @@ const std::vector<SettingRow> kRows = {
      CliForm::OnOff},
     {"submap_distance", &P::submap_distance, SettingGroup::Map, "m", 0, 1000, true, 0, "",
      "submaps: a new one starts once the camera is this far from the active one's first camera"},
-    {"submap_angle", &P::submap_angle, SettingGroup::Map, "deg", 0, 180, true, 0, "",
-     "submaps: a new one starts once the camera has turned this far from the active one's first camera"},
     {"submap_overlap_frames", &P::submap_overlap_frames, SettingGroup::Map, "", 0, 1000, false, 0, "",
-     "submaps: frames fused into both the old and the new submap before the new one is tracked against"},
+     "submaps: frames fused into both the old and the new submap at most before the new one is tracked against (it "
+     "is once it covers a frame as well as the old)"},
     {"tracker", &P::tracker, SettingGroup::Tracking, "", 0, 0, false, 0, "icp color ren rgbd",
      "icp | color | ren | rgbd (default: rgbd, robust ICP plus colour aligned to the map's colours and, beyond "
      "max_depth, to keyframes of the far depths; ren: the same without colour)"},
@@ -255,7 +254,6 @@ MainEngineSettings PipelineSettings::toEngineSettings() const {
     s.swap.blocks_per_frame = swap_blocks_per_frame;
     s.submaps.enabled = submaps;
     s.submaps.max_distance_m = submap_distance;
-    s.submaps.max_angle_deg = submap_angle;
     s.submaps.overlap_frames = submap_overlap_frames;
     s.tracker = trackerSettingsWith(
         {tracker_config, tracker, tracker_levels, tracker_iterations, tracker_max_distance, "the tracker settings"});
@@ -289,7 +287,6 @@ PipelineSettings PipelineSettings::of(const MainEngineSettings& e) {
     p.swap_blocks_per_frame = e.swap.blocks_per_frame;
     p.submaps = e.submaps.enabled;
     p.submap_distance = e.submaps.max_distance_m;
-    p.submap_angle = e.submaps.max_angle_deg;
     p.submap_overlap_frames = e.submaps.overlap_frames;
     p.tracker = toString(e.tracker.kind);
     p.tracker_levels.clear();

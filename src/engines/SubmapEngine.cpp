@@ -1,5 +1,5 @@
 // SubmapEngine: frames are tracked against the active submap and fused into it; when the camera has
-// left the active submap's neighbourhood (SubmapSettings) a new submap starts at the camera, and for
+// left the active submap's neighbourhood (SubmapSettings::max_distance_m) a new submap starts at the camera, and for
 // SubmapSettings::overlap_frames frames each frame is still tracked against the old submap and fused
 // into both, after which the new one is tracked against. Each submap is a MainEngine whose world is the
 // submap's frame: the camera that started it. Consecutive submaps are joined by odometry edges.
@@ -34,21 +34,18 @@ constexpr float kLoopSigmaRad = 0.5f * float(M_PI) / 180.f;
 // refinement of its candidates.
 constexpr int kLoopSubmapsPerFrame = 2;
 // A submap is searched only where the camera is within this share of its neighbourhood (the distance
-// and angle that start a new submap): a quarter of it is hysteresis.
+// that starts a new submap): a quarter of it is hysteresis.
 constexpr float kLoopSearchShare = 0.75f;
 
 constexpr int kMinSubmapBuckets = 4096;
 constexpr int kMinSubmapExcess = 1024;
 
-float rotationAngleRad(const Mat4f& T) {
-    const float c = 0.5f * (T(0, 0) + T(1, 1) + T(2, 2) - 1.f);
-    return std::acos(std::max(-1.f, std::min(1.f, c)));
-}
 float translationNormM(const Mat4f& T) { return length(T.translation()); }
 
+void toWorld(const Mat4f& T_world_submap, TrackingState& t) { t.T_world_camera = T_world_submap * t.T_world_camera; }
 void toWorld(const Mat4f& T_world_submap, FrameResult& r) {
     r.T_world_camera = T_world_submap * r.T_world_camera;
-    r.tracking.T_world_camera = T_world_submap * r.tracking.T_world_camera;
+    toWorld(T_world_submap, r.tracking);
 }
 
 void transformMesh(const Mat4f& T, Mesh& mesh) {
@@ -98,6 +95,13 @@ public:
         last_T_world_camera_ = result.T_world_camera;
         world_render_version_ = -1;
 
+        if (result.status == TrackingStatus::Lost && !T_world_camera_given) {
+            const Timer search;
+            relocaliseInOtherSubmaps(frame, result);
+            result.stages.push_back({"submap_relocalise", search.elapsedMs()});
+            result.total_ms = total.elapsedMs();
+            return result;
+        }
         // A frame the active submap took as a keyframe shows what it had not seen: perhaps a place an
         // older submap has.
         const bool novel = result.keyframes > active.keyframes;
@@ -115,12 +119,17 @@ public:
             if (building_ >= 0) {
                 const Timer fuse;
                 Submap& building = submaps_[building_];
+                // The new submap is tracked against once its model explains as much of the frame as the
+                // old one did (the tracker's inlier share; given poses have none), or after
+                // overlap_frames at most.
+                const float coverage =
+                    T_world_camera_given ? 0.f : building.engine->modelCoverage(active.engine->view());
                 const Mat4f T_building_camera = rigidInverse(building.T_world_submap) * result.T_world_camera;
                 building.engine->processFrame(frame, &T_building_camera);
                 result.stages.push_back({"submap_fuse", fuse.elapsedMs()});
-                if (--overlap_left_ <= 0) switchTo(building_);
-            } else if (translationNormM(T_submap_camera) > submap_settings_.max_distance_m ||
-                       rotationAngleRad(T_submap_camera) > submap_settings_.max_angle_deg * float(M_PI) / 180.f) {
+                if (--overlap_left_ <= 0 || (!T_world_camera_given && coverage >= result.tracking.inlier_ratio))
+                    switchTo(building_);
+            } else if (translationNormM(T_submap_camera) > submap_settings_.max_distance_m) {
                 const Timer start;
                 startSubmap(frame, result.T_world_camera, T_submap_camera);
                 result.stages.push_back({"submap_start", start.elapsedMs()});
@@ -230,6 +239,7 @@ public:
         return true;
     }
     int submapCount() const override { return static_cast<int>(submaps_.size()); }
+    float modelCoverage(const View& view) override { return submaps_[active_].engine->modelCoverage(view); }
 
     std::vector<LoopClosure> loopClosures() override {
         std::vector<LoopClosure> loops = loops_;
@@ -349,11 +359,39 @@ private:
         return false;
     }
 
-    // Whether a camera at T_submap_camera is within `share` of the distance and angle that start a new
-    // submap.
+    // Lost in the active submap: the frame is looked up in the other submaps near the last good pose,
+    // as a loop is (their keyframes may hold the view); found, it is fused there and that submap is
+    // tracked against from here. `result` becomes the frame's, relocalised.
+    void relocaliseInOtherSubmaps(const RGBDFrame& frame, FrameResult& result) {
+        std::vector<std::pair<float, int>> nearest;
+        for (int j = 0; j < static_cast<int>(submaps_.size()); ++j) {
+            if (j == active_) continue;
+            const Mat4f T_j_camera = rigidInverse(submaps_[j].T_world_submap) * result.T_world_camera;
+            if (withinNeighbourhood(T_j_camera, 1.f)) nearest.push_back({translationNormM(T_j_camera), j});
+        }
+        std::sort(nearest.begin(), nearest.end());
+        const View& view = submaps_[active_].engine->view();
+        for (std::size_t k = 0; k < nearest.size() && k < std::size_t(kLoopSubmapsPerFrame); ++k) {
+            const int j = nearest[k].second;
+            TrackingState found;
+            if (!submaps_[j].engine->locate(view, found)) continue;
+            submaps_[j].engine->processFrame(frame, &found.T_world_camera);
+            switchTo(j);
+            result.fused = true;
+            result.status = TrackingStatus::Relocalised;
+            result.quality = found.quality;
+            result.tracking = found;
+            toWorld(submaps_[j].T_world_submap, result.tracking);
+            result.T_world_camera = result.tracking.T_world_camera;
+            frame_poses_.back() = {j, found.T_world_camera};
+            last_T_world_camera_ = result.T_world_camera;
+            return;
+        }
+    }
+
+    // Whether a camera at T_submap_camera is within `share` of the distance that starts a new submap.
     bool withinNeighbourhood(const Mat4f& T_submap_camera, float share) const {
-        return translationNormM(T_submap_camera) <= share * submap_settings_.max_distance_m &&
-               rotationAngleRad(T_submap_camera) <= share * submap_settings_.max_angle_deg * float(M_PI) / 180.f;
+        return translationNormM(T_submap_camera) <= share * submap_settings_.max_distance_m;
     }
 
     // The pose graph's newest solution becomes the submaps' poses (the camera's pose in the world moves

@@ -5,6 +5,8 @@
 
 namespace voxfuse {
 
+bool poseGraphAvailable() { return false; }
+
 PoseGraphResult solvePoseGraph(const std::vector<Mat4f>&, const std::vector<PoseGraphEdge>&, const PoseGraphSettings&) {
     throw ConfigError("this VoxFuse build has no pose graph optimisation (install libceres-dev and rebuild)");
 }

@@ -41,17 +41,17 @@ struct SwapSettings {
 struct SubmapSettings {
     bool enabled = false;
     // A new submap starts once the camera is farther than max_distance_m from the active submap's
-    // origin (the pose of the camera that started it) or turned by more than max_angle_deg from it.
-    // Odometry drifts with the path (about 1% of the distance and a degree per metre for frame-to-model
-    // RGB-D tracking): 1.5 m keeps a submap's own drift near a centimetre, about two voxels of 5 mm.
-    // 45 degrees turns a Kinect's 58-degree view two thirds onto new space.
+    // origin (the position of the camera that started it). Odometry drifts with the path (about 1% of
+    // the distance and a degree per metre for frame-to-model RGB-D tracking): 1.5 m keeps a submap's
+    // own drift near a centimetre, about two voxels of 5 mm. Turning is no reason: what a camera
+    // turning on the spot sees new is fused into the submap it stands in, as a single map would, and a
+    // young submap of a few views is what tracking loses itself in.
     float max_distance_m = 1.5f;
-    float max_angle_deg = 45.f;
     // After a new submap starts, frames are still tracked against the old one while they are fused
-    // into both, so that the new one is tracked against only once it holds views from this many
-    // frames (a third of a second at 30 frames/s: at walking pace the camera has moved a few
-    // centimetres, and the new model covers what the camera sees).
-    int overlap_frames = 10;
+    // into both, until the new one's model covers as much of a frame as the old one's tracking
+    // explained (its inlier share; a young submap of a few views loses the camera), or for this many
+    // frames at most (a second at 30 frames/s bounds the doubled fusion).
+    int overlap_frames = 30;
 };
 
 // The default hash tables with the block ceiling left to the engine (kAutomaticBlockCount).
@@ -223,6 +223,10 @@ public:
     // whether one passed, with the tracker's verdict and pose (this map's world) in `found`. False
     // without relocalisation (it keeps the keyframes).
     virtual bool locate(const View& /*view*/, TrackingState& /*found*/) { return false; }
+    // How much of a frame the map would explain: the share of `view`'s depth pixels (converted by an
+    // engine of the same settings; sampled at the tracking raycast's resolution) where the model this
+    // engine would track the next frame against (its raycast from the last pose) has a surface.
+    virtual float modelCoverage(const View& view) = 0;
     // With submaps: every loop closure found so far, with the pose graph's verdict (waits for a solve in
     // progress). Empty without submaps.
     virtual std::vector<LoopClosure> loopClosures() { return {}; }

@@ -39,7 +39,6 @@ struct PipelineSettings {
     // Submaps.
     bool submaps = SubmapSettings{}.enabled;
     float submap_distance = SubmapSettings{}.max_distance_m;
-    float submap_angle = SubmapSettings{}.max_angle_deg;
     int submap_overlap_frames = SubmapSettings{}.overlap_frames;
     // The camera: overrides of the tracker's settings (TrackerOverrides), empty = the defaults.
     std::string tracker;

@@ -15,6 +15,9 @@
 
 namespace voxfuse {
 
+// Whether this build can optimise pose graphs (it has Ceres).
+bool poseGraphAvailable();
+
 struct PoseGraphEdge {
     int from = 0;
     int to = 0;
