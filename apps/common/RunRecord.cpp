@@ -87,15 +87,6 @@ int countRelocalisationAttempts(const RunRecord& run) {
     return n;
 }
 
-std::vector<TimedPose> optimisedTrajectory(const RunRecord& run, const std::vector<Mat4f>& T_world_camera) {
-    if (T_world_camera.size() != run.frames.size()) return run.trajectory;
-    std::vector<TimedPose> trajectory;
-    for (std::size_t i = 0; i < run.frames.size(); ++i)
-        if (run.frames[i].result.status != TrackingStatus::Lost)
-            trajectory.push_back({run.frames[i].timestamp_s, T_world_camera[i]});
-    return trajectory;
-}
-
 double medianTotalMs(const RunRecord& run) {
     std::vector<double> totals;
     for (const auto& f : run.frames) totals.push_back(f.result.total_ms);

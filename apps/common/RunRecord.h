@@ -63,10 +63,6 @@ int countFused(const RunRecord& run);
 // without frames (a map written out alone) are not judged.
 std::string nothingFusedReason(const RunRecord& run);
 
-// The trajectory (lost frames left out, as SequenceRunner leaves them) from the engine's optimised pose
-// of each processed frame (MainEngine::optimisedPoses); the tracked one if the counts disagree.
-std::vector<TimedPose> optimisedTrajectory(const RunRecord& run, const std::vector<Mat4f>& T_world_camera);
-
 double medianTotalMs(const RunRecord& run);
 double framesPerSecond(const RunRecord& run);
 

@@ -309,7 +309,7 @@ int run(CliOptions& o) {
     record.loop_closures = engine->loopClosures();
     if (std::vector<Mat4f> optimised; engine->optimisedPoses(optimised)) {
         record.trajectory_online = record.trajectory;
-        record.trajectory = app::optimisedTrajectory(record, optimised);
+        record.trajectory = withPoses(record.trajectory, optimised);
         writeTumTrajectory(out.file("trajectory_online.txt"), record.trajectory_online);
     }
     if (!source->groundTruth().empty()) {

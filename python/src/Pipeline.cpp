@@ -17,10 +17,7 @@ FrameResult Pipeline::process(const RGBDFrame& frame, const Mat4f* T_world_camer
     relocalisation_attempts_ += r.relocalisation_tried;
     relocalisations_ += r.status == TrackingStatus::Relocalised;
     // A lost frame holds the last good pose, not its own: like the CLI's trajectory, leave it out.
-    if (r.status != TrackingStatus::Lost) {
-        trajectory_.push_back({frame.timestamp_s, r.T_world_camera});
-        trajectory_frames_.push_back(frames_ - 1);
-    }
+    if (r.status != TrackingStatus::Lost) trajectory_.push_back({frame.timestamp_s, r.T_world_camera});
     for (const StageTime& st : r.stages) stage_times_[st.stage].ms.push_back(st.ms);
     stage_times_["total"].ms.push_back(r.total_ms);
     return r;
@@ -41,11 +38,7 @@ Mat4f Pipeline::groundTruthPose(const RGBDFrame& frame) {
 std::vector<TimedPose> Pipeline::optimisedTrajectory() {
     std::vector<Mat4f> T_world_camera;
     if (!engine_->optimisedPoses(T_world_camera)) return trajectory_;
-    std::vector<TimedPose> optimised = trajectory_;
-    for (std::size_t k = 0; k < optimised.size(); ++k)
-        if (std::size_t(trajectory_frames_[k]) < T_world_camera.size())
-            optimised[k].T_world_camera = T_world_camera[trajectory_frames_[k]];
-    return optimised;
+    return withPoses(trajectory_, T_world_camera);
 }
 
 std::unique_lock<std::mutex> Pipeline::claim(const char* call) {
@@ -60,7 +53,6 @@ void Pipeline::reset() {
     have_origin_ = false;
     engine_->reset();
     trajectory_.clear();
-    trajectory_frames_.clear();
     stage_times_.clear();
     frames_ = fused_ = failed_ = poor_ = 0;
     lost_ = relocalisation_attempts_ = relocalisations_ = 0;

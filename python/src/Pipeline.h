@@ -56,9 +56,8 @@ private:
     RGBDCalib calib_;
     PipelineSettings settings_;
     std::unique_ptr<MainEngine> engine_;
-    RGBDFrame frame_;                     // reused: its images keep their memory between frames
-    std::vector<TimedPose> trajectory_;   // the frames with a pose: a lost frame has none (as the CLI's trajectory.txt)
-    std::vector<int> trajectory_frames_;  // each one's processed frame (0 = the first since the map began)
+    RGBDFrame frame_;                    // reused: its images keep their memory between frames
+    std::vector<TimedPose> trajectory_;  // the frames with a pose: a lost frame has none (as the CLI's trajectory.txt)
     std::map<std::string, StageTimes> stage_times_;
     int frames_ = 0, fused_ = 0, failed_ = 0, poor_ = 0;
     int lost_ = 0, relocalisation_attempts_ = 0, relocalisations_ = 0;

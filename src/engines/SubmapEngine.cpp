@@ -48,18 +48,16 @@ void toWorld(const Mat4f& T_world_submap, FrameResult& r) {
     toWorld(T_world_submap, r.tracking);
 }
 
-void transformMesh(const Mat4f& T, Mesh& mesh) {
-    for (Vec3f& v : mesh.vertices) v = transformPoint(T, v);
-    for (Vec3f& n : mesh.normals) n = transformDirection(T, n);
+template <class T>
+void append(const std::vector<T>& part, std::vector<T>& all) {
+    all.insert(all.end(), part.begin(), part.end());
 }
 
-void appendMesh(const Mesh& part, Mesh& mesh) {
-    const int offset = static_cast<int>(mesh.vertices.size());
-    mesh.vertices.insert(mesh.vertices.end(), part.vertices.begin(), part.vertices.end());
-    mesh.normals.insert(mesh.normals.end(), part.normals.begin(), part.normals.end());
-    mesh.colors.insert(mesh.colors.end(), part.colors.begin(), part.colors.end());
-    mesh.labels.insert(mesh.labels.end(), part.labels.begin(), part.labels.end());
-    for (const Vec3i& t : part.triangles) mesh.triangles.push_back({t.x + offset, t.y + offset, t.z + offset});
+// A submap's points and normals moved into the world by T_world_submap, appended.
+void appendTransformed(const Mat4f& T_world_submap, const std::vector<Vec3f>& points, const std::vector<Vec3f>& normals,
+                       std::vector<Vec3f>& world_points, std::vector<Vec3f>& world_normals) {
+    for (const Vec3f& p : points) world_points.push_back(transformPoint(T_world_submap, p));
+    for (const Vec3f& n : normals) world_normals.push_back(transformDirection(T_world_submap, n));
 }
 
 class SubmapEngine final : public MainEngine {
@@ -91,9 +89,8 @@ public:
         FrameResult result = active.engine->processFrame(frame, T_world_camera_given ? &T_submap_given : nullptr);
         const Mat4f T_submap_camera = result.T_world_camera;
         toWorld(active.T_world_submap, result);
-        frame_poses_.push_back({active_, T_submap_camera});
+        ++frames_processed_;
         last_T_world_camera_ = result.T_world_camera;
-        world_render_version_ = -1;
 
         if (result.status == TrackingStatus::Lost && !T_world_camera_given) {
             const Timer search;
@@ -102,6 +99,7 @@ public:
             result.total_ms = total.elapsedMs();
             return result;
         }
+        frame_poses_.push_back({active_, T_submap_camera});
         // A frame the active submap took as a keyframe shows what it had not seen: perhaps a place an
         // older submap has.
         const bool novel = result.keyframes > active.keyframes;
@@ -148,7 +146,7 @@ public:
     }
     // The active submap's raycast, in world coordinates.
     const RenderState& renderState() const override {
-        if (world_render_version_ == static_cast<long long>(frame_poses_.size())) return world_render_;
+        if (world_render_version_ == frames_processed_) return world_render_;
         const Submap& active = submaps_[active_];
         const RenderState& local = active.engine->renderState();
         const Mat4f& T = active.T_world_submap;
@@ -156,7 +154,7 @@ public:
         world_render_.T_world_camera = T * local.T_world_camera;
         copyTransformed(local.points_world, T, true, world_render_.points_world);
         copyTransformed(local.normals_world, T, false, world_render_.normals_world);
-        world_render_version_ = static_cast<long long>(frame_poses_.size());
+        world_render_version_ = frames_processed_;
         return world_render_;
     }
     void renderLast(RenderMode mode, Image<Vec4u8>& image) override {
@@ -171,6 +169,7 @@ public:
     void reset() override {
         submaps_.clear();
         frame_poses_.clear();
+        frames_processed_ = 0;
         loops_.clear();
         loop_edges_.clear();
         // Solutions of the old map's graph are not the new one's.
@@ -197,8 +196,11 @@ public:
         for (std::size_t i = 0; i < submaps_.size(); ++i) {
             Mesh part;
             submaps_[i].engine->extractMesh(part);
-            transformMesh(T_world_submaps[i], part);
-            appendMesh(part, mesh);
+            const int offset = static_cast<int>(mesh.vertices.size());
+            appendTransformed(T_world_submaps[i], part.vertices, part.normals, mesh.vertices, mesh.normals);
+            append(part.colors, mesh.colors);
+            append(part.labels, mesh.labels);
+            for (const Vec3i& t : part.triangles) mesh.triangles.push_back({t.x + offset, t.y + offset, t.z + offset});
         }
     }
     void extractPointCloud(PointCloud& cloud) override {
@@ -207,12 +209,9 @@ public:
         for (std::size_t i = 0; i < submaps_.size(); ++i) {
             PointCloud part;
             submaps_[i].engine->extractPointCloud(part);
-            for (Vec3f& p : part.points) p = transformPoint(T_world_submaps[i], p);
-            for (Vec3f& n : part.normals) n = transformDirection(T_world_submaps[i], n);
-            cloud.points.insert(cloud.points.end(), part.points.begin(), part.points.end());
-            cloud.normals.insert(cloud.normals.end(), part.normals.begin(), part.normals.end());
-            cloud.colors.insert(cloud.colors.end(), part.colors.begin(), part.colors.end());
-            cloud.labels.insert(cloud.labels.end(), part.labels.begin(), part.labels.end());
+            appendTransformed(T_world_submaps[i], part.points, part.normals, cloud.points, cloud.normals);
+            append(part.colors, cloud.colors);
+            append(part.labels, cloud.labels);
         }
     }
 
@@ -247,11 +246,11 @@ public:
         optimiser_.waitIdle();
         PoseGraphResult solved;
         if (optimiser_.latest(solved) > solutions_before_map_)
-            for (LoopClosure& l : loops) {
-                const std::size_t e = static_cast<std::size_t>(loop_edges_[&l - loops.data()]);
+            for (std::size_t k = 0; k < loops.size(); ++k) {
+                const std::size_t e = static_cast<std::size_t>(loop_edges_[k]);
                 if (e < solved.edge_chi2.size()) {
-                    l.chi2 = solved.edge_chi2[e];
-                    l.rejected = solved.edge_rejected[e];
+                    loops[k].chi2 = solved.edge_chi2[e];
+                    loops[k].rejected = solved.edge_rejected[e];
                 }
             }
         return loops;
@@ -343,7 +342,7 @@ private:
             graph_.addEdge(loop);
             optimiser_.submit(graph_);
             LoopClosure report;
-            report.frame = static_cast<int>(frame_poses_.size()) - 1;
+            report.frame = static_cast<int>(frames_processed_) - 1;
             report.from_submap = j;
             report.to_submap = active_;
             report.residual_m = found.residual_m;
@@ -383,7 +382,7 @@ private:
             result.tracking = found;
             toWorld(submaps_[j].T_world_submap, result.tracking);
             result.T_world_camera = result.tracking.T_world_camera;
-            frame_poses_.back() = {j, found.T_world_camera};
+            frame_poses_.push_back({j, found.T_world_camera});
             last_T_world_camera_ = result.T_world_camera;
             return;
         }
@@ -397,9 +396,9 @@ private:
     // The pose graph's newest solution becomes the submaps' poses (the camera's pose in the world moves
     // with its submap's; within the submap tracking is undisturbed).
     void adoptSolution() {
+        if (optimiser_.solvedCount() == solutions_adopted_) return;  // every frame: no copy unless new
         PoseGraphResult solved;
         const int count = optimiser_.latest(solved);
-        if (count == solutions_adopted_) return;
         solutions_adopted_ = count;
         // Submaps started after that graph was handed over move as the submap they started from did.
         std::vector<Mat4f> before;
@@ -449,10 +448,11 @@ private:
     MainEngineSettings local_settings_;  // each submap's engine's: submaps off
     MainEngineSettings settings_;        // as reported: submaps on, the map's tables, a submap's block ceiling
     std::vector<Submap> submaps_;
-    int active_ = 0;        // tracked against and fused into
-    int building_ = -1;     // during an overlap: the new submap, fused into too
-    int overlap_left_ = 0;  // frames until it becomes the active one
-    std::vector<FramePose> frame_poses_;
+    int active_ = 0;                      // tracked against and fused into
+    int building_ = -1;                   // during an overlap: the new submap, fused into too
+    int overlap_left_ = 0;                // frames until it becomes the active one
+    std::vector<FramePose> frame_poses_;  // of the frames with a pose (not the lost ones)
+    long long frames_processed_ = 0;      // since the map began
     std::vector<LoopClosure> loops_;
     std::vector<int> loop_edges_;  // each loop's edge in graph_
     int solutions_adopted_ = 0;

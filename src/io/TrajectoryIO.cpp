@@ -135,4 +135,11 @@ bool interpolatePose(const std::vector<TimedPose>& poses, double t, double max_g
     return false;
 }
 
+std::vector<TimedPose> withPoses(const std::vector<TimedPose>& poses, const std::vector<Mat4f>& T_world_camera) {
+    if (T_world_camera.size() != poses.size()) return poses;
+    std::vector<TimedPose> replaced = poses;
+    for (std::size_t i = 0; i < replaced.size(); ++i) replaced[i].T_world_camera = T_world_camera[i];
+    return replaced;
+}
+
 }  // namespace voxfuse

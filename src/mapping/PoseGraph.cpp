@@ -89,6 +89,11 @@ int PoseGraphOptimiser::latest(PoseGraphResult& result) const {
     return solved_;
 }
 
+int PoseGraphOptimiser::solvedCount() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return solved_;
+}
+
 void PoseGraphOptimiser::waitIdle() {
     std::unique_lock<std::mutex> lock(mutex_);
     idle_.wait(lock, [this] { return !pending_ && !busy_; });

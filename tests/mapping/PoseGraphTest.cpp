@@ -33,6 +33,14 @@ PoseGraphEdge edge(int from, int to, const Mat4f& T_from_to, bool loop, float si
     return e;
 }
 
+PoseGraph chainWithLoop() {
+    PoseGraph g;
+    for (int i = 0; i < 5; ++i) g.addNode(pose(0.f, {1.1f * i, 0.f, 0.f}));
+    for (int i = 0; i < 4; ++i) g.addEdge(edge(i, i + 1, pose(0.f, {1.1f, 0.f, 0.f}), false, 0.1f));
+    g.addEdge(edge(0, 4, pose(0.f, {4.0f, 0.f, 0.f}), true, 0.1f));
+    return g;
+}
+
 // Nodes on a line, 1 m apart, odometry measuring 1.1 m each (4 edges), a loop edge measuring 4 m from
 // the first to the last, all with a standard deviation of 0.1 m: least squares puts every step at
 // d = (4 * 1.1 + 4 * 4) / (4 + 16) = 1.02 m, so the last node at 4.08 m, and every edge 0.8
@@ -41,10 +49,7 @@ TEST(PoseGraphTest, ChainWithLoopMeetsTheLeastSquaresSolution) {
 #ifndef VOXFUSE_WITH_CERES
     GTEST_SKIP() << "built without Ceres";
 #endif
-    PoseGraph g;
-    for (int i = 0; i < 5; ++i) g.addNode(pose(0.f, {1.1f * i, 0.f, 0.f}));
-    for (int i = 0; i < 4; ++i) g.addEdge(edge(i, i + 1, pose(0.f, {1.1f, 0.f, 0.f}), false, 0.1f));
-    g.addEdge(edge(0, 4, pose(0.f, {4.0f, 0.f, 0.f}), true, 0.1f));
+    const PoseGraph g = chainWithLoop();
     const PoseGraphResult r = g.optimise();
     ASSERT_EQ(r.T_world_node.size(), 5u);
     for (int i = 0; i < 5; ++i) {
@@ -142,10 +147,7 @@ TEST(PoseGraphTest, OptimiserThreadGivesTheDirectSolution) {
 #ifndef VOXFUSE_WITH_CERES
     GTEST_SKIP() << "built without Ceres";
 #endif
-    PoseGraph g;
-    for (int i = 0; i < 5; ++i) g.addNode(pose(0.f, {1.1f * i, 0.f, 0.f}));
-    for (int i = 0; i < 4; ++i) g.addEdge(edge(i, i + 1, pose(0.f, {1.1f, 0.f, 0.f}), false, 0.1f));
-    g.addEdge(edge(0, 4, pose(0.f, {4.0f, 0.f, 0.f}), true, 0.1f));
+    const PoseGraph g = chainWithLoop();
     PoseGraphOptimiser optimiser;
     PoseGraphResult r;
     EXPECT_EQ(optimiser.latest(r), 0);

@@ -211,9 +211,9 @@ public:
     virtual void setSourceOrigin(const Mat4f& T_source_world) = 0;
     virtual bool sourceOrigin(Mat4f& T_source_world) const = 0;
 
-    // With submaps: the pose of every frame processed since the map began (in order; a lost frame
-    // holds the last good pose), from the submaps' poses as the pose graph last optimised them (waits
-    // for a solve in progress). Without submaps the poses as tracked are final: returns false.
+    // With submaps: the pose of every frame processed since the map began that has one (in order; lost
+    // frames have none, as in a trajectory), from the submaps' poses as the pose graph last optimised
+    // them (waits for a solve in progress). Without submaps the poses as tracked are final: returns false.
     virtual bool optimisedPoses(std::vector<Mat4f>& /*T_world_camera*/) { return false; }
     // The submaps the map holds (1 without submaps).
     virtual int submapCount() const { return 1; }

@@ -86,6 +86,8 @@ public:
     // The newest solution and the number of graphs solved so far (0: none yet, `result` untouched).
     // A solve that threw is reported by rethrowing its error here.
     int latest(PoseGraphResult& result) const;
+    // The number of graphs solved so far, without copying the solution.
+    int solvedCount() const;
     // Blocks until every submitted graph is solved.
     void waitIdle();
 
