@@ -36,6 +36,19 @@ def rows_per_entity(path):
     return rows
 
 
+def blueprint_views(path):
+    """The names of the views in the blueprint an .rrd file carries."""
+    chunk = pytest.importorskip("rerun.chunk", reason="reading an .rrd back needs rerun.chunk (rerun-sdk 0.29+)")
+    reader = chunk.RrdReader(str(path))
+    names = set()
+    for store in reader.blueprints():
+        for c in reader.stream(store=store).to_chunks():
+            batch = c.to_record_batch()
+            if "ViewBlueprint:display_name" in batch.schema.names:
+                names.update(n for row in batch.column("ViewBlueprint:display_name").to_pylist() for n in row)
+    return names
+
+
 def test_a_run_logs_pose_frustum_images_raycast_scalars_and_meshes(tmp_path, room_frames, rr):
     source, frames = room_frames
     pipeline = voxfuse.Pipeline(source.calib, voxel_size=0.01)
@@ -59,6 +72,7 @@ def test_a_run_logs_pose_frustum_images_raycast_scalars_and_meshes(tmp_path, roo
     ):
         assert rows.get(entity) == FRAMES, (entity, rows)
     assert rows.get("/world/mesh") == FRAMES // MESH_EVERY  # frames 0 and 3
+    assert rows.get("/world/trajectory") == 1  # with the mesh of frame 3: frame 0's path is one point
 
 
 def test_the_entry_point_saves_an_rrd_headless(tmp_path, rr):
@@ -73,6 +87,8 @@ def test_the_entry_point_saves_an_rrd_headless(tmp_path, rr):
     rows = rows_per_entity(rrd)
     assert rows.get("/world/camera") == 4
     assert rows.get("/world/mesh") == 3  # frames 0 and 2, and the final map
+    assert rows.get("/world/trajectory") == 2
+    assert blueprint_views(rrd) >= {"map", "colour", "depth", "raycast", "tracking", "stage ms"}
     assert np.loadtxt(out / "trajectory.txt").shape == (4, 8)
 
 

@@ -83,7 +83,7 @@ def _write_atomically(path, text):
 
 
 def _start_rerun(target):
-    from .rerun_logging import _import_rerun
+    from .rerun_logging import _import_rerun, blueprint
 
     rr = _import_rerun()
     recording = rr.RecordingStream("voxfuse")
@@ -93,6 +93,7 @@ def _start_rerun(target):
         recording.save(target)
     else:
         raise Error(f"--rerun takes a file ending .rrd or 'spawn', not {target!r}")
+    recording.send_blueprint(blueprint())
     return recording
 
 

@@ -14,7 +14,11 @@ the first camera's frame, x right, y down, z forward, metres. Entities:
     world/camera/image            the depth camera (Pinhole: its frustum) with depth, rgb and raycast
     world/camera/colour           the colour camera, where it is not the depth camera
     world/mesh                    the map's surface (Mesh3D)
+    world/trajectory              the camera path so far, logged with each mesh (LineStrips3D)
     tracking/<name>, timings/<stage>   scalars (timings in ms)
+
+``blueprint()`` lays these out (the world in 3D beside the camera's images and the plots);
+``python -m voxfuse --rerun`` sends it, a script can with ``recording.send_blueprint(blueprint())``.
 """
 
 import numpy as np
@@ -110,6 +114,40 @@ def log_to_rerun(
         log_mesh(pipeline, recording=recording)
 
 
+def blueprint():
+    """The viewer layout for what log_to_rerun logs: the world (mesh, path, camera) in 3D, beside the
+    depth camera's colour, depth and raycast, and the tracking and timing plots below (a colour camera
+    apart from the depth camera is shown in the 3D view). The time panel follows the newest frame."""
+    _import_rerun()
+    import rerun.blueprint as rrb
+
+    camera = "world/camera/image"
+    return rrb.Blueprint(
+        rrb.Vertical(
+            rrb.Horizontal(
+                # the depth would also show there as points, the raycast as a second image in the frustum
+                rrb.Spatial3DView(
+                    origin="world", contents=["+ /world/**", f"- /{camera}/depth", f"- /{camera}/raycast"], name="map"
+                ),
+                rrb.Vertical(
+                    rrb.Spatial2DView(origin=camera, contents=f"{camera}/rgb", name="colour"),
+                    rrb.Spatial2DView(origin=camera, contents=f"{camera}/depth", name="depth"),
+                    rrb.Spatial2DView(origin=camera, contents=f"{camera}/raycast", name="raycast"),
+                ),
+                column_shares=[3, 1],
+            ),
+            rrb.Horizontal(
+                rrb.TimeSeriesView(origin="tracking", name="tracking"),
+                rrb.TimeSeriesView(origin="timings", name="stage ms"),
+            ),
+            row_shares=[3, 1],
+        ),
+        rrb.BlueprintPanel(state="collapsed"),
+        rrb.SelectionPanel(state="collapsed"),
+        rrb.TimePanel(state="collapsed", timeline="frame", play_state="following"),
+    )
+
+
 def log_mesh(pipeline, *, recording=None, path="world/mesh"):
     """Logs the pipeline's mesh (marching cubes over the whole map) at `path`."""
     rr = _import_rerun()
@@ -127,3 +165,6 @@ def log_mesh(pipeline, *, recording=None, path="world/mesh"):
         ),
         recording=recording,
     )
+    _, poses = pipeline.trajectory
+    if len(poses) > 1:
+        rr.log("world/trajectory", rr.LineStrips3D([np.asarray(poses)[:, :3, 3]]), recording=recording)
