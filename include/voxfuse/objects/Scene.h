@@ -23,8 +23,9 @@ public:
     using Voxel = TVoxel;
     using Index = TIndex;
 
-    // Allocates the voxel storage the index asks for on `location` (moving the index there too) and sets
-    // every voxel to TVoxel::initial(). The index is moved in (the hash owns large tables).
+    // Allocates the voxel storage the index asks for on `location` (moving the index there too): a dense
+    // array's voxels set to TVoxel::initial(), a hash's blocks as resizeVoxelStorage says. The index is
+    // moved in (the hash owns large tables).
     Scene(const SceneParams& params, TIndex index, Device location)
         : params_(params), index_(std::move(index)), location_(location) {
         if constexpr (std::is_same<TIndex, VoxelBlockHash>::value) index_.moveTo(location_);
@@ -94,27 +95,23 @@ private:
             return index_;
     }
 
-    // Reallocates the voxels on location() to `count`, keeping the first min(count, old size) and
-    // setting the rest to TVoxel::initial().
+    // Reallocates the voxels on location() to `count`, keeping the first min(count, old size). Where the
+    // array grows in place, the new blocks are left as they are: a block is reset to TVoxel::initial()
+    // when the allocation engine takes it off the free stack (or written whole by whoever inserts it),
+    // so the capacity not yet used costs address space, not memory (a quarter of the map at most).
     void resizeVoxelStorage(std::size_t count) {
         if constexpr (std::is_same<TIndex, VoxelBlockHash>::value) {
             if (location_ == Device::CPU && !voxels_.onDevice() && count >= voxels_.size()) {
                 // On the host the array grows inside address space reserved for the index's maximum:
-                // the voxels stay where they are, and a growth costs the new blocks' initial values,
-                // not a copy of the whole map (which stalls the frame that grows it).
-                const std::size_t kept = voxels_.size();
+                // the voxels stay where they are, and a growth costs nothing until blocks are used, not
+                // a copy of the whole map (which stalls the frame that grows it).
                 voxels_.growHost(count, index_.maxVoxelCount());
-                voxels_.fill(Device::CPU, TVoxel::initial(), kept, count - kept);
                 return;
             }
             // On the GPU likewise, where it has virtual memory management (else the copy below).
-            if (location_ == Device::CUDA && !voxels_.onHost() && count >= voxels_.size()) {
-                const std::size_t kept = voxels_.size();
-                if (voxels_.growDevice(count, index_.maxVoxelCount())) {
-                    voxels_.fill(Device::CUDA, TVoxel::initial(), kept, count - kept);
-                    return;
-                }
-            }
+            if (location_ == Device::CUDA && !voxels_.onHost() && count >= voxels_.size() &&
+                voxels_.growDevice(count, index_.maxVoxelCount()))
+                return;
         }
         MemoryBlock<TVoxel> resized(count, location_ == Device::CPU, location_ == Device::CUDA);
         const std::size_t kept = std::min(count, voxels_.size());
