@@ -4,6 +4,7 @@
 
 #include "voxfuse/engines/MainEngine.h"
 
+#include <cmath>
 #include <type_traits>
 
 #include "MainEngineSettings.h"
@@ -23,6 +24,8 @@
 #include "voxfuse/engines/RaycastEngine.h"
 #include "voxfuse/objects/GlobalCache.h"
 #include "voxfuse/objects/Scene.h"
+#include "voxfuse/shared/HashAccess.h"
+#include "voxfuse/shared/VoxelAccess.h"
 
 namespace voxfuse {
 namespace {
@@ -230,6 +233,13 @@ public:
     const TrackerStats& trackerStats() const override { return tracker_->lastStats(); }
     // The map is meshed where it lives; a map with swapped-out blocks is meshed on the CPU from a host
     // copy with every block in it (the whole map may not fit the active budget on the device).
+    void depthWeightsAt(const std::vector<Vec3f>& points_world, std::vector<float>& weights) override {
+        if (onGpu() || swapping_.hasStoredBlocks(scene_))
+            depthWeightsIn(swapping_.completeHostCopy(scene_), points_world, weights);
+        else
+            depthWeightsIn(scene_, points_world, weights);
+    }
+
     void extractMesh(Mesh& mesh) override {
         if (swapping_.hasStoredBlocks(scene_))
             hostMeshing().extractMesh(swapping_.completeHostCopy(scene_), mesh);
@@ -245,6 +255,22 @@ public:
 
 private:
     bool onGpu() const { return settings_.device == Device::CUDA; }
+
+    static void depthWeightsIn(const Scene<TVoxel, TIndex>& scene, const std::vector<Vec3f>& points_world,
+                               std::vector<float>& weights) {
+        const float inv_voxel = 1.f / scene.params().voxel_size_m;
+        const TVoxel* voxels = scene.voxels().host();
+        const auto index = scene.index().data();
+        weights.resize(points_world.size());
+        for (std::size_t i = 0; i < points_world.size(); ++i) {
+            const Vec3f p = points_world[i] * inv_voxel;
+            bool found;
+            const TVoxel v = readVoxel(
+                voxels, index,
+                Vec3i{int(std::floor(p.x + 0.5f)), int(std::floor(p.y + 0.5f)), int(std::floor(p.z + 0.5f))}, found);
+            weights[i] = found ? float(v.w_depth) : 0.f;
+        }
+    }
 
     // The model the next frame is tracked against: a raycast from the current pose at the tracker's
     // resolution, normals from its points, rays starting near what the frame just fused saw

@@ -48,18 +48,6 @@ void toWorld(const Mat4f& T_world_submap, FrameResult& r) {
     toWorld(T_world_submap, r.tracking);
 }
 
-template <class T>
-void append(const std::vector<T>& part, std::vector<T>& all) {
-    all.insert(all.end(), part.begin(), part.end());
-}
-
-// A submap's points and normals moved into the world by T_world_submap, appended.
-void appendTransformed(const Mat4f& T_world_submap, const std::vector<Vec3f>& points, const std::vector<Vec3f>& normals,
-                       std::vector<Vec3f>& world_points, std::vector<Vec3f>& world_normals) {
-    for (const Vec3f& p : points) world_points.push_back(transformPoint(T_world_submap, p));
-    for (const Vec3f& n : normals) world_normals.push_back(transformDirection(T_world_submap, n));
-}
-
 class SubmapEngine final : public MainEngine {
 public:
     SubmapEngine(const MainEngineSettings& settings, const RGBDCalib& calib)
@@ -189,18 +177,39 @@ public:
     AllocationStats allocationStats() const override { return submaps_[active_].engine->allocationStats(); }
     const TrackerStats& trackerStats() const override { return submaps_[active_].engine->trackerStats(); }
 
-    // Every submap's surface at its optimised pose.
+    // Every submap's surface at its optimised pose, each part of it from the submap that observed it
+    // most (bestObserved): where submaps overlap, the union holds one surface, not each one's.
     void extractMesh(Mesh& mesh) override {
         mesh.clear();
         const std::vector<Mat4f> T_world_submaps = optimisedSubmapPoses();
         for (std::size_t i = 0; i < submaps_.size(); ++i) {
             Mesh part;
             submaps_[i].engine->extractMesh(part);
-            const int offset = static_cast<int>(mesh.vertices.size());
-            appendTransformed(T_world_submaps[i], part.vertices, part.normals, mesh.vertices, mesh.normals);
-            append(part.colors, mesh.colors);
-            append(part.labels, mesh.labels);
-            for (const Vec3i& t : part.triangles) mesh.triangles.push_back({t.x + offset, t.y + offset, t.z + offset});
+            std::vector<Vec3f> centres;
+            centres.reserve(part.triangles.size());
+            for (const Vec3i& t : part.triangles)
+                centres.push_back((part.vertices[t.x] + part.vertices[t.y] + part.vertices[t.z]) * (1.f / 3.f));
+            const std::vector<char> keep = bestObserved(int(i), centres, T_world_submaps);
+            // The kept triangles' vertices, in the order the triangles first use them.
+            std::vector<int> index_in_union(part.vertices.size(), -1);
+            const Mat4f& T = T_world_submaps[i];
+            for (std::size_t k = 0; k < part.triangles.size(); ++k) {
+                if (!keep[k]) continue;
+                Vec3i t = part.triangles[k];
+                for (int* corner : {&t.x, &t.y, &t.z}) {
+                    int& u = index_in_union[std::size_t(*corner)];
+                    if (u < 0) {
+                        u = int(mesh.vertices.size());
+                        const std::size_t v = std::size_t(*corner);
+                        mesh.vertices.push_back(transformPoint(T, part.vertices[v]));
+                        if (part.hasNormals()) mesh.normals.push_back(transformDirection(T, part.normals[v]));
+                        if (part.hasColors()) mesh.colors.push_back(part.colors[v]);
+                        if (part.hasLabels()) mesh.labels.push_back(part.labels[v]);
+                    }
+                    *corner = u;
+                }
+                mesh.triangles.push_back(t);
+            }
         }
     }
     void extractPointCloud(PointCloud& cloud) override {
@@ -209,9 +218,29 @@ public:
         for (std::size_t i = 0; i < submaps_.size(); ++i) {
             PointCloud part;
             submaps_[i].engine->extractPointCloud(part);
-            appendTransformed(T_world_submaps[i], part.points, part.normals, cloud.points, cloud.normals);
-            append(part.colors, cloud.colors);
-            append(part.labels, cloud.labels);
+            const std::vector<char> keep = bestObserved(int(i), part.points, T_world_submaps);
+            const Mat4f& T = T_world_submaps[i];
+            for (std::size_t k = 0; k < part.points.size(); ++k) {
+                if (!keep[k]) continue;
+                cloud.points.push_back(transformPoint(T, part.points[k]));
+                if (part.hasNormals()) cloud.normals.push_back(transformDirection(T, part.normals[k]));
+                if (part.hasColors()) cloud.colors.push_back(part.colors[k]);
+                if (part.hasLabels()) cloud.labels.push_back(part.labels[k]);
+            }
+        }
+    }
+    // The highest depth weight any submap has at each point (the world frame).
+    void depthWeightsAt(const std::vector<Vec3f>& points_world, std::vector<float>& weights) override {
+        const std::vector<Mat4f> T_world_submaps = optimisedSubmapPoses();
+        weights.assign(points_world.size(), 0.f);
+        std::vector<Vec3f> local(points_world.size());
+        std::vector<float> w;
+        for (std::size_t j = 0; j < submaps_.size(); ++j) {
+            const Mat4f T_submap_world = rigidInverse(T_world_submaps[j]);
+            for (std::size_t k = 0; k < points_world.size(); ++k)
+                local[k] = transformPoint(T_submap_world, points_world[k]);
+            submaps_[j].engine->depthWeightsAt(local, w);
+            for (std::size_t k = 0; k < w.size(); ++k) weights[k] = std::max(weights[k], w[k]);
         }
     }
 
@@ -270,6 +299,25 @@ private:
     };
 
     // The first submap; its frame is the world.
+    // Which of submap i's surface points (its frame) it observed best: no other submap has a higher
+    // depth weight there, nor an older one as high (one owner where weights saturate alike). A point
+    // no other submap observed stays, whatever its own weight.
+    std::vector<char> bestObserved(int i, const std::vector<Vec3f>& points, const std::vector<Mat4f>& T_world_submaps) {
+        std::vector<float> own, other;
+        submaps_[std::size_t(i)].engine->depthWeightsAt(points, own);
+        std::vector<char> keep(points.size(), 1);
+        std::vector<Vec3f> there(points.size());
+        for (int j = 0; j < int(submaps_.size()); ++j) {
+            if (j == i) continue;
+            const Mat4f T_j_i = rigidInverse(T_world_submaps[std::size_t(j)]) * T_world_submaps[std::size_t(i)];
+            for (std::size_t k = 0; k < points.size(); ++k) there[k] = transformPoint(T_j_i, points[k]);
+            submaps_[std::size_t(j)].engine->depthWeightsAt(there, other);
+            for (std::size_t k = 0; k < points.size(); ++k)
+                if (other[k] > own[k] || (other[k] > 0.f && other[k] == own[k] && j < i)) keep[k] = 0;
+        }
+        return keep;
+    }
+
     void startMap() {
         Submap first;
         first.engine = MainEngine::create(local_settings_, calib_);

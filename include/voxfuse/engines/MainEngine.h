@@ -227,6 +227,10 @@ public:
     // engine of the same settings; sampled at the tracking raycast's resolution) where the model this
     // engine would track the next frame against (its raycast from the last pose) has a surface.
     virtual float modelCoverage(const View& view) = 0;
+    // The depth weight of the voxel nearest to each point (this map's world frame, metres; 0 where
+    // nothing was observed), into `weights`. Submaps keep each part of the surface from the submap that
+    // observed it most (SubmapEngine's meshes and clouds). Reads a host copy of a map on the GPU.
+    virtual void depthWeightsAt(const std::vector<Vec3f>& points_world, std::vector<float>& weights) = 0;
     // With submaps: every loop closure found so far, with the pose graph's verdict (waits for a solve in
     // progress). Empty without submaps.
     virtual std::vector<LoopClosure> loopClosures() { return {}; }
