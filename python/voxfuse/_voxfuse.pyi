@@ -108,6 +108,7 @@ class Settings:
     max_blocks: int
     hash_buckets: int
     hash_excess: int
+    hash_max_buckets: int
     volume_size: list[int]
     volume_offset: list[int]
     tracker: str

@@ -61,6 +61,8 @@ public:
                 out_of_range = true;
                 --distinct;
             }
+            // A growable table first grows to hold them (stage 1 keeps no entry index, only keys).
+            while (hash.wantsMoreBuckets(distinct)) hash.growBuckets();
             const int inserted = insertMissingBlocks(scene, distinct, stats);
             if (appended <= stored) break;
             if (inserted == 0) {

@@ -96,12 +96,14 @@ int automaticMaxBlockCount(Device device, std::size_t voxel_bytes, const VoxelBl
                            double available_bytes) {
     constexpr int kDesignBlocks = 1 << 18, kMostBlocks = 1 << 22;
     if (!(available_bytes > 0.0)) return kDesignBlocks;
-    const long long entries = (long long)hash.bucket_count * hash.entries_per_bucket + hash.excess_entry_count;
+    // The tables as large as they may grow: as many blocks as they then have entries.
+    const VoxelBlockHashSettings largest = VoxelBlockHash::fullyGrown(hash);
+    const long long entries = (long long)largest.bucket_count * largest.entries_per_bucket + largest.excess_entry_count;
     // Per block: its voxels (twice on the GPU, whose growth holds the old array and the new one at
     // once; the host array grows in place), and its places in the free stack and the visible list.
     const double voxel_copies = device == Device::CUDA ? 2.0 : 1.0;
     const double block_bytes = voxel_copies * double(voxel_bytes) * kBlockVoxelCount + 2.0 * sizeof(int);
-    VoxelBlockHashSettings tables = hash;
+    VoxelBlockHashSettings tables = largest;
     tables.max_block_count = 0;
     const double for_blocks = 0.75 * available_bytes - double(VoxelBlockHash::tableBytesFor(tables));
     // In steps of 2^16 blocks, so that runs on one machine choose the same ceiling (map headers hold it)

@@ -58,9 +58,12 @@ const std::vector<SettingRow> kRows = {
      "hash: most 8^3 voxel blocks (memory grows on demand up to this); 0 = automatic: as many as the hash has "
      "entries and 3/4 of the device's free memory holds (on the GPU with room for the copy a growth makes)"},
     {"hash_buckets", &P::hash_buckets, SettingGroup::Map, "", 1, kIntMax, false, 0, "",
-     "hash: number of ordered buckets"},
+     "hash: ordered buckets the table starts with"},
     {"hash_excess", &P::hash_excess, SettingGroup::Map, "", 0, kIntMax, false, 0, "",
-     "hash: entries in the excess list"},
+     "hash: entries in the excess list it starts with"},
+    {"hash_max_buckets", &P::hash_max_buckets, SettingGroup::Map, "", 0, kIntMax, false, 0, "",
+     "hash: the table doubles, its excess list with it, rather than hold more blocks than 0.4 of its buckets, up "
+     "to this many buckets; at most hash_buckets: a fixed table"},
     {"volume_size", &P::volume_size, SettingGroup::Map, "voxels", 1, 1 << 16, false, 3, "",
      "dense: the box's size (x y z)"},
     {"volume_offset", &P::volume_offset, SettingGroup::Map, "voxels", -(1 << 24), 1 << 24, false, 3, "",
@@ -247,6 +250,7 @@ MainEngineSettings PipelineSettings::toEngineSettings() const {
     s.hash.max_block_count = active_blocks > 0 ? active_blocks : max_blocks;
     s.hash.bucket_count = hash_buckets;
     s.hash.excess_entry_count = hash_excess;
+    s.hash.max_bucket_count = hash_max_buckets;
     s.dense_size = {volume_size[0], volume_size[1], volume_size[2]};
     s.dense_offset = {volume_offset[0], volume_offset[1], volume_offset[2]};
     s.swap.enabled = swap || active_blocks > 0 || !swap_file.empty();
@@ -279,6 +283,7 @@ PipelineSettings PipelineSettings::of(const MainEngineSettings& e) {
     p.max_blocks = e.hash.max_block_count;
     p.hash_buckets = e.hash.bucket_count;
     p.hash_excess = e.hash.excess_entry_count;
+    p.hash_max_buckets = e.hash.max_bucket_count;
     p.volume_size = {e.dense_size.x, e.dense_size.y, e.dense_size.z};
     p.volume_offset = {e.dense_offset.x, e.dense_offset.y, e.dense_offset.z};
     p.swap = e.swap.enabled;

@@ -54,9 +54,8 @@ public:
         : calib_(calib), submap_settings_(settings.submaps) {
         local_settings_ = settings;
         local_settings_.submaps.enabled = false;
-        // A submap holds the part of the scene seen from its stretch of the path: tables an eighth of
-        // the map's (2^17 buckets by default: room for about 200 m^2 of surface at 5 mm voxels), so
-        // that many submaps cost what one map does. The automatic block ceiling follows the tables.
+        // A submap holds the part of the scene seen from its stretch of the path: its tables start at an
+        // eighth of the map's (and grow as the map's do), so that many submaps cost what one map does.
         local_settings_.hash.bucket_count = std::max(kMinSubmapBuckets, settings.hash.bucket_count / 8);
         local_settings_.hash.excess_entry_count = std::max(kMinSubmapExcess, settings.hash.excess_entry_count / 8);
         // Most submaps stay small: their voxel arrays grow in steps of a quarter of the map's.

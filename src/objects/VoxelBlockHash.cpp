@@ -27,6 +27,12 @@ void validate(const VoxelBlockHashSettings& s) {
     // Voxel offsets ptr * 512 + i are ints: 2^22 blocks (2^31 voxels) at most.
     if (s.max_block_count < 1 || s.max_block_count > (1 << 22))
         fail("maximum block count must be in 1..4194304 (got " + std::to_string(s.max_block_count) + ")");
+    if (s.max_bucket_count < 0)
+        fail("maximum bucket count must not be negative (got " + std::to_string(s.max_bucket_count) + ")");
+    if ((long long)std::max(s.bucket_count, s.max_bucket_count) * s.entries_per_bucket +
+            (long long)s.excess_entry_count * std::max(1, s.max_bucket_count / s.bucket_count) >
+        INT_MAX)
+        fail("too many hash entries once the table has grown");
     if (s.blocks_per_growth < 1)
         fail("blocks per growth must be positive (got " + std::to_string(s.blocks_per_growth) + ")");
 }
@@ -45,6 +51,16 @@ std::size_t VoxelBlockHash::tableBytesFor(const Settings& s) {
         std::size_t(s.bucket_count) * std::size_t(s.entries_per_bucket) + std::size_t(s.excess_entry_count);
     return entries * (sizeof(HashEntry) + sizeof(std::uint8_t) + sizeof(int)) +
            (std::size_t(s.excess_entry_count) + 2 * std::size_t(s.max_block_count)) * sizeof(int);
+}
+
+VoxelBlockHash::Settings VoxelBlockHash::fullyGrown(const Settings& s) {
+    Settings grown = s;
+    while (grown.bucket_count < s.max_bucket_count) {
+        const int buckets = int(std::min<long long>(s.max_bucket_count, 2LL * grown.bucket_count));
+        grown.excess_entry_count = int((long long)grown.excess_entry_count * buckets / grown.bucket_count);
+        grown.bucket_count = buckets;
+    }
+    return grown;
 }
 
 VoxelBlockHash::VoxelBlockHash(const Settings& settings, Device location, bool allocate_tables)
@@ -87,16 +103,20 @@ VoxelBlockHash VoxelBlockHash::copyTo(Device where) const {
     copyAcross(copy.free_excess_, where, free_excess_, location_);
     copyAcross(copy.free_blocks_, where, free_blocks_, location_);
     copyAcross(copy.visible_entries_, where, visible_entries_, location_);
-    copy.free_block_count_ = free_block_count_;
+    copyBookkeepingTo(copy);
     copy.free_excess_count_ = free_excess_count_;
-    copy.block_capacity_ = block_capacity_;
-    copy.stored_block_count_ = stored_block_count_;
-    copy.visible_count_ = visible_count_;
-    copy.visible_valid_ = visible_valid_;
-    copy.visible_T_world_camera_ = visible_T_world_camera_;
-    copy.visible_intrinsics_ = visible_intrinsics_;
-    copy.stats_ = stats_;
     return copy;
+}
+
+void VoxelBlockHash::copyBookkeepingTo(VoxelBlockHash& to) const {
+    to.free_block_count_ = free_block_count_;
+    to.block_capacity_ = block_capacity_;
+    to.stored_block_count_ = stored_block_count_;
+    to.visible_count_ = visible_count_;
+    to.visible_valid_ = visible_valid_;
+    to.visible_T_world_camera_ = visible_T_world_camera_;
+    to.visible_intrinsics_ = visible_intrinsics_;
+    to.stats_ = stats_;
 }
 
 VoxelBlockHash::Data VoxelBlockHash::data() const {
@@ -121,18 +141,75 @@ void VoxelBlockHash::clearBlocks() {
     entries_.fill(location_, HashEntry::empty(), 0, entries_.size());
     entry_visibility_.fill(location_, kEntryNotVisible, 0, entry_visibility_.size());
     stored_slot_.fill(location_, kNoStoredCopy, 0, stored_slot_.size());
-    // Popped from the top: excess entry 0 is used first.
-    std::vector<int> excess(std::size_t(settings_.excess_entry_count));
-    for (int i = 0; i < settings_.excess_entry_count; ++i)
-        excess[std::size_t(i)] = settings_.excess_entry_count - 1 - i;
-    free_excess_.writeRange(location_, 0, excess.data(), excess.size());
-    free_excess_count_ = settings_.excess_entry_count;
+    fillFreeExcessStack();
     block_capacity_ = 0;
     free_block_count_ = 0;
     stored_block_count_ = 0;
     visible_count_ = 0;
     visible_valid_ = false;
     stats_ = AllocationStats();
+}
+
+void VoxelBlockHash::fillFreeExcessStack() {
+    std::vector<int> excess(std::size_t(settings_.excess_entry_count));
+    for (int i = 0; i < settings_.excess_entry_count; ++i)
+        excess[std::size_t(i)] = settings_.excess_entry_count - 1 - i;
+    free_excess_.writeRange(location_, 0, excess.data(), excess.size());
+    free_excess_count_ = settings_.excess_entry_count;
+}
+
+bool VoxelBlockHash::wantsMoreBuckets(int adding) const {
+    const long long ordered = (long long)settings_.bucket_count * settings_.entries_per_bucket;
+    return settings_.max_bucket_count > settings_.bucket_count &&
+           double(blocksInUse()) + double(storedBlocks()) + double(adding) > double(kMaxBucketLoad) * double(ordered);
+}
+
+void VoxelBlockHash::growBuckets() {
+    if (settings_.max_bucket_count <= settings_.bucket_count) return;
+    const Device where = location_;
+    moveTo(Device::CPU);
+    Settings grown = settings_;
+    grown.bucket_count = int(std::min<long long>(settings_.max_bucket_count, 2LL * settings_.bucket_count));
+    grown.excess_entry_count =
+        int((long long)settings_.excess_entry_count * grown.bucket_count / settings_.bucket_count);
+    VoxelBlockHash fresh(grown, Device::CPU, false);
+    const std::size_t entries =
+        std::size_t(grown.bucket_count) * std::size_t(grown.entries_per_bucket) + std::size_t(grown.excess_entry_count);
+    allocateOn(fresh.entries_, entries, Device::CPU);
+    allocateOn(fresh.entry_visibility_, entries, Device::CPU);
+    allocateOn(fresh.stored_slot_, entries, Device::CPU);
+    allocateOn(fresh.free_excess_, std::size_t(grown.excess_entry_count), Device::CPU);
+    fresh.entries_.fill(Device::CPU, HashEntry::empty(), 0, entries);
+    fresh.entry_visibility_.fill(Device::CPU, kEntryNotVisible, 0, entries);
+    fresh.stored_slot_.fill(Device::CPU, kNoStoredCopy, 0, entries);
+    fresh.fillFreeExcessStack();
+    // In entry order, so that the new table (and the visible list) does not depend on threads.
+    std::vector<int> moved_to(std::size_t(entryCount()), -1);
+    const HashEntry* old_entries = entries_.host();
+    for (int i = 0; i < entryCount(); ++i) {
+        const HashEntry& e = old_entries[i];
+        if (e.ptr == kEntryFree) continue;
+        const Vec3i block{e.pos.x, e.pos.y, e.pos.z};
+        int target, at;
+        if (findHashEntry(fresh.data(), block, target) >= 0 || !fresh.insertEntry(target, block, e.ptr, &at))
+            throw Error("voxel block hash: a block does not fit the grown table (" +
+                        std::to_string(grown.bucket_count) + " buckets)");
+        fresh.stored_slot_.host()[at] = stored_slot_.host()[i];
+        fresh.entry_visibility_.host()[at] = entry_visibility_.host()[i];
+        moved_to[std::size_t(i)] = at;
+    }
+    // The voxel blocks and their free stack stay; the visible list names the blocks' new entries.
+    fresh.free_blocks_ = std::move(free_blocks_);
+    fresh.visible_entries_ = std::move(visible_entries_);
+    int* visible = fresh.visible_entries_.host();
+    int kept = 0;
+    for (int k = 0; k < visible_count_; ++k)
+        if (moved_to[std::size_t(visible[k])] >= 0) visible[kept++] = moved_to[std::size_t(visible[k])];
+    std::sort(visible, visible + kept);
+    visible_count_ = kept;
+    copyBookkeepingTo(fresh);
+    *this = std::move(fresh);
+    moveTo(where);
 }
 
 int VoxelBlockHash::grownBlockCapacity(int blocks) const {

@@ -2,14 +2,19 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <memory>
 #include <tuple>
+#include <vector>
 
 #include "DeviceTestSupport.h"
 #include "SyntheticViews.h"
 #include "voxfuse/core/Error.h"
 #include "voxfuse/engines/MainEngine.h"
+#include "voxfuse/objects/Mesh.h"
+#include "voxfuse/objects/VoxelBlockHash.h"
 
 namespace voxfuse {
 namespace {
@@ -89,6 +94,44 @@ TEST_P(MainEngineVoxelTest, RaycastReproducesTheLastFrameDepth) {
     int lit = 0;
     for (std::size_t i = 0; i < image.pixelCount(); ++i) lit += image.host()[i].x > 0;
     EXPECT_GT(lit, int(image.pixelCount() / 4)) << "a free viewpoint sees the fused surfaces";
+}
+
+// The hash table's growth moves entries, never blocks: a map whose table starts at 16 buckets and
+// doubles tracks and fuses bit for bit as one whose table has its final size from the start.
+TEST_P(MainEngineVoxelTest, AGrowingHashTableMakesTheMapAFixedOneMakes) {
+    MainEngineSettings growing = settings();
+    growing.index_type = IndexType::Hash;
+    growing.hash.bucket_count = 16;
+    growing.hash.excess_entry_count = 2;
+    growing.hash.max_bucket_count = 1 << 14;
+    MainEngineSettings fixed = growing;
+    fixed.hash = VoxelBlockHash::fullyGrown(growing.hash);
+    fixed.hash.max_bucket_count = 0;
+    auto a = makeEngine(growing), b = makeEngine(fixed);
+    for (int k = 0; k < 6; ++k) {
+        const Mat4f pose = pathPose(k);
+        const RGBDFrame frame = test::toRgbdFrame(test::renderView(world(), kCamera, pose), k);
+        const FrameResult ra = a->processFrame(frame, k == 0 ? &pose : nullptr);
+        const FrameResult rb = b->processFrame(frame, k == 0 ? &pose : nullptr);
+        EXPECT_EQ(0, std::memcmp(ra.T_world_camera.m, rb.T_world_camera.m, sizeof(ra.T_world_camera.m))) << k;
+    }
+    const AllocationStats sa = a->allocationStats(), sb = b->allocationStats();
+    EXPECT_GT(sa.blocks_allocated, 100) << "far more blocks than 16 buckets and 2 excess entries hold";
+    EXPECT_EQ(sa.blocks_allocated, sb.blocks_allocated);
+    EXPECT_EQ(sa.allocation_failures_total, 0);
+    Mesh ma, mb;
+    a->extractMesh(ma);
+    b->extractMesh(mb);
+    ASSERT_GT(ma.vertices.size(), 1000u);
+    // The same surface; vertices come in entry order, which the tables do not share.
+    const auto sorted = [](std::vector<Vec3f> v) {
+        std::sort(v.begin(), v.end(),
+                  [](const Vec3f& p, const Vec3f& q) { return std::tie(p.x, p.y, p.z) < std::tie(q.x, q.y, q.z); });
+        return v;
+    };
+    const std::vector<Vec3f> va = sorted(ma.vertices), vb = sorted(mb.vertices);
+    ASSERT_EQ(va.size(), vb.size());
+    EXPECT_EQ(0, std::memcmp(va.data(), vb.data(), va.size() * sizeof(Vec3f)));
 }
 
 // After a frame that failed tracking (not fused), the view holds that frame's depth, which says

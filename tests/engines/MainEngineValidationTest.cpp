@@ -158,6 +158,9 @@ TEST(MainEngineCreate, TheEngineSettingsHoldTheCeilingItChose) {
     ASSERT_EQ(s.hash.max_block_count, kAutomaticBlockCount);
     s.hash.bucket_count = 4096;
     s.hash.excess_entry_count = 1024;
+    s.hash.max_bucket_count = 16384;  // as many blocks as the table has entries once it has grown
+    EXPECT_EQ(MainEngine::create(s, smallCalib())->settings().hash.max_block_count, 16384 + 4096);
+    s.hash.max_bucket_count = 0;  // a fixed table
     EXPECT_EQ(MainEngine::create(s, smallCalib())->settings().hash.max_block_count, 5120);
     s.device = Device::CPU;
     s.hash.max_block_count = 77;  // asked for: kept

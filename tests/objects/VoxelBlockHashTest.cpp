@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <map>
 #include <random>
 #include <set>
@@ -210,6 +211,67 @@ TEST(VoxelBlockHashTest, FullTableAndFullBlockArrayAreReportedNotCrashed) {
     EXPECT_EQ(small.index().blockCapacity(), 5);
     EXPECT_EQ(small.voxels().size(), 5u * kBlockVoxelCount);
     EXPECT_EQ(small.index().insert({1 << 16, 0, 0}), VoxelBlockHash::InsertResult::OutOfRange);
+}
+
+TEST(VoxelBlockHashTest, AGrowingTableKeepsItsBlocksStoredCopiesAndVisibleList) {
+    VoxelBlockHashSettings s;
+    s.bucket_count = 16;
+    s.excess_entry_count = 4;
+    s.max_bucket_count = 64;
+    s.max_block_count = 100;
+    s.blocks_per_growth = 64;
+    HashScene scene(SceneParams(), VoxelBlockHash(s), Device::CPU);
+    VoxelBlockHash& hash = scene.index();
+    scene.reserveVoxelBlocks(10);
+    std::vector<Vec3i> blocks;
+    for (int x = 0; x < 7; ++x) blocks.push_back({x, 1, -2});
+    std::vector<int> ptrs;
+    for (const Vec3i& b : blocks) {
+        int entry = -1;
+        ASSERT_EQ(hash.insert(b, &entry), VoxelBlockHash::InsertResult::Inserted);
+        ptrs.push_back(hash.entry(entry).ptr);
+    }
+    ASSERT_EQ(hash.insertStored({500, 0, 0}, 5), VoxelBlockHash::InsertResult::Inserted);
+    EXPECT_TRUE(hash.wantsMoreBuckets()) << "8 blocks in 16 buckets: past 0.4";
+    hash.setVisibleEntries({hash.findEntry(blocks[1]), hash.findEntry(blocks[4])}, Mat4f::identity(), Intrinsics());
+
+    hash.growBuckets();
+    EXPECT_EQ(hash.settings().bucket_count, 32);
+    EXPECT_EQ(hash.settings().excess_entry_count, 8);
+    EXPECT_EQ(hash.entryCount(), 40);
+    EXPECT_FALSE(hash.wantsMoreBuckets());
+    for (std::size_t k = 0; k < blocks.size(); ++k) {
+        const int e = hash.findEntry(blocks[k]);
+        ASSERT_GE(e, 0) << k;
+        EXPECT_EQ(hash.entry(e).ptr, ptrs[k]) << "a block keeps its voxels";
+    }
+    const int stored = hash.findEntry({500, 0, 0});
+    ASSERT_GE(stored, 0);
+    EXPECT_EQ(hash.entry(stored).ptr, kEntrySwappedOut);
+    EXPECT_EQ(hash.storedSlots()[stored], 5);
+    EXPECT_EQ(hash.blocksInUse(), 7);
+    EXPECT_EQ(hash.storedBlocks(), 1);
+    std::vector<int> visible{hash.findEntry(blocks[1]), hash.findEntry(blocks[4])};
+    std::sort(visible.begin(), visible.end());
+    ASSERT_EQ(hash.visibleCount(), 2);
+    EXPECT_EQ(std::vector<int>(hash.visibleEntries(), hash.visibleEntries() + 2), visible) << "in entry order";
+    for (int e : visible) EXPECT_EQ(hash.entryVisibility()[e], kEntryVisible);
+    int marked = 0;
+    for (int e = 0; e < hash.entryCount(); ++e) marked += hash.entryVisibility()[e] == kEntryVisible ? 1 : 0;
+    EXPECT_EQ(marked, 2);
+
+    // New blocks go into the grown table; it grows no further than its maximum.
+    EXPECT_EQ(hash.insert({3, 3, 3}), VoxelBlockHash::InsertResult::Inserted);
+    hash.growBuckets();
+    hash.growBuckets();
+    EXPECT_EQ(hash.settings().bucket_count, 64);
+    EXPECT_EQ(hash.settings().excess_entry_count, 16);
+    EXPECT_FALSE(hash.wantsMoreBuckets());
+    for (const Vec3i& b : blocks) EXPECT_GE(hash.findEntry(b), 0);
+    EXPECT_GE(hash.findEntry({3, 3, 3}), 0);
+    const VoxelBlockHashSettings largest = VoxelBlockHash::fullyGrown(s);
+    EXPECT_EQ(largest.bucket_count, 64);
+    EXPECT_EQ(largest.excess_entry_count, 16);
 }
 
 TEST(VoxelBlockHashTest, VoxelArrayGrowsInChunksAndKeepsItsContents) {

@@ -54,9 +54,14 @@ struct SubmapSettings {
     int overlap_frames = 30;
 };
 
-// The default hash tables with the block ceiling left to the engine (kAutomaticBlockCount).
-inline VoxelBlockHashSettings hashWithAutomaticBlockCount() {
+// The engine's hash tables: 2^16 buckets to start with (a scene of a few square metres), doubling as the
+// map grows up to InfiniTAM's 2^20, each with an excess list of an eighth; the block ceiling is left to
+// the engine (kAutomaticBlockCount).
+inline VoxelBlockHashSettings engineHashDefaults() {
     VoxelBlockHashSettings s;
+    s.bucket_count = 1 << 16;
+    s.excess_entry_count = 1 << 13;
+    s.max_bucket_count = 1 << 20;
     s.max_block_count = kAutomaticBlockCount;
     return s;
 }
@@ -75,7 +80,7 @@ struct MainEngineSettings {
     Vec3i dense_size{512, 512, 512};
     // Hash index: table sizes and the most voxel blocks it may hold (memory grows on demand up to
     // it). The default ceiling, kAutomaticBlockCount, is chosen by create(): automaticMaxBlockCount().
-    VoxelBlockHashSettings hash = hashWithAutomaticBlockCount();
+    VoxelBlockHashSettings hash = engineHashDefaults();
     // Blocks that never received an update go back to the free stack every this many frames (0 = never).
     int remove_empty_blocks_every = 10;
     // How the pose of each frame is estimated when none is given.

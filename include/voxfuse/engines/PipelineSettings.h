@@ -26,8 +26,9 @@ struct PipelineSettings {
     float max_depth = SceneParams{}.view_frustum_max_m;
     float depth_gap_tolerance = MainEngineSettings{}.depth_gap_tolerance;
     int max_blocks = kAutomaticBlockCount;
-    int hash_buckets = VoxelBlockHashSettings{}.bucket_count;
-    int hash_excess = VoxelBlockHashSettings{}.excess_entry_count;
+    int hash_buckets = engineHashDefaults().bucket_count;
+    int hash_excess = engineHashDefaults().excess_entry_count;
+    int hash_max_buckets = engineHashDefaults().max_bucket_count;
     std::vector<int> volume_size{512, 512, 512};
     std::vector<int> volume_offset{-256, -256, 0};
     std::string label_update = "probabilistic";

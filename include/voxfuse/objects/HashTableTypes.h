@@ -51,6 +51,10 @@ struct VoxelBlockHashSettings {
     int bucket_count = 0x100000;       // buckets of the ordered table (any positive number; powers of two hash faster)
     int entries_per_bucket = 1;        // ordered entries per bucket: 1 or 2 (the InfiniTAM report's buckets hold 2)
     int excess_entry_count = 0x20000;  // entries of the excess list shared by all buckets
+    // The table doubles (its excess list with it) before an allocation would fill more than
+    // kMaxBucketLoad of its entries, up to this many buckets; at most bucket_count: a fixed table. So a
+    // small scene scans and keeps a small table, and a large one ends with the table it needs.
+    int max_bucket_count = 0;
     // Voxel blocks the array may grow to (2^18 x 512 voxels), at most 2^22. MainEngineSettings starts
     // from kAutomaticBlockCount instead: the engine then chooses (automaticMaxBlockCount in MainEngine.h).
     int max_block_count = 1 << 18;
@@ -58,6 +62,11 @@ struct VoxelBlockHashSettings {
     // so a small scene costs little and growth copies each voxel about four times in all.
     int blocks_per_growth = 4096;  // 4096 blocks = 2M voxels
 };
+
+// A growable table doubles rather than hold more blocks than this share of its ordered entries: with
+// one entry per bucket about 0.33 of the buckets are then taken and 0.07 of them chain into the excess
+// list, which holds an eighth (the share of InfiniTAM's tables).
+constexpr float kMaxBucketLoad = 0.4f;
 
 // What a lookup needs (read-only), on the device where the tables live.
 struct HashTableView {

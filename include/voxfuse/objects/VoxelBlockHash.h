@@ -65,10 +65,20 @@ public:
     // Memory of the index itself (entry table, free stacks, visibility, visible list); fixed by the settings.
     // The same, from the settings alone: what constructing the index will allocate.
     static std::size_t tableBytesFor(const Settings& settings);
+    // The settings of a table once it has grown all it may (growBuckets up to max_bucket_count).
+    static Settings fullyGrown(const Settings& settings);
     std::size_t tableBytes() const {
         return entries_.bytes() + free_blocks_.bytes() + free_excess_.bytes() + entry_visibility_.bytes() +
                stored_slot_.bytes() + visible_entries_.bytes();
     }
+    // Whether the table, with `adding` more blocks, would hold more than kMaxBucketLoad of its ordered
+    // entries, and may still grow (settings().max_bucket_count).
+    bool wantsMoreBuckets(int adding = 0) const;
+    // Doubles the buckets (at most to max_bucket_count) and the excess list, and moves every entry into
+    // the new table in entry order: the blocks keep their voxel blocks, stored slots and visibility, the
+    // visible list its blocks (in the new entry order). On the GPU through host memory (each doubling
+    // happens once). Entry indices change: nothing may keep one across this call.
+    void growBuckets();
     // After a device layer took blocks and excess entries from the tops of the free stacks (negative:
     // pushed back), keeps the stack sizes and the statistics in step.
     void popFreeStacks(int blocks, int excess_entries);
@@ -134,6 +144,11 @@ private:
     void clearBlocks();
 
     void requireHost(const char* what) const;
+    // The excess list's free stack, full: popped from the top, excess entry 0 is used first.
+    void fillFreeExcessStack();
+    // The host-side numbers (block counts, the visible list's size and viewpoint, statistics) but the
+    // excess stack's size, which follows the table.
+    void copyBookkeepingTo(VoxelBlockHash& to) const;
     VoxelBlockHash(const Settings& settings, Device location, bool allocate_tables);
 
     Settings settings_;
