@@ -231,8 +231,7 @@ public:
     }
     AllocationStats allocationStats() const override { return allocation_stats_; }
     const TrackerStats& trackerStats() const override { return tracker_->lastStats(); }
-    // The map is meshed where it lives; a map with swapped-out blocks is meshed on the CPU from a host
-    // copy with every block in it (the whole map may not fit the active budget on the device).
+    // On the host: a map on the GPU, or with swapped-out blocks, is copied whole for each call.
     void depthWeightsAt(const std::vector<Vec3f>& points_world, std::vector<float>& weights) override {
         if (onGpu() || swapping_.hasStoredBlocks(scene_))
             depthWeightsIn(swapping_.completeHostCopy(scene_), points_world, weights);
@@ -240,6 +239,8 @@ public:
             depthWeightsIn(scene_, points_world, weights);
     }
 
+    // The map is meshed where it lives; a map with swapped-out blocks is meshed on the CPU from a host
+    // copy with every block in it (the whole map may not fit the active budget on the device).
     void extractMesh(Mesh& mesh) override {
         if (swapping_.hasStoredBlocks(scene_))
             hostMeshing().extractMesh(swapping_.completeHostCopy(scene_), mesh);

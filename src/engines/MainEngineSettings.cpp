@@ -178,9 +178,12 @@ std::string indexMemoryNeed(const MainEngineSettings& s) {
 MainEngineSettings settingsForMap(const MapFileInfo& info, MainEngineSettings base) {
     base.voxel_type = parseVoxelType(info.voxel_type);
     base.index_type = info.hash ? IndexType::Hash : IndexType::Dense;
-    if (info.hash)
+    if (info.hash) {
+        // The table as it was saved, growing as far as `base`'s would (the file does not hold that).
+        const int max_buckets = base.hash.max_bucket_count;
         base.hash = info.hash_settings;
-    else {
+        base.hash.max_bucket_count = max_buckets;
+    } else {
         base.dense_offset = info.dense_offset;
         base.dense_size = info.dense_size;
     }

@@ -297,7 +297,6 @@ private:
         Mat4f T_submap_camera;
     };
 
-    // The first submap; its frame is the world.
     // Which of submap i's surface points (its frame) it observed best: no other submap has a higher
     // depth weight there, nor an older one as high (one owner where weights saturate alike). A point
     // no other submap observed stays, whatever its own weight.
@@ -317,6 +316,7 @@ private:
         return keep;
     }
 
+    // The first submap; its frame is the world.
     void startMap() {
         Submap first;
         first.engine = MainEngine::create(local_settings_, calib_);

@@ -296,7 +296,10 @@ TEST_P(MapFileEngineTest, ARunContinuedFromItsMapTracksOn) {
     Mesh saved_mesh;
     first->extractMesh(saved_mesh);
 
-    auto second = MainEngine::create(settingsForMap(readMapFileInfo(path), s), calib);
+    const MainEngineSettings loading = settingsForMap(readMapFileInfo(path), s);
+    EXPECT_EQ(loading.hash.max_bucket_count, s.hash.max_bucket_count) << "the loaded table grows as the engine's";
+    EXPECT_EQ(loading.hash.bucket_count, s.hash.bucket_count) << "8 small frames: the table has not grown";
+    auto second = MainEngine::create(loading, calib);
     second->loadMap(path);
     Mesh loaded_mesh;
     second->extractMesh(loaded_mesh);

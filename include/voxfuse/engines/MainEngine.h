@@ -242,7 +242,8 @@ public:
 };
 
 // `base` with the voxel type, index, index settings, voxel size and mu of a map file, so that an engine
-// created with them can load it; every other setting stays as in `base`.
+// created with them can load it; every other setting stays as in `base`, the hash table's growth
+// (max_bucket_count) too.
 MainEngineSettings settingsForMap(const MapFileInfo& info, MainEngineSettings base);
 
 }  // namespace voxfuse
