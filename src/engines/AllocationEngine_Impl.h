@@ -62,7 +62,7 @@ public:
                 --distinct;
             }
             // A growable table first grows to hold them (stage 1 keeps no entry index, only keys).
-            while (hash.wantsMoreBuckets(distinct)) hash.growBuckets();
+            if (hash.wantsMoreBuckets(distinct)) hash.growBuckets(distinct);
             const int inserted = insertMissingBlocks(scene, distinct, stats);
             if (appended <= stored) break;
             if (inserted == 0) {

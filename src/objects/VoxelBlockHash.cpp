@@ -53,13 +53,25 @@ std::size_t VoxelBlockHash::tableBytesFor(const Settings& s) {
            (std::size_t(s.excess_entry_count) + 2 * std::size_t(s.max_block_count)) * sizeof(int);
 }
 
+namespace {
+
+// One doubling of a growable table: its buckets (at most to max_bucket_count) and its excess list.
+VoxelBlockHashSettings doubled(const VoxelBlockHashSettings& s) {
+    VoxelBlockHashSettings grown = s;
+    grown.bucket_count = int(std::min<long long>(s.max_bucket_count, 2LL * s.bucket_count));
+    grown.excess_entry_count = int((long long)s.excess_entry_count * grown.bucket_count / s.bucket_count);
+    return grown;
+}
+
+bool overLoad(const VoxelBlockHashSettings& s, double blocks) {
+    return blocks > double(kMaxBucketLoad) * double(s.bucket_count) * double(s.entries_per_bucket);
+}
+
+}  // namespace
+
 VoxelBlockHash::Settings VoxelBlockHash::fullyGrown(const Settings& s) {
     Settings grown = s;
-    while (grown.bucket_count < s.max_bucket_count) {
-        const int buckets = int(std::min<long long>(s.max_bucket_count, 2LL * grown.bucket_count));
-        grown.excess_entry_count = int((long long)grown.excess_entry_count * buckets / grown.bucket_count);
-        grown.bucket_count = buckets;
-    }
+    while (grown.bucket_count < s.max_bucket_count) grown = doubled(grown);
     return grown;
 }
 
@@ -141,7 +153,12 @@ void VoxelBlockHash::clearBlocks() {
     entries_.fill(location_, HashEntry::empty(), 0, entries_.size());
     entry_visibility_.fill(location_, kEntryNotVisible, 0, entry_visibility_.size());
     stored_slot_.fill(location_, kNoStoredCopy, 0, stored_slot_.size());
-    fillFreeExcessStack();
+    // Popped from the top: excess entry 0 is used first.
+    std::vector<int> excess(std::size_t(settings_.excess_entry_count));
+    for (int i = 0; i < settings_.excess_entry_count; ++i)
+        excess[std::size_t(i)] = settings_.excess_entry_count - 1 - i;
+    free_excess_.writeRange(location_, 0, excess.data(), excess.size());
+    free_excess_count_ = settings_.excess_entry_count;
     block_capacity_ = 0;
     free_block_count_ = 0;
     stored_block_count_ = 0;
@@ -150,39 +167,19 @@ void VoxelBlockHash::clearBlocks() {
     stats_ = AllocationStats();
 }
 
-void VoxelBlockHash::fillFreeExcessStack() {
-    std::vector<int> excess(std::size_t(settings_.excess_entry_count));
-    for (int i = 0; i < settings_.excess_entry_count; ++i)
-        excess[std::size_t(i)] = settings_.excess_entry_count - 1 - i;
-    free_excess_.writeRange(location_, 0, excess.data(), excess.size());
-    free_excess_count_ = settings_.excess_entry_count;
-}
-
 bool VoxelBlockHash::wantsMoreBuckets(int adding) const {
-    const long long ordered = (long long)settings_.bucket_count * settings_.entries_per_bucket;
     return settings_.max_bucket_count > settings_.bucket_count &&
-           double(blocksInUse()) + double(storedBlocks()) + double(adding) > double(kMaxBucketLoad) * double(ordered);
+           overLoad(settings_, double(blocksInUse()) + double(storedBlocks()) + double(adding));
 }
 
-void VoxelBlockHash::growBuckets() {
+void VoxelBlockHash::growBuckets(int adding) {
     if (settings_.max_bucket_count <= settings_.bucket_count) return;
+    Settings grown = doubled(settings_);
+    const double blocks = double(blocksInUse()) + double(storedBlocks()) + double(adding);
+    while (grown.bucket_count < grown.max_bucket_count && overLoad(grown, blocks)) grown = doubled(grown);
     const Device where = location_;
     moveTo(Device::CPU);
-    Settings grown = settings_;
-    grown.bucket_count = int(std::min<long long>(settings_.max_bucket_count, 2LL * settings_.bucket_count));
-    grown.excess_entry_count =
-        int((long long)settings_.excess_entry_count * grown.bucket_count / settings_.bucket_count);
-    VoxelBlockHash fresh(grown, Device::CPU, false);
-    const std::size_t entries =
-        std::size_t(grown.bucket_count) * std::size_t(grown.entries_per_bucket) + std::size_t(grown.excess_entry_count);
-    allocateOn(fresh.entries_, entries, Device::CPU);
-    allocateOn(fresh.entry_visibility_, entries, Device::CPU);
-    allocateOn(fresh.stored_slot_, entries, Device::CPU);
-    allocateOn(fresh.free_excess_, std::size_t(grown.excess_entry_count), Device::CPU);
-    fresh.entries_.fill(Device::CPU, HashEntry::empty(), 0, entries);
-    fresh.entry_visibility_.fill(Device::CPU, kEntryNotVisible, 0, entries);
-    fresh.stored_slot_.fill(Device::CPU, kNoStoredCopy, 0, entries);
-    fresh.fillFreeExcessStack();
+    VoxelBlockHash fresh(grown, Device::CPU);
     // In entry order, so that the new table (and the visible list) does not depend on threads.
     std::vector<int> moved_to(std::size_t(entryCount()), -1);
     const HashEntry* old_entries = entries_.host();

@@ -74,11 +74,12 @@ public:
     // Whether the table, with `adding` more blocks, would hold more than kMaxBucketLoad of its ordered
     // entries, and may still grow (settings().max_bucket_count).
     bool wantsMoreBuckets(int adding = 0) const;
-    // Doubles the buckets (at most to max_bucket_count) and the excess list, and moves every entry into
-    // the new table in entry order: the blocks keep their voxel blocks, stored slots and visibility, the
-    // visible list its blocks (in the new entry order). On the GPU through host memory (each doubling
-    // happens once). Entry indices change: nothing may keep one across this call.
-    void growBuckets();
+    // Doubles the buckets and the excess list, once and then until `adding` more blocks would not take
+    // the table past kMaxBucketLoad (at most to max_bucket_count), and moves every entry into the new
+    // table in entry order: the blocks keep their voxel blocks, stored slots and visibility, the visible
+    // list its blocks (in the new entry order). On the GPU through host memory, once per call. Entry
+    // indices change: nothing may keep one across this call.
+    void growBuckets(int adding = 0);
     // After a device layer took blocks and excess entries from the tops of the free stacks (negative:
     // pushed back), keeps the stack sizes and the statistics in step.
     void popFreeStacks(int blocks, int excess_entries);
@@ -144,8 +145,6 @@ private:
     void clearBlocks();
 
     void requireHost(const char* what) const;
-    // The excess list's free stack, full: popped from the top, excess entry 0 is used first.
-    void fillFreeExcessStack();
     // The host-side numbers (block counts, the visible list's size and viewpoint, statistics) but the
     // excess stack's size, which follows the table.
     void copyBookkeepingTo(VoxelBlockHash& to) const;
