@@ -16,7 +16,8 @@ fi
 packages=(
   cmake ninja-build g++ pkg-config
   libeigen3-dev        # linear algebra (host side)
-  libopencv-dev        # image codecs (PNG/JPEG), video decoding (iPhone rgb.mp4), undistortion maps
+  libpng-dev libtiff-dev  # PNG and TIFF images
+  libopencv-dev        # the video module (iPhone rgb.mp4), and the tests' reference codecs and undistortion
   libopenni2-dev       # optional: OpenNI2 cameras and .oni recordings (VOXFUSE_OPENNI2); pulls in its drivers
   libcli11-dev         # command-line parsing
   nlohmann-json3-dev   # the JSON reports (summary.json, timings.json, voxfuse_bench.json)

@@ -30,13 +30,13 @@ struct ListedImage {
 // ParseError naming the line for a malformed one.
 std::vector<ListedImage> readTimestampedImageList(const std::string& list_path, int& missing);
 
-// .pgm -> 16-bit big-endian PGM, anything else -> 16-bit single-channel PNG (or any format OpenCV
-// reads as such). The image must have the calibrated depth camera's size.
+// .pgm -> 16-bit big-endian PGM, anything else -> 16-bit single-channel PNG (or TIFF: any format
+// io/ImageIO.h reads). The image must have the calibrated depth camera's size.
 // Decoded into `depth`, whose memory is reused when it has the size (io/ImageIO.h). Returns the samples
 // above the maximum the file declares (a PGM's maxval), which are read as no measurement.
 std::size_t readDepth(const std::string& path, int frame, const Intrinsics& depth_camera, Image<std::uint16_t>& depth);
 
-// Any colour image (PPM by hand, the rest through OpenCV), converted to RGBA. The image must have
+// Any colour image io/ImageIO.h reads, converted to RGBA. The image must have
 // the calibrated RGB camera's size. Returns the samples above a PPM's maxval (read as full intensity).
 std::size_t readColor(const std::string& path, int frame, const Intrinsics& rgb_camera, Image<Vec4u8>& rgb);
 

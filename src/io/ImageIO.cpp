@@ -1,6 +1,6 @@
 // Image files. PPM/PGM are read and written by hand because InfiniTAM's depth PGMs are 16-bit
-// big-endian and we want exact, explained errors for them; everything else goes through OpenCV,
-// which stays hidden in this file.
+// big-endian and we want exact, explained errors for them; the other formats go through the codecs
+// of ImageCodecs.h, and are converted here to what the caller asked for.
 
 #include "voxfuse/io/ImageIO.h"
 
@@ -13,11 +13,7 @@
 #include <memory>
 #include <vector>
 
-#include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
-#include <turbojpeg.h>
-
+#include "ImageCodecs.h"
 #include "ImageHeader.h"
 #include "voxfuse/core/Error.h"
 #include "voxfuse/io/AtomicFile.h"
@@ -55,22 +51,15 @@ void readWholeFile(const std::string& path, std::vector<unsigned char>& bytes) {
     if (!in.read(reinterpret_cast<char*>(bytes.data()), size)) throw IoError(path, "read error");
 }
 
-std::vector<unsigned char> readWholeFile(const std::string& path) {
-    std::vector<unsigned char> bytes;
-    readWholeFile(path, bytes);
-    return bytes;
-}
-
 // What decoding a frame needs besides its image, kept per thread so that reading a sequence makes no
 // megabyte allocation per frame. Buffers made and freed every frame fragment glibc's heap (once one
 // is freed, later ones come from the heap rather than mmap, and the small long-lived allocations
-// between them keep it from shrinking), so the peak memory of a long run grows. OpenCV decodes into
-// the Mat it is given, reusing its memory when the size and type match, so depth and colour keep one
-// Mat each: sharing one would change its type, and reallocate it, twice a frame.
+// between them keep it from shrinking), so the peak memory of a long run grows. Depth and colour
+// keep a decoded image each: sharing one would resize it twice a frame.
 struct DecodeScratch {
     std::vector<unsigned char> bytes;  // the file
-    cv::Mat depth;                     // a decoded depth image
-    cv::Mat color, converted;          // a decoded colour image; its 8-bit version where it had 16
+    codecs::DecodedImage depth;        // a decoded depth image
+    codecs::DecodedImage color;        // a decoded colour image
 };
 DecodeScratch& decodeScratch() {
     thread_local DecodeScratch scratch;
@@ -178,41 +167,10 @@ std::string netpbmHeader(const char* magic, Vec2i size, int maxval) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// OpenCV
+// The other formats
 
-std::string describeMat(const cv::Mat& m) {
-    std::string depth;
-    switch (m.depth()) {
-        case CV_8U:
-            depth = "8-bit";
-            break;
-        case CV_8S:
-            depth = "8-bit signed";
-            break;
-        case CV_16U:
-            depth = "16-bit";
-            break;
-        case CV_16S:
-            depth = "16-bit signed";
-            break;
-        case CV_32S:
-            depth = "32-bit integer";
-            break;
-        case CV_32F:
-            depth = "32-bit float";
-            break;
-        case CV_64F:
-            depth = "64-bit float";
-            break;
-        default:
-            depth = "unknown-depth";
-            break;
-    }
-    return depth + " " + std::to_string(m.channels()) + "-channel";
-}
-
-// Only the formats VoxFuse reads reach a decoder, and only with a size a frame can have: OpenCV
-// allocates what a header claims (up to 2^30 pixels) before it reads a pixel.
+// Only the formats VoxFuse reads reach a decoder, and only with a size a frame can have: a decoder
+// allocates what a header claims before it reads a pixel.
 image_header::Header requirePlausibleImage(const std::string& path) {
     const image_header::Header h = image_header::read(path);
     if (h.format == image_header::Format::Unknown)
@@ -231,62 +189,68 @@ image_header::Header requirePlausibleImage(const std::string& path) {
     return h;
 }
 
+// Binary PGM or PPM of any maxval, samples as stored (maxval says what full intensity is).
+void decodeNetpbm(const std::string& path, const std::vector<unsigned char>& bytes, codecs::DecodedImage& image) {
+    if (bytes.size() < 2 || (bytes[1] != '5' && bytes[1] != '6'))
+        throw IoError(path, "cannot decode image: only binary PGM and PPM (P5, P6) are read, not P1-P4");
+    const bool colour = bytes[1] == '6';
+    const NetpbmHeader h =
+        NetpbmHeaderParser(path, bytes).parse(colour ? '6' : '5', colour ? "binary PPM" : "binary PGM");
+    if (h.maxval < 1 || h.maxval > 65535)
+        throw IoError(path, "maxval " + std::to_string(h.maxval) + " out of range (1..65535)");
+    const int channels = colour ? 3 : 1, sample_bytes = h.maxval > 255 ? 2 : 1;
+    requirePixelBytes(path, bytes, h, std::size_t(channels * sample_bytes));
+    image.reset(Vec2i{h.width, h.height}, channels, sample_bytes, unsigned(h.maxval));
+    const unsigned char* src = bytes.data() + h.data_offset;
+    if (sample_bytes == 1) {
+        std::memcpy(image.samples.data(), src, image.samples.size());
+        return;
+    }
+    for (std::size_t i = 0; i < image.samples.size(); i += 2) {  // big-endian, as Netpbm defines
+        const std::uint16_t v = std::uint16_t(src[i] << 8 | src[i + 1]);
+        std::memcpy(&image.samples[i], &v, 2);
+    }
+}
+
 // Decodes a file that passed requireImageFile and requirePlausibleImage.
-void decodeWithOpenCV(const std::string& path, cv::Mat& m) {
+void decode(const std::string& path, image_header::Format format, codecs::DecodedImage& image) {
     std::vector<unsigned char>& bytes = decodeScratch().bytes;
     readWholeFile(path, bytes);
-    try {
-        cv::imdecode(bytes, cv::IMREAD_UNCHANGED, &m);
-    } catch (const cv::Exception& e) {
-        throw IoError(path, "cannot decode image: " + e.msg);
+    switch (format) {
+        case image_header::Format::Png:
+            return codecs::decodePng(path, bytes, image);
+        case image_header::Format::Jpeg:
+            return codecs::decodeJpeg(path, bytes, image);
+        case image_header::Format::Tiff:
+            return codecs::decodeTiff(path, bytes, image);
+        case image_header::Format::Bmp:
+            return codecs::decodeBmp(path, bytes, image);
+        case image_header::Format::Netpbm:
+            return decodeNetpbm(path, bytes, image);
+        case image_header::Format::Unknown:
+            break;
     }
-    if (m.empty()) throw IoError(path, "cannot decode image (corrupt file or unsupported format)");
+    throw IoError(path, "cannot decode image: not a format VoxFuse reads");
 }
 
-void readWithOpenCV(const std::string& path, cv::Mat& m) {
-    requireImageFile(path);
-    requirePlausibleImage(path);
-    decodeWithOpenCV(path, m);
-}
-
-cv::Mat readWithOpenCV(const std::string& path) {
-    cv::Mat m;
-    readWithOpenCV(path, m);
-    return m;
-}
-
-// Encoded in memory and written through AtomicFile, which checks the flush and the close: the codecs'
-// own file writers do not, so a disk that fills during the last flush left a short image under its
-// final name.
-void writeWithOpenCV(const std::string& path, const cv::Mat& m) {
-    std::vector<unsigned char> bytes;
-    bool ok = false;
-    std::string detail;
-    try {
-        ok = cv::imencode(std::filesystem::path(path).extension().string(), m, bytes);
-    } catch (const cv::Exception& e) {
-        detail = " (" + e.msg + ")";
-    }
-    if (!ok) throw IoError(path, "cannot encode the image: unknown format" + detail);
+// Encoded in memory and written through AtomicFile, which checks the flush and the close: a codec's
+// own file writer might not, so a disk that fills during the last flush would leave a short image
+// under its final name.
+void writeEncoded(const std::string& path, const codecs::Bytes& bytes) {
     AtomicFile file(path);
     file.stream().write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
     file.commit();
 }
 
-template <typename T>
-void copyMatToImage(const cv::Mat& m, Image<T>& image) {
-    image.resize(Vec2i{m.cols, m.rows});
-    const std::size_t row_bytes = std::size_t(m.cols) * sizeof(T);
-    for (int y = 0; y < m.rows; ++y) std::memcpy(&image.at(0, y), m.ptr(y), row_bytes);
-}
-
-// The image as a cv::Mat header over its own memory: OpenCV writes into it without allocating.
-cv::Mat matOver(Image<Vec4u8>& image) { return cv::Mat(image.height(), image.width(), CV_8UC4, image.host()); }
-
 bool hasExtension(const std::string& path, const char* extension) {
     std::string ext = std::filesystem::path(path).extension().string();
     for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
     return ext == extension;
+}
+
+void requirePngName(const std::string& path, const char* what) {
+    if (!hasExtension(path, ".png"))
+        throw IoError(path, std::string(what) + " are written as PNG: the file name must end in .png");
 }
 
 }  // namespace
@@ -379,57 +343,52 @@ void writePGM16(const std::string& path, const Image<std::uint16_t>& depth) {
 
 namespace {
 
-// JPEG through TurboJPEG rather than OpenCV: OpenCV decodes a truncated or damaged JPEG into a
-// partly grey image and leaves only libjpeg's warning on stderr; here a warning is an error. CMYK
-// JPEGs (TurboJPEG does not convert them to RGB) go to OpenCV. False: not decoded here.
-bool readJpeg(const std::string& path, Image<Vec4u8>& image) {
-    std::vector<unsigned char>& bytes = decodeScratch().bytes;
-    readWholeFile(path, bytes);
-    const std::unique_ptr<void, int (*)(tjhandle)> tj(tjInitDecompress(), tjDestroy);
-    if (!tj) throw IoError(path, "cannot start the JPEG decoder");
-    int width = 0, height = 0, subsampling = 0, colorspace = 0;
-    if (tjDecompressHeader3(tj.get(), bytes.data(), static_cast<unsigned long>(bytes.size()), &width, &height,
-                            &subsampling, &colorspace) != 0)
-        throw IoError(path, std::string("corrupt JPEG: ") + tjGetErrorStr2(tj.get()));
-    if (colorspace == TJCS_CMYK || colorspace == TJCS_YCCK) return false;
-    if (width <= 0 || height <= 0) throw IoError(path, "corrupt JPEG: the header gives no image size");
-    if (double(width) * double(height) > kMaxImagePixels)
-        throw IoError(path, "the JPEG says it is " + std::to_string(width) + "x" + std::to_string(height) +
-                                " pixels: too large for an image of a frame (corrupt header?)");
-    image.resize(Vec2i{width, height});
-    if (tjDecompress2(tj.get(), bytes.data(), static_cast<unsigned long>(bytes.size()),
-                      reinterpret_cast<unsigned char*>(image.host()), width, 0, height, TJPF_RGBA,
-                      TJFLAG_STOPONWARNING) != 0)
-        throw IoError(path,
-                      std::string("corrupt JPEG: ") + tjGetErrorStr2(tj.get()) + " (the file is damaged or truncated)");
-    return true;
+// 8-bit RGBA of any decoded image: grey is repeated, a missing alpha is opaque, other ranges are
+// scaled so that maxval is 255 (samples above it, invalid, are full intensity).
+void toRgba(const codecs::DecodedImage& image, Image<Vec4u8>& rgba) {
+    rgba.resize(image.size);
+    const int n = image.channels;
+    const unsigned maxval = image.maxval;
+    const auto to8 = [maxval](unsigned v) { return std::uint8_t(std::min(255u, (v * 255u + maxval / 2) / maxval)); };
+    for (int y = 0; y < image.size.y; ++y) {
+        Vec4u8* dst = &rgba.at(0, y);
+        if (image.bytes_per_sample == 1 && maxval == 255 && n >= 3) {  // the common case, without scaling
+            const std::uint8_t* src = image.row(y);
+            for (int x = 0; x < image.size.x; ++x, src += n)
+                dst[x] = Vec4u8{src[0], src[1], src[2], n == 4 ? src[3] : std::uint8_t(255)};
+            continue;
+        }
+        for (int x = 0; x < image.size.x; ++x) {
+            const std::uint8_t first = to8(image.sample(x, y, 0));
+            if (n <= 2)
+                dst[x] = Vec4u8{first, first, first, n == 2 ? to8(image.sample(x, y, 1)) : std::uint8_t(255)};
+            else
+                dst[x] = Vec4u8{first, to8(image.sample(x, y, 1)), to8(image.sample(x, y, 2)),
+                                n == 4 ? to8(image.sample(x, y, 3)) : std::uint8_t(255)};
+        }
+    }
 }
 
 }  // namespace
 
+void codecs::readImageFile(const std::string& path, DecodedImage& image) {
+    requireImageFile(path);
+    decode(path, requirePlausibleImage(path).format, image);
+}
+
 std::size_t readColorImage(const std::string& path, Image<Vec4u8>& rgba) {
     if (hasExtension(path, ".ppm")) return readPPM(path, rgba);
     requireImageFile(path);
-    if (requirePlausibleImage(path).format == image_header::Format::Jpeg && readJpeg(path, rgba)) return 0;
-    DecodeScratch& scratch = decodeScratch();
-    decodeWithOpenCV(path, scratch.color);
-    const cv::Mat* m = &scratch.color;
-    if (m->depth() == CV_16U) {
-        m->convertTo(scratch.converted, CV_8U, 1.0 / 257.0);  // 65535 -> 255
-        m = &scratch.converted;
-    } else if (m->depth() != CV_8U) {
-        throw IoError(path, "unsupported colour image: " + describeMat(*m) + " (expected 8- or 16-bit)");
+    const image_header::Format format = requirePlausibleImage(path).format;
+    if (format == image_header::Format::Jpeg) {  // straight into the frame's image
+        std::vector<unsigned char>& bytes = decodeScratch().bytes;
+        readWholeFile(path, bytes);
+        codecs::decodeJpegToRgba(path, bytes, rgba);
+        return 0;
     }
-    const int channels = m->channels();
-    const int to_rgba = channels == 1   ? cv::COLOR_GRAY2RGBA
-                        : channels == 3 ? cv::COLOR_BGR2RGBA
-                        : channels == 4 ? cv::COLOR_BGRA2RGBA
-                                        : -1;
-    if (to_rgba < 0)
-        throw IoError(path, "unsupported colour image: " + describeMat(*m) + " (expected 1, 3 or 4 channels)");
-    rgba.resize(Vec2i{m->cols, m->rows});
-    cv::Mat into = matOver(rgba);
-    cv::cvtColor(*m, into, to_rgba);
+    codecs::DecodedImage& image = decodeScratch().color;
+    decode(path, format, image);
+    toRgba(image, rgba);
     return 0;
 }
 
@@ -440,10 +399,12 @@ Image<Vec4u8> readColorImage(const std::string& path) {
 }
 
 void readDepthPNG(const std::string& path, Image<std::uint16_t>& depth) {
-    cv::Mat& m = decodeScratch().depth;
-    readWithOpenCV(path, m);
-    if (m.type() != CV_16UC1) throw IoError(path, "expected a 16-bit single-channel depth PNG, got " + describeMat(m));
-    copyMatToImage(m, depth);
+    codecs::DecodedImage& image = decodeScratch().depth;
+    codecs::readImageFile(path, image);
+    if (image.channels != 1 || image.bytes_per_sample != 2)
+        throw IoError(path, "expected a 16-bit single-channel depth PNG, got " + image.describe());
+    depth.resize(image.size);
+    std::memcpy(depth.host(), image.samples.data(), image.samples.size());
 }
 
 Image<std::uint16_t> readDepthPNG(const std::string& path) {
@@ -454,80 +415,40 @@ Image<std::uint16_t> readDepthPNG(const std::string& path) {
 
 void writePNG(const std::string& path, const Image<Vec4u8>& rgba) {
     if (rgba.empty()) throw IoError(path, "cannot write an empty image");
-    const cv::Mat wrapped(rgba.height(), rgba.width(), CV_8UC4, const_cast<Vec4u8*>(rgba.host()));
+    requirePngName(path, "colour images");
     // Keep alpha only when it carries something, so ordinary colour frames stay plain RGB files.
     bool opaque = true;
     for (std::size_t i = 0; i < rgba.pixelCount() && opaque; ++i) opaque = rgba.host()[i].w == 255;
-    cv::Mat bgr;
-    cv::cvtColor(wrapped, bgr, opaque ? cv::COLOR_RGBA2BGR : cv::COLOR_RGBA2BGRA);
-    writeWithOpenCV(path, bgr);
+    if (!opaque) return writeEncoded(path, codecs::encodePng(path, rgba.size(), 4, 1, rgba.host()));
+    std::vector<std::uint8_t> rgb(rgba.pixelCount() * 3);
+    for (std::size_t i = 0; i < rgba.pixelCount(); ++i) std::memcpy(&rgb[3 * i], &rgba.host()[i], 3);
+    writeEncoded(path, codecs::encodePng(path, rgba.size(), 3, 1, rgb.data()));
 }
 
 void writeDepthPNG(const std::string& path, const Image<std::uint16_t>& depth) {
     if (depth.empty()) throw IoError(path, "cannot write an empty image");
-    if (!hasExtension(path, ".png"))
-        throw IoError(path, "depth images are written as 16-bit PNG: the file name must end in .png");
-    const cv::Mat wrapped(depth.height(), depth.width(), CV_16UC1, const_cast<std::uint16_t*>(depth.host()));
-    writeWithOpenCV(path, wrapped);
+    requirePngName(path, "depth images");
+    writeEncoded(path, codecs::encodePng(path, depth.size(), 1, 2, depth.host()));
 }
 
-namespace {
-
-// Class ids as the file stores them. OpenCV rescales what it reads in two cases that would change
-// ids silently, so those are read here: binary PGMs (OpenCV stretches maxval < 255 to 0..255) and
-// grey PNGs of 1, 2 or 4 bits (libpng expands them to 0..255: a 1-bit 1 becomes 255).
-cv::Mat readRawClassIds(const std::string& path) {
-    if (hasExtension(path, ".pgm")) {
-        requireImageFile(path);
-        const auto bytes = readWholeFile(path);
-        const NetpbmHeader h = NetpbmHeaderParser(path, bytes).parse('5', "binary PGM label image");
-        if (h.maxval < 1 || h.maxval > 65535)
-            throw IoError(path, "maxval " + std::to_string(h.maxval) + " out of range (1..65535)");
-        const bool wide = h.maxval > 255;  // two bytes per sample, big-endian
-        requirePixelBytes(path, bytes, h, wide ? 2 : 1);
-        cv::Mat m(h.height, h.width, wide ? CV_16UC1 : CV_8UC1);
-        const unsigned char* src = bytes.data() + h.data_offset;
-        for (int y = 0; y < h.height; ++y)
-            for (int x = 0; x < h.width; ++x, src += wide ? 2 : 1) {
-                if (wide)
-                    m.at<std::uint16_t>(y, x) = std::uint16_t((src[0] << 8) | src[1]);
-                else
-                    m.at<std::uint8_t>(y, x) = src[0];
-            }
-        return m;
-    }
-    cv::Mat m = readWithOpenCV(path);
-    // PNG: signature, IHDR length and type, width, height, then bit depth (byte 24) and colour type (25).
-    std::ifstream in(path, std::ios::binary);
-    unsigned char head[26] = {};
-    const bool png = in.read(reinterpret_cast<char*>(head), sizeof head) &&
-                     std::memcmp(head, "\x89PNG\r\n\x1a\n", 8) == 0 && std::memcmp(head + 12, "IHDR", 4) == 0;
-    const int bits = head[24];
-    const bool grey = head[25] == 0;
-    if (png && grey && (bits == 1 || bits == 2 || bits == 4) && m.type() == CV_8UC1)
-        m /= 255 / ((1 << bits) - 1);  // exact: 255, 85, 17
-    return m;
-}
-
-}  // namespace
-
+// Class ids as the file stores them: the decoders never stretch a PGM's maxval or a 1, 2 or 4-bit
+// PNG's range to 0..255 (a 1-bit mask's 1 stays class 1).
 Image<ClassId> readLabelImage(const std::string& path, int ignore_id) {
     if (ignore_id < -1 || ignore_id > 65535)
         throw ConfigError("label ignore id " + std::to_string(ignore_id) +
                           " out of range: expected -1 (none) or 0..65535");
-    const cv::Mat m = readRawClassIds(path);
+    codecs::DecodedImage image;
+    codecs::readImageFile(path, image);
     const std::string requirement = "label images must be single-channel 8- or 16-bit class ids; ";
-    // IMREAD_UNCHANGED expands palette PNGs to BGR, so their indices are lost: say what to do about it.
-    if (m.channels() != 1)
-        throw IoError(path, requirement + "this one has " + std::to_string(m.channels()) +
+    // Palette images are expanded to colour, so their indices are lost: say what to do about it.
+    if (image.channels != 1)
+        throw IoError(path, requirement + "this one has " + std::to_string(image.channels) +
                                 " channels (colour-coded or palette images must be converted to class ids first)");
-    if (m.depth() != CV_8U && m.depth() != CV_16U) throw IoError(path, requirement + "this one is " + describeMat(m));
-    Image<ClassId> labels(Vec2i{m.cols, m.rows});
-    const bool eight_bit = m.depth() == CV_8U;
-    for (int y = 0; y < m.rows; ++y) {
+    Image<ClassId> labels(image.size);
+    for (int y = 0; y < image.size.y; ++y) {
         ClassId* dst = &labels.at(0, y);
-        for (int x = 0; x < m.cols; ++x) {
-            const int id = eight_bit ? int(m.ptr<std::uint8_t>(y)[x]) : int(m.ptr<std::uint16_t>(y)[x]);
+        for (int x = 0; x < image.size.x; ++x) {
+            const int id = int(image.sample(x, y, 0));
             dst[x] = (id == ignore_id || id == int(kNoLabel)) ? kNoLabel : ClassId(id);
         }
     }

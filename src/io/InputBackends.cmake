@@ -1,17 +1,27 @@
 # Included by src/CMakeLists.txt: what the input front-ends (src/io) need beyond the core library.
-#  - OpenCV videoio (the colour video of iPhone captures) and calib3d (lens undistortion maps).
-#  - TurboJPEG: JPEG colour images, whose damage it reports.
+#  - libpng, TurboJPEG and libtiff: the image codecs (src/io/ImageCodecs.h). TurboJPEG reports a
+#    damaged or truncated JPEG, which libjpeg alone decodes into a partly grey image with a warning.
+#  - The video module, voxfuse_video: OpenCV's videoio for the colour video of iPhone captures. It
+#    brings FFmpeg, GStreamer and OpenCV's codecs (with GDAL, Poppler, GDCM): 63 MB of memory that
+#    every process linking them paid. As a module beside libvoxfuse, loaded the first time a video is
+#    opened (src/io/VideoDecoder.h), only runs that read a video pay for it.
 #  - OpenNI2, optional: live cameras and .oni playback. VOXFUSE_OPENNI2 defaults to ON when it is
 #    found (Debian: libopenni2-dev); without it OpenNISource throws an IoError saying so.
 
-find_package(OpenCV REQUIRED COMPONENTS videoio calib3d)
-target_link_libraries(voxfuse PRIVATE opencv_videoio opencv_calib3d)
-
-# TurboJPEG (Debian: libturbojpeg0-dev) decodes JPEG colour so that a damaged or truncated file is an
-# error naming it; OpenCV would decode it into a partly grey image with only a warning on stderr.
+find_package(PNG REQUIRED)
+find_package(TIFF REQUIRED)
 find_package(PkgConfig REQUIRED)
-pkg_check_modules(TURBOJPEG REQUIRED IMPORTED_TARGET libturbojpeg)
-target_link_libraries(voxfuse PRIVATE PkgConfig::TURBOJPEG)
+pkg_check_modules(TURBOJPEG REQUIRED IMPORTED_TARGET GLOBAL libturbojpeg)  # GLOBAL: the tests use it too
+target_link_libraries(voxfuse PRIVATE PNG::PNG TIFF::TIFF PkgConfig::TURBOJPEG ${CMAKE_DL_LIBS})
+
+find_package(OpenCV REQUIRED COMPONENTS core imgproc videoio)
+add_library(voxfuse_video MODULE ${CMAKE_CURRENT_LIST_DIR}/VideoDecoderOpenCV.cpp)
+target_link_libraries(voxfuse_video PRIVATE voxfuse_core opencv_core opencv_imgproc opencv_videoio)
+target_compile_options(voxfuse_video PRIVATE ${VOXFUSE_WARNINGS})
+# Built beside libvoxfuse (a MODULE's default folder is this one's too), where the library looks.
+target_compile_definitions(voxfuse PRIVATE VOXFUSE_VIDEO_MODULE="$<TARGET_FILE_NAME:voxfuse_video>")
+add_dependencies(voxfuse voxfuse_video)  # whatever builds the library builds its module
+install(TARGETS voxfuse_video LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})
 
 pkg_check_modules(OPENNI2 QUIET libopenni2)
 if(NOT OPENNI2_FOUND)

@@ -6,10 +6,8 @@
 #include <iterator>
 #include <map>
 
-#include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
-
 #include "FrameReading.h"
+#include "ImageCodecs.h"
 #include "ImageHeader.h"
 #include "StrayScannerFiles.h"
 #include "VideoFrameReader.h"
@@ -48,26 +46,25 @@ Intrinsics scaledTo(const Intrinsics& k, Vec2i size) {
 
 Image<std::uint8_t> readConfidence(const std::string& path, int frame, Vec2i depth_size) {
     if (!frame_reading::fileExists(path)) throw IoError(path, "missing confidence map", frame);
-    // Never more pixels than the depth map it belongs to: a corrupt header must not make imread allocate gigabytes.
+    // Never more pixels than the depth map it belongs to: a corrupt header must not make the decoder allocate
+    // gigabytes.
     const image_header::Header h = image_header::read(path);
     if (h.format != image_header::Format::Png || h.width != depth_size.x || h.height != depth_size.y)
         throw IoError(path, "a confidence map must be a PNG of the depth map's size (" + sizeText(depth_size) + ")",
                       frame);
-    const cv::Mat m = cv::imread(path, cv::IMREAD_UNCHANGED);
-    if (m.empty()) throw IoError(path, "cannot decode the confidence map", frame);
-    if (m.channels() != 1 || (m.depth() != CV_8U && m.depth() != CV_16U))
-        throw IoError(path, "a confidence map must be a single-channel 8- or 16-bit image", frame);
-    if (m.cols != depth_size.x || m.rows != depth_size.y)
+    codecs::DecodedImage m;
+    try {
+        codecs::readImageFile(path, m);
+    } catch (const IoError& e) {
+        throw IoError(path, e.reason(), frame);
+    }
+    if (m.channels != 1) throw IoError(path, "a confidence map must be a single-channel 8- or 16-bit image", frame);
+    if (m.size != depth_size)
         throw IoError(
-            path,
-            "the confidence map is " + sizeText({m.cols, m.rows}) + " but the depth map is " + sizeText(depth_size),
-            frame);
+            path, "the confidence map is " + sizeText(m.size) + " but the depth map is " + sizeText(depth_size), frame);
     Image<std::uint8_t> confidence(depth_size);
-    for (int y = 0; y < m.rows; ++y)
-        for (int x = 0; x < m.cols; ++x) {
-            const int v = m.depth() == CV_8U ? m.at<std::uint8_t>(y, x) : m.at<std::uint16_t>(y, x);
-            confidence.at(x, y) = std::uint8_t(std::min(v, 255));
-        }
+    for (int y = 0; y < m.size.y; ++y)
+        for (int x = 0; x < m.size.x; ++x) confidence.at(x, y) = std::uint8_t(std::min(m.sample(x, y, 0), 255u));
     return confidence;
 }
 

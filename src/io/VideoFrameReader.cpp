@@ -1,40 +1,62 @@
 #include "VideoFrameReader.h"
 
-#include <cmath>
+#include <dlfcn.h>
+
 #include <filesystem>
+#include <mutex>
 
-#include <opencv2/core.hpp>
-#include <opencv2/imgproc.hpp>
-#include <opencv2/videoio.hpp>
-#include <opencv2/videoio/registry.hpp>
-
+#include "VideoDecoder.h"
 #include "voxfuse/core/Error.h"
 
 namespace voxfuse {
 
+namespace {
+
+// The video module's entry point, loaded once per process: from the folder this library was loaded
+// from (the build tree, an install, a wheel's voxfuse/lib alike), else wherever the loader finds it.
+// The module is never unloaded: decoders made by it may outlive any one reader.
+OpenVideoDecoderFunction videoModule(const std::string& video_path) {
+    static std::once_flag once;
+    static OpenVideoDecoderFunction entry = nullptr;
+    static std::string failure;
+    std::call_once(once, [] {
+        std::string tried;
+        Dl_info self{};
+        void* handle = nullptr;
+        if (dladdr(reinterpret_cast<void*>(&videoModule), &self) && self.dli_fname) {
+            const std::string beside =
+                (std::filesystem::path(self.dli_fname).parent_path() / VOXFUSE_VIDEO_MODULE).string();
+            handle = dlopen(beside.c_str(), RTLD_NOW | RTLD_LOCAL);
+            if (!handle) tried = dlerror();
+        }
+        if (!handle) handle = dlopen(VOXFUSE_VIDEO_MODULE, RTLD_NOW | RTLD_LOCAL);
+        if (!handle) {
+            failure = std::string(dlerror()) + (tried.empty() ? "" : "; " + tried);
+            return;
+        }
+        entry = reinterpret_cast<OpenVideoDecoderFunction>(dlsym(handle, kOpenVideoDecoderSymbol));
+        if (!entry) failure = std::string(VOXFUSE_VIDEO_MODULE) + " has no " + kOpenVideoDecoderSymbol;
+    });
+    if (!entry)
+        throw IoError(video_path, std::string("cannot decode video: VoxFuse's video module (") + VOXFUSE_VIDEO_MODULE +
+                                      ", installed beside libvoxfuse) cannot be loaded: " + failure);
+    return entry;
+}
+
+}  // namespace
+
 struct VideoFrameReader::Capture {
-    cv::VideoCapture video;
+    std::unique_ptr<VideoDecoder> decoder;
 };
 
 VideoFrameReader::VideoFrameReader(const std::string& path) : path_(path), capture_(std::make_unique<Capture>()) {
     std::error_code ec;
     if (!std::filesystem::is_regular_file(path, ec)) throw IoError(path, "no such file");
-    // FFmpeg decodes H.264 and HEVC; only an OpenCV built without it gets to try its other backends
-    // (probing those, GStreamer especially, is slow and noisy for a file FFmpeg has rejected).
-    const bool has_ffmpeg = cv::videoio_registry::hasBackend(cv::CAP_FFMPEG);
-    if (!capture_->video.open(path, has_ffmpeg ? cv::CAP_FFMPEG : cv::CAP_ANY))
-        throw IoError(path, has_ffmpeg ? "FFmpeg (through OpenCV) cannot open this video: not a video file, or a "
-                                         "damaged one"
-                                       : "OpenCV cannot open this video: this OpenCV build has no FFmpeg, and no "
-                                         "other video backend reads the file (see cv::getBuildInformation(), "
-                                         "'Video I/O')");
-    cv::VideoCapture& video = capture_->video;
-    size_ = Vec2i{int(video.get(cv::CAP_PROP_FRAME_WIDTH)), int(video.get(cv::CAP_PROP_FRAME_HEIGHT))};
-    const double count = video.get(cv::CAP_PROP_FRAME_COUNT);
-    frame_count_ = count > 0.0 && std::isfinite(count) ? int(std::lround(count)) : -1;
-    const double fps = video.get(cv::CAP_PROP_FPS);
-    fps_ = fps > 0.0 && std::isfinite(fps) ? fps : 0.0;
-    if (size_.x <= 0 || size_.y <= 0) throw IoError(path, "the video does not say its frame size (not a video?)");
+    capture_->decoder.reset(videoModule(path)(path));
+    const VideoDecoder& video = *capture_->decoder;
+    size_ = video.size();
+    frame_count_ = video.frameCount();
+    fps_ = video.framesPerSecond();
 }
 
 VideoFrameReader::~VideoFrameReader() = default;
@@ -45,30 +67,15 @@ bool VideoFrameReader::read(int index, Image<Vec4u8>& rgba, Vec2i output_size) {
                       "video frames are decoded in order: frame " + std::to_string(index) +
                           " was asked for after frame " + std::to_string(next_index_ - 1),
                       index);
-    cv::VideoCapture& video = capture_->video;
+    VideoDecoder& video = *capture_->decoder;
     for (; !ended_ && next_index_ < index; ++next_index_)
-        if (!video.grab()) ended_ = true;
+        if (!video.skip()) ended_ = true;
     if (ended_) return false;
-    cv::Mat bgr;
-    if (!video.read(bgr) || bgr.empty()) {
+    if (!video.read(rgba, output_size, index)) {
         ended_ = true;
         return false;
     }
     ++next_index_;
-    if (bgr.type() != CV_8UC3)
-        throw IoError(path_,
-                      "the video decodes to an unexpected pixel type (OpenCV type " + std::to_string(bgr.type()) +
-                          "), expected 8-bit colour",
-                      index);
-    if (bgr.cols != size_.x || bgr.rows != size_.y) throw IoError(path_, "frame size changed within the video", index);
-    if (output_size != size_) {
-        cv::Mat resized;
-        cv::resize(bgr, resized, cv::Size(output_size.x, output_size.y), 0.0, 0.0, cv::INTER_AREA);
-        bgr = resized;
-    }
-    rgba.resize(output_size);
-    cv::Mat out(output_size.y, output_size.x, CV_8UC4, static_cast<void*>(rgba.host()));
-    cv::cvtColor(bgr, out, cv::COLOR_BGR2RGBA);
     return true;
 }
 

@@ -1,6 +1,6 @@
 #pragma once
 // Internal: sequential decoding of a colour video (e.g. an iPhone capture's rgb.mp4: H.264 or HEVC)
-// through OpenCV's videoio, which stays hidden in VideoFrameReader.cpp.
+// through the video module (VideoDecoder.h), loaded the first time a video is opened.
 
 #include <memory>
 #include <string>
@@ -11,8 +11,8 @@ namespace voxfuse {
 
 class VideoFrameReader {
 public:
-    // Opens the video and reads its size. Throws IoError naming the file when it is missing or no
-    // video backend of this OpenCV build can decode it.
+    // Opens the video and reads its size. Throws IoError naming the file when it is missing, the
+    // video module cannot be loaded, or no video backend of its OpenCV can decode it.
     explicit VideoFrameReader(const std::string& path);
     ~VideoFrameReader();
     VideoFrameReader(const VideoFrameReader&) = delete;

@@ -237,7 +237,7 @@ TEST(ImageIO, ReadingIntoAnImageReusesItsMemoryOnlyAtTheSameSize) {
 
 TEST(ImageIO, GreyImageBecomesRgba) {
     ScratchDir dir;
-    const std::string path = dir.file("grey.pgm");  // 8-bit PGM, decoded by OpenCV
+    const std::string path = dir.file("grey.pgm");  // 8-bit PGM: through the general decoder, not readPPM
     writeBytes(path, "P5\n2 1\n255\n" + bytesOf({10, 200}));
     const Image<Vec4u8> rgba = readColorImage(path);
     ASSERT_EQ(rgba.size(), (Vec2i{2, 1}));
@@ -319,8 +319,8 @@ TEST(ImageIO, ADamagedJpegColorFrameNamesItsFileAndFrameAndTheSequenceGoesOn) {
     EXPECT_EQ(frame.index, 2);
 }
 
-// Found by fuzzing: a PPM header in a file of another name went to OpenCV, which allocated the 3 GB
-// it claimed before reading a pixel.
+// Found by fuzzing: a PPM header in a file of another name went to a decoder (OpenCV's then), which
+// allocated the 3 GB it claimed before reading a pixel.
 TEST(ImageIO, OnlyKnownFormatsOfAPlausibleSizeReachTheDecoders) {
     ScratchDir dir;
     const std::string bomb = dir.file("colour.jpg");
@@ -417,7 +417,7 @@ namespace {
 
 TEST(ImageIO, LabelImageEightBitIdsWithIgnoreId) {
     ScratchDir dir;
-    // An 8-bit PGM, which OpenCV reads as single-channel 8-bit: ids 0, 3, 254, 255.
+    // An 8-bit PGM, single-channel 8-bit: ids 0, 3, 254, 255.
     const std::string path = dir.file("labels.pgm");
     writeBytes(path, "P5\n2 2\n255\n" + bytesOf({0, 3, 254, 255}));
     const Image<ClassId> ignoring_zero = readLabelImage(path, 0);

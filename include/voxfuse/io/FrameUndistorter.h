@@ -1,6 +1,7 @@
 #pragma once
 // Removes lens distortion from raw frames with per-pixel lookup maps computed once from the
-// calibration (OpenCV's initUndistortRectifyMap), so that each frame costs one remap per image.
+// calibration (the Brown-Conrady model, as OpenCV's initUndistortRectifyMap computes it), so that
+// each frame costs one resampling per image.
 
 #include <memory>
 #include <mutex>
@@ -40,7 +41,7 @@ public:
 private:
     struct Maps;
     // Null when the camera has no distortion (nothing to do for its images).
-    static std::unique_ptr<Maps> makeMaps(const Intrinsics& camera, const LensDistortion& distortion, int map_type);
+    static std::unique_ptr<Maps> makeMaps(const Intrinsics& camera, const LensDistortion& distortion);
 
     std::unique_ptr<Maps> rgb_maps_;
     std::unique_ptr<Maps> depth_maps_;

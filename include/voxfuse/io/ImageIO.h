@@ -1,7 +1,8 @@
 #pragma once
 // Image files: PPM/PGM by hand (InfiniTAM's 16-bit big-endian PGM depth is not what image libraries
-// expect), PNG/JPEG through OpenCV. Every failure throws IoError naming the file and the reason
-// (missing, truncated, wrong magic, wrong bit depth, size mismatch...).
+// expect), PNG, JPEG and TIFF through libpng, TurboJPEG and libtiff, BMP by hand. Every failure
+// throws IoError naming the file and the reason (missing, truncated, wrong magic, wrong bit depth,
+// size mismatch...).
 
 #include <cstdint>
 #include <string>
@@ -18,6 +19,7 @@ void writePGM16(const std::string& path, const Image<std::uint16_t>& depth);
 
 Image<Vec4u8> readColorImage(const std::string& path);       // PNG/JPEG/PPM..., any channel count -> RGBA
 Image<std::uint16_t> readDepthPNG(const std::string& path);  // must be single-channel 16-bit
+// RGB, or RGBA where some pixel is not opaque. The name must end in .png (IoError otherwise).
 void writePNG(const std::string& path, const Image<Vec4u8>& rgba);
 
 // The same readers decoding into `image`, whose memory is kept when it has the file's size already:
@@ -32,7 +34,7 @@ std::size_t readPGM16(const std::string& path, Image<std::uint16_t>& image);
 std::size_t readColorImage(const std::string& path, Image<Vec4u8>& image);
 void readDepthPNG(const std::string& path, Image<std::uint16_t>& image);
 
-void writeDepthPNG(const std::string& path, const Image<std::uint16_t>& depth);
+void writeDepthPNG(const std::string& path, const Image<std::uint16_t>& depth);  // 16-bit grey, name *.png
 
 // A semantic label image: one class id per pixel, in a single-channel lossless file: PNG (1 to 16-bit
 // grey), binary PGM (any maxval), TIFF... Ids are taken as stored, never rescaled to the file's range.
