@@ -1,5 +1,5 @@
-// Colour and depth frames as the sources read them: JPEG (TurboJPEG), PNG (OpenCV), PPM; the first
-// byte picks the file name.
+// Colour and depth frames as the sources read them: JPEG, PNG, TIFF, BMP, PPM (the format by content,
+// except PPM by name); the first byte picks the file name.
 
 #include "FuzzInput.h"
 #include "voxfuse/core/Error.h"
