@@ -74,6 +74,7 @@ public:
             relocalising_.poseGiven(view_, result);
             clock_.stageDone("track");
         } else {
+            if (model_released_) raycastModel(nullptr);  // releaseFrameMemory() took the model
             relocalising_.track(trackingContext(), tracking_, result);
         }
         result.tracking = tracking_;
@@ -125,6 +126,7 @@ public:
     }
 
     float modelCoverage(const View& view) override {
+        if (model_released_) raycastModel(nullptr);
         if (model_.points_world.empty() || view.depth.empty()) return 0.f;
         if (onGpu()) model_.points_world.memory().updateHost();  // view(): its host copy is current
         const int factor = settings_.tracking_raycast_downsample;
@@ -137,6 +139,26 @@ public:
                 covered += model_.points_world.at(u, v).w > 0.f ? 1 : 0;
             }
         return valid > 0 ? float(covered) / float(valid) : 0.f;
+    }
+
+    void releaseFrameMemory() override {
+        for (Image<float>* image : {&view_.depth, &view_.far_depth}) *image = Image<float>();
+        view_.rgb = Image<Vec4u8>();
+        view_.labels = Image<ClassId>();
+        model_ = RenderState();
+        display_ = RenderState();
+        free_view_ = RenderState();
+        display_version_ = -1;
+        model_depth_view_ = -1;
+        model_released_ = true;
+        // The engines are stateless but for their buffers: new ones start without.
+        low_level_ = makeLowLevelEngine(settings_.device);
+        allocation_ = makeAllocationEngine<TVoxel, TIndex>(settings_.device);
+        integration_ = makeIntegrationEngine<TVoxel, TIndex>(settings_.device);
+        raycast_ = makeRaycastEngine<TVoxel, TIndex>(settings_.device);
+        tracker_ = makeTracker(settings_.tracker, settings_.device);
+        meshing_ = makeMeshingEngine<TVoxel, TIndex>(settings_.device);
+        host_meshing_.reset();
     }
 
     bool locate(const View& view, TrackingState& found) override {
@@ -286,6 +308,7 @@ private:
             raycast_->renderIntensity(scene_, model_, model_.intensity);
         model_depth_view_ = fused_depth ? views_converted_ : -1;
         ++model_version_;
+        model_released_ = false;
     }
 
     // The model seen from the pose of the last model raycast, at the depth camera's resolution with
@@ -295,7 +318,9 @@ private:
     RenderState& displayRaycast() const {
         if (display_version_ != model_version_) {
             const bool hint = model_depth_view_ >= 0 && model_depth_view_ == views_converted_;
-            raycast_->raycast(scene_, view_.calib.depth, model_.T_world_camera, display_, RaycastNormals::SdfGradient,
+            // After releaseFrameMemory() the model is raycast again at the next frame: until then from the last pose.
+            const Mat4f& T_world_camera = model_released_ ? tracking_.T_world_camera : model_.T_world_camera;
+            raycast_->raycast(scene_, view_.calib.depth, T_world_camera, display_, RaycastNormals::SdfGradient,
                               hint ? &view_.depth : nullptr);
             display_version_ = model_version_;
         }
@@ -350,7 +375,8 @@ private:
     int frames_fused_ = 0;
     bool has_source_origin_ = false;
     Mat4f T_source_world_ = Mat4f::identity();
-    bool map_started_ = false;  // a frame was fused, or a map loaded
+    bool map_started_ = false;     // a frame was fused, or a map loaded
+    bool model_released_ = false;  // releaseFrameMemory() took model_: raycast it again before use
     RelocalisingTracking<TVoxel, TIndex> relocalising_;
     MapSwapping<TVoxel, TIndex> swapping_;
     StageClock clock_;

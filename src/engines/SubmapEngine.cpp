@@ -268,6 +268,11 @@ public:
     int submapCount() const override { return static_cast<int>(submaps_.size()); }
     float modelCoverage(const View& view) override { return submaps_[active_].engine->modelCoverage(view); }
 
+    void releaseFrameMemory() override {
+        for (Submap& m : submaps_) m.engine->releaseFrameMemory();
+        world_render_version_ = -1;
+    }
+
     std::vector<LoopClosure> loopClosures() override {
         std::vector<LoopClosure> loops = loops_;
         if (loops.empty()) return loops;
@@ -376,7 +381,7 @@ private:
         for (std::size_t k = 0; k < nearest.size() && k < std::size_t(kLoopSubmapsPerFrame); ++k) {
             const int j = nearest[k].second;
             TrackingState found;
-            if (!submaps_[j].engine->locate(view, found)) continue;
+            if (!locateIn(j, view, found)) continue;
 
             PoseGraphEdge loop;
             loop.from = j;
@@ -397,7 +402,10 @@ private:
             loops_.push_back(report);
 
             // The frame is fused into the older submap at the pose found there, which is tracked from here.
-            if (!withinNeighbourhood(found.T_world_camera, 1.f)) return false;
+            if (!withinNeighbourhood(found.T_world_camera, 1.f)) {
+                submaps_[std::size_t(j)].engine->releaseFrameMemory();
+                return false;
+            }
             submaps_[j].engine->processFrame(frame, &found.T_world_camera);
             switchTo(j);
             return true;
@@ -420,7 +428,7 @@ private:
         for (std::size_t k = 0; k < nearest.size() && k < std::size_t(kLoopSubmapsPerFrame); ++k) {
             const int j = nearest[k].second;
             TrackingState found;
-            if (!submaps_[j].engine->locate(view, found)) continue;
+            if (!locateIn(j, view, found)) continue;
             submaps_[j].engine->processFrame(frame, &found.T_world_camera);
             switchTo(j);
             result.fused = true;
@@ -433,6 +441,15 @@ private:
             last_T_world_camera_ = result.T_world_camera;
             return;
         }
+    }
+
+    // The frame in `view` looked up in submap j (MainEngine::locate), whose tracker and raycast buffers
+    // the search fills: they are released again unless j is to be tracked against.
+    bool locateIn(int j, const View& view, TrackingState& found) {
+        MainEngine& engine = *submaps_[std::size_t(j)].engine;
+        const bool located = engine.locate(view, found);
+        if (!located) engine.releaseFrameMemory();
+        return located;
     }
 
     // Whether a camera at T_submap_camera is within `share` of the distance that starts a new submap.
@@ -460,7 +477,10 @@ private:
         }
     }
 
+    // The submaps not tracked against from here keep their maps and keyframes, not their frame buffers.
     void switchTo(int submap) {
+        for (const int left : {active_, building_})
+            if (left >= 0 && left != submap) submaps_[std::size_t(left)].engine->releaseFrameMemory();
         active_ = submap;
         building_ = -1;
         world_render_version_ = -1;

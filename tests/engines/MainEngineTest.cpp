@@ -134,6 +134,37 @@ TEST_P(MainEngineVoxelTest, AGrowingHashTableMakesTheMapAFixedOneMakes) {
     EXPECT_EQ(0, std::memcmp(va.data(), vb.data(), va.size() * sizeof(Vec3f)));
 }
 
+// Releasing the frame buffers keeps the map and the pose: the render still shows the map from the
+// last pose, and tracking goes on where it was, as closely as an engine that kept them (which
+// predicts the motion, where the released one starts from the last pose).
+TEST_P(MainEngineVoxelTest, AReleasedEngineTracksOnFromItsMap) {
+    MainEngineSettings s = settings();
+    s.index_type = IndexType::Hash;
+    auto released = makeEngine(s), kept = makeEngine(s);
+    for (int k = 0; k < 8; ++k) {
+        const Mat4f pose = pathPose(k);
+        const RGBDFrame frame = test::toRgbdFrame(test::renderView(world(), kCamera, pose), k);
+        const FrameResult a = released->processFrame(frame, k == 0 ? &pose : nullptr);
+        const FrameResult b = kept->processFrame(frame, k == 0 ? &pose : nullptr);
+        ASSERT_NE(a.quality, TrackingQuality::Failed) << k;
+        EXPECT_LT(length(a.T_world_camera.translation() - b.T_world_camera.translation()), 0.001f) << k;
+        if (k == 3) {
+            released->releaseFrameMemory();
+            EXPECT_TRUE(released->view().depth.empty());
+            const RenderState& model = released->renderState();  // raycast again, from the last pose
+            int surface = 0;
+            for (std::size_t i = 0; i < model.points_world.pixelCount(); ++i)
+                surface += model.points_world.host()[i].w > 0.f;
+            EXPECT_GT(surface, int(kCamera.width * kCamera.height) / 4);
+        }
+    }
+    Mesh ma, mb;
+    released->extractMesh(ma);
+    kept->extractMesh(mb);
+    ASSERT_GT(mb.vertices.size(), 1000u);
+    EXPECT_NEAR(double(ma.vertices.size()), double(mb.vertices.size()), 0.02 * double(mb.vertices.size()));
+}
+
 // After a frame that failed tracking (not fused), the view holds that frame's depth, which says
 // nothing about the model's pose: the render of the last fused pose must not start its rays there.
 TEST_P(MainEngineVoxelTest, TheLastRenderIgnoresTheDepthOfAFrameNotFused) {

@@ -239,6 +239,13 @@ public:
     // With submaps: every loop closure found so far, with the pose graph's verdict (waits for a solve in
     // progress). Empty without submaps.
     virtual std::vector<LoopClosure> loopClosures() { return {}; }
+    // Frees what the frame loop keeps between frames: the view's images, the model raycast and renders,
+    // and the engines' per-frame buffers (the tracker's pyramids among them, tens of MB at VGA). The
+    // map, the keyframes and the pose stay. Submaps release the ones they are not tracking against.
+    // The buffers come back with the next frame, and tracking resumes as after a tracker reset: the
+    // next tracked frame is aligned to the model raycast again from the last pose, with no motion
+    // predicted from before the release.
+    virtual void releaseFrameMemory() = 0;
 };
 
 // `base` with the voxel type, index, index settings, voxel size and mu of a map file, so that an engine
