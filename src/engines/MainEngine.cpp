@@ -188,6 +188,18 @@ public:
         raycast_->raycast(scene_, intrinsics, T_world_camera, free_view_);
         raycast_->render(scene_, free_view_, mode, image);
     }
+    void renderFromPose(const Mat4f& T_world_camera, const Intrinsics& intrinsics, RenderMode mode,
+                        Image<Vec4u8>& image, Image<float>& depth_m) override {
+        renderFromPose(T_world_camera, intrinsics, mode, image);
+        if (onGpu()) free_view_.points_world.memory().updateHost();
+        const Mat4f T_camera_world = rigidInverse(T_world_camera);
+        depth_m.resize(intrinsics.size());
+        const Vec4f* points = free_view_.points_world.host();
+        for (std::size_t i = 0; i < depth_m.pixelCount(); ++i)
+            depth_m.host()[i] = points[i].w > 0.f
+                                    ? transformPoint(T_camera_world, Vec3f{points[i].x, points[i].y, points[i].z}).z
+                                    : 0.f;
+    }
 
     void saveMap(const std::string& path) override {
         MapFileInfo pose;

@@ -144,13 +144,87 @@ public:
         world_render_version_ = frames_processed_;
         return world_render_;
     }
+    // Renders show every submap at its pose now, as the map's surface: the last pose's from the depth camera.
     void renderLast(RenderMode mode, Image<Vec4u8>& image) override {
-        submaps_[active_].engine->renderLast(mode, image);
+        renderFromPose(last_T_world_camera_, calib_.depth, mode, image);
     }
     void renderFromPose(const Mat4f& T_world_camera, const Intrinsics& intrinsics, RenderMode mode,
                         Image<Vec4u8>& image) override {
-        const Submap& active = submaps_[active_];
-        active.engine->renderFromPose(rigidInverse(active.T_world_submap) * T_world_camera, intrinsics, mode, image);
+        renderFromPose(T_world_camera, intrinsics, mode, image, render_depth_);
+    }
+    // Each pixel from the submap whose surface is nearest the camera there, among the surfaces no other
+    // submap that saw along the same ray observed better (bestObserved's rule): a submap keeps surface
+    // that later views, fused into another submap, carved away (it saw the place from the edge of its
+    // views only), and that surface must not hide the one behind it. The submaps not tracked against
+    // release the raycast buffers their renders took.
+    void renderFromPose(const Mat4f& T_world_camera, const Intrinsics& intrinsics, RenderMode mode,
+                        Image<Vec4u8>& image, Image<float>& depth_m) override {
+        const std::size_t n = submaps_.size();
+        part_images_.resize(n);
+        part_depths_.resize(n);
+        for (std::size_t j = 0; j < n; ++j) {
+            MainEngine& engine = *submaps_[j].engine;
+            const Mat4f T_submap_camera = rigidInverse(submaps_[j].T_world_submap) * T_world_camera;
+            engine.renderFromPose(T_submap_camera, intrinsics, mode, part_images_[j], part_depths_[j]);
+            if (int(j) != active_ && int(j) != building_) engine.releaseFrameMemory();
+        }
+        const std::size_t pixels = std::size_t(intrinsics.width) * std::size_t(intrinsics.height);
+        // hidden[j][i]: submap j's surface at pixel i is one another submap observed better.
+        std::vector<std::vector<char>> hidden(n, std::vector<char>(pixels, 0));
+        if (n > 1) {
+            std::vector<Vec3f> points;
+            std::vector<std::size_t> at;
+            std::vector<float> own, other;
+            for (std::size_t j = 0; j < n; ++j) {
+                // Submap j's surface points (its own frame) where some other submap's ray met a surface too.
+                points.clear();
+                at.clear();
+                const Mat4f T_submap_camera = rigidInverse(submaps_[j].T_world_submap) * T_world_camera;
+                for (std::size_t i = 0; i < pixels; ++i) {
+                    const float d = part_depths_[j].host()[i];
+                    if (!(d > 0.f)) continue;
+                    bool shared = false;
+                    for (std::size_t k = 0; k < n && !shared; ++k) shared = k != j && part_depths_[k].host()[i] > 0.f;
+                    if (!shared) continue;
+                    const int u = int(i % std::size_t(intrinsics.width)), v = int(i / std::size_t(intrinsics.width));
+                    const Vec3f camera{(u - intrinsics.cx) * d / intrinsics.fx, (v - intrinsics.cy) * d / intrinsics.fy,
+                                       d};
+                    points.push_back(transformPoint(T_submap_camera, camera));
+                    at.push_back(i);
+                }
+                if (points.empty()) continue;
+                submaps_[j].engine->depthWeightsAt(points, own);
+                std::vector<Vec3f> there(points.size());
+                for (std::size_t k = 0; k < n; ++k) {
+                    if (k == j) continue;
+                    const Mat4f T_k_j = rigidInverse(submaps_[k].T_world_submap) * submaps_[j].T_world_submap;
+                    for (std::size_t q = 0; q < points.size(); ++q) there[q] = transformPoint(T_k_j, points[q]);
+                    submaps_[k].engine->depthWeightsAt(there, other);
+                    for (std::size_t q = 0; q < points.size(); ++q)
+                        if (other[q] > own[q] || (other[q] > 0.f && other[q] == own[q] && k < j)) hidden[j][at[q]] = 1;
+                }
+            }
+        }
+        image.resize(intrinsics.size());
+        depth_m.resize(intrinsics.size());
+        for (std::size_t i = 0; i < pixels; ++i) {
+            int best = -1;
+            bool best_hidden = true;
+            for (std::size_t j = 0; j < n; ++j) {
+                const float d = part_depths_[j].host()[i];
+                if (!(d > 0.f)) continue;
+                const bool h = hidden[j][i] != 0;
+                // A surface seen best wins over a hidden one; between alike, the nearer.
+                if (best < 0 || (best_hidden && !h) ||
+                    (best_hidden == h && d < part_depths_[std::size_t(best)].host()[i])) {
+                    best = int(j);
+                    best_hidden = h;
+                }
+            }
+            const std::size_t from = best < 0 ? 0 : std::size_t(best);
+            image.host()[i] = part_images_[from].host()[i];
+            depth_m.host()[i] = best < 0 ? 0.f : part_depths_[from].host()[i];
+        }
     }
 
     void reset() override {
@@ -527,6 +601,9 @@ private:
     Mat4f last_T_world_camera_ = Mat4f::identity();
     mutable TrackingState tracking_;
     mutable RenderState world_render_;
+    std::vector<Image<Vec4u8>> part_images_;  // renderFromPose: each submap's render and depth
+    std::vector<Image<float>> part_depths_;
+    Image<float> render_depth_;
     mutable long long world_render_version_ = -1;
     bool has_source_origin_ = false;
     Mat4f T_source_world_ = Mat4f::identity();

@@ -187,6 +187,10 @@ public:
     // Raycasts and renders the model from any viewpoint (does not disturb the tracking raycast).
     virtual void renderFromPose(const Mat4f& T_world_camera, const Intrinsics& intrinsics, RenderMode mode,
                                 Image<Vec4u8>& image) = 0;
+    // The same, with each pixel's depth along the camera's optical axis in `depth_m` (metres; 0 where
+    // the ray met no surface): renders of several maps are composited by it.
+    virtual void renderFromPose(const Mat4f& T_world_camera, const Intrinsics& intrinsics, RenderMode mode,
+                                Image<Vec4u8>& image, Image<float>& depth_m) = 0;
     // Clears the map, the pose, the keyframes and the source origin (the next map's world is defined
     // anew, by its first frame).
     virtual void reset() = 0;
