@@ -121,4 +121,29 @@ void drawStatusBar(const PanelRect& bar, const std::string& status_line, const s
     drawText(bar.x + margin, top + line_height, keys_line, scale);
 }
 
+void drawSubmapOverlay(const SubmapOverlay& overlay) {
+    glLineWidth(2.f);
+    glBegin(GL_LINES);
+    for (const OverlaySegment& s : overlay.segments) {
+        if (s.loop)
+            glColor3f(1.f, 0.2f, 0.8f);
+        else
+            glColor3f(1.f, 0.75f, 0.1f);
+        glVertex2f(s.from.x, s.from.y);
+        glVertex2f(s.to.x, s.to.y);
+    }
+    glEnd();
+    glLineWidth(1.f);
+    constexpr float kHalf = 4.f;  // an origin's square: 8 pixels across
+    glColor3f(1.f, 0.75f, 0.1f);
+    glBegin(GL_QUADS);
+    for (const Vec2f& o : overlay.origins) {
+        glVertex2f(o.x - kHalf, o.y - kHalf);
+        glVertex2f(o.x + kHalf, o.y - kHalf);
+        glVertex2f(o.x + kHalf, o.y + kHalf);
+        glVertex2f(o.x - kHalf, o.y + kHalf);
+    }
+    glEnd();
+}
+
 }  // namespace voxfuse::viewer

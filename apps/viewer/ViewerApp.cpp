@@ -213,9 +213,13 @@ void ViewerApp::renderModel() {
         model_image_ = Image<Vec4u8>();
     } else if (free_view_.active()) {
         engine_->renderFromPose(free_view_.pose(), engine_->view().calib.depth, mode_, model_image_);
+        model_pose_ = free_view_.pose();
     } else {
         engine_->renderLast(mode_, model_image_);
+        model_pose_ = engine_->trackingState().T_world_camera;
     }
+    submap_poses_ = engine_->submapPoses();
+    loops_ = submap_poses_.empty() ? std::vector<LoopClosure>() : engine_->loopClosures();
     model_texture_.upload(model_image_);
 }
 
@@ -232,6 +236,9 @@ void ViewerApp::drawPanels() {
     glLoadIdentity();
     const PanelLayout layout = layoutPanels(width, height);
     model_texture_.draw(layout.model);
+    if (!submap_poses_.empty() && !model_image_.empty())
+        drawSubmapOverlay(projectSubmaps(submap_poses_, loops_, model_pose_, engine_->view().calib.depth,
+                                         fitAspect(layout.model, model_image_.width(), model_image_.height())));
     depth_texture_.draw(layout.live_depth);
     color_texture_.draw(layout.live_color);
     drawStatusBar(layout.status_bar, statusLine(), kKeysLine);
@@ -389,6 +396,9 @@ std::string ViewerApp::statusLine() const {
                                : std::string("tracking ") + toString(last->quality);
     if (last && engine_->settings().relocalisation.enabled)
         tracking += ", " + std::to_string(last->keyframes) + " keyframes";
+    if (!submap_poses_.empty())
+        tracking +=
+            ", " + std::to_string(submap_poses_.size()) + " submaps, " + std::to_string(loops_.size()) + " loops";
     std::snprintf(text, sizeof text, "frame %d%s%s | %.1f ms/frame | %.1f fps | %s | %s%s | %s%s%s", done,
                   total > 0 ? "/" : "", total > 0 ? std::to_string(total).c_str() : "", engine_ms, fps,
                   tracking.c_str(), modeName(mode_), free_view_.active() ? ", free view" : "",

@@ -11,6 +11,7 @@
 #include "OrbitCamera.h"
 #include "RunRecord.h"
 #include "SequenceRunner.h"
+#include "SubmapOverlay.h"
 #include "TextureImage.h"
 #include "voxfuse/core/Timer.h"
 #include "voxfuse/engines/MainEngine.h"
@@ -76,6 +77,11 @@ private:
 
     TextureImage model_texture_, depth_texture_, color_texture_;
     Image<Vec4u8> model_image_, depth_image_;
+    // With submaps: where they were when the model panel was last rendered, and its camera, for the
+    // overlay of submaps and loops (SubmapOverlay.h).
+    std::vector<SubmapPose> submap_poses_;
+    std::vector<LoopClosure> loops_;
+    Mat4f model_pose_ = Mat4f::identity();
     RenderMode mode_ = RenderMode::Shaded;
     OrbitCamera free_view_;
     bool have_frame_ = false;            // a frame was processed since start or reset: there is a model to show

@@ -340,6 +340,11 @@ public:
         return true;
     }
     int submapCount() const override { return static_cast<int>(submaps_.size()); }
+    std::vector<SubmapPose> submapPoses() const override {
+        std::vector<SubmapPose> poses;
+        for (const Submap& m : submaps_) poses.push_back({m.T_world_submap, m.parent});
+        return poses;
+    }
     float modelCoverage(const View& view) override { return submaps_[active_].engine->modelCoverage(view); }
 
     void releaseFrameMemory() override {

@@ -121,6 +121,15 @@ TEST(SubmapEngineTest, GivenPosesMakeTheSingleMapsSurface) {
     auto submapped = MainEngine::create(settings, calib);
     const Played p = play(*submapped, frames, order, gt, true);
     EXPECT_GE(p.submaps, 3);
+    // Each submap starts where the camera was at its first frame, from the submap active then.
+    const std::vector<SubmapPose> poses = submapped->submapPoses();
+    ASSERT_EQ(int(poses.size()), p.submaps);
+    EXPECT_EQ(poses[0].parent, -1);
+    EXPECT_LT(length(poses[0].T_world_submap.translation()), 1e-6f);
+    for (std::size_t j = 1; j < poses.size(); ++j) {
+        EXPECT_GE(poses[j].parent, 0);
+        EXPECT_LT(poses[j].parent, int(j));
+    }
     ASSERT_EQ(p.optimised.size(), order.size());
     for (std::size_t k = 0; k < p.optimised.size(); ++k) EXPECT_LT(distanceM(p.optimised[k], p.truth[k]), 1e-4f) << k;
 

@@ -162,6 +162,12 @@ struct LoopClosure {
     bool rejected = false;  // dropped by the pose graph as an outlier
 };
 
+// A submap as the map places it now.
+struct SubmapPose {
+    Mat4f T_world_submap = Mat4f::identity();  // the pose graph's last solution the map adopted
+    int parent = -1;  // the submap it started from, joined to it by an odometry edge; -1: the first
+};
+
 class MainEngine {
 public:
     // settings() then holds the settings as used: an automatic block ceiling is replaced by its value.
@@ -226,6 +232,9 @@ public:
     virtual bool optimisedPoses(std::vector<Mat4f>& /*T_world_camera*/) { return false; }
     // The submaps the map holds (1 without submaps).
     virtual int submapCount() const { return 1; }
+    // Every submap's pose now (what tracking and renders use; no wait for a solve in progress). Empty
+    // without submaps.
+    virtual std::vector<SubmapPose> submapPoses() const { return {}; }
     // Loop closure between submaps: the pose in this map of the frame in `view` (converted by an engine
     // of the same settings), found from the keyframes most like it and checked as relocalisation checks
     // its candidates (engines/Relocaliser.h); nothing is fused and the engine's pose stays. Returns
