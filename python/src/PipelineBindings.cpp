@@ -629,6 +629,22 @@ void bindPipeline(py::module_& m) {
             },
             "The submaps the map holds (1 without submaps).")
         .def(
+            "submap_poses",
+            [](Pipeline& p) {
+                const auto busy = p.claim("submap_poses");
+                py::list submaps;
+                for (const SubmapPose& m : p.engine().submapPoses()) {
+                    py::dict d;
+                    d["pose"] = matrixToArray(m.T_world_submap);
+                    d["parent"] = m.parent;
+                    submaps.append(d);
+                }
+                return submaps;
+            },
+            "Every submap as the map places it now (submaps=True; empty without): dicts of pose (the submap-to-world "
+            "pose (4, 4), the pose graph's last solution the map adopted) and parent (the submap it started from, "
+            "joined by odometry; -1 for the first).")
+        .def(
             "loop_closures",
             [](Pipeline& p) {
                 const auto busy = p.claim("loop_closures");

@@ -198,7 +198,7 @@ def test_submaps_expose_their_loops_and_optimised_trajectory(room_source):
             break
     single = voxfuse.Pipeline(room_source.calib)
     single.process_frame(frames[0])
-    assert single.submap_count == 1 and single.loop_closures() == []
+    assert single.submap_count == 1 and single.loop_closures() == [] and single.submap_poses() == []
     np.testing.assert_array_equal(single.optimised_trajectory[1], single.trajectory[1])
 
     try:
@@ -208,6 +208,11 @@ def test_submaps_expose_their_loops_and_optimised_trajectory(room_source):
     for i in list(range(30)) + list(range(28, -1, -1)):  # there and back
         p.process_frame(frames[i])
     assert p.submap_count >= 3
+    submaps = p.submap_poses()
+    assert len(submaps) == p.submap_count and submaps[0]["parent"] == -1
+    np.testing.assert_allclose(submaps[0]["pose"], np.eye(4), atol=1e-6)
+    assert all(0 <= s["parent"] < i for i, s in enumerate(submaps) if i > 0)
+    assert all(s["pose"].shape == (4, 4) for s in submaps)
     loops = p.loop_closures()
     assert len(loops) >= 1
     assert all(not l["rejected"] and l["frame"] >= 30 and l["chi2"] < 22.46 for l in loops)
