@@ -88,7 +88,15 @@ int main(int argc, char** argv) {
     cli.add_flag("--paused", o.paused, "start paused (n steps, space runs)");
     cli.add_option("--size", o.size, "window size WIDTHxHEIGHT (default 1200x640)");
     cli.add_option("--screenshot", o.viewer.screenshot_path,
-                   "save the window as PNG once processing stops (end of source or --frames)");
+                   "save the window as PNG once processing stops (end of source or --frames)")
+        ->check(
+            [](const std::string& path) {
+                // Refused before the run rather than after it: the file is written once processing stops.
+                const std::string ext = std::filesystem::path(path).extension().string();
+                return ext == ".png" || ext == ".PNG" ? std::string()
+                                                      : "the screenshot is a PNG file: its name must end in .png";
+            },
+            "PNG");
     cli.add_flag("--exit", o.viewer.exit_when_done,
                  "quit once processing stops (after --screenshot); for scripts and tests");
     app::addVersionFlag(cli, "voxfuse_viewer");
