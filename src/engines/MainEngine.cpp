@@ -164,6 +164,10 @@ public:
     bool locate(const View& view, TrackingState& found) override {
         return relocalising_.locate({scene_, view, *raycast_, *tracker_, settings_, onGpu()}, found);
     }
+    bool locateNear(const View& view, const Mat4f& T_world_prior, TrackingState& found) override {
+        requireCameraPose(T_world_prior, "locateNear");
+        return relocalising_.locateNear({scene_, view, *raycast_, *tracker_, settings_, onGpu()}, T_world_prior, found);
+    }
 
     const MainEngineSettings& settings() const override { return settings_; }
     // On the GPU the frame's depth and the raycast live there: host copies are made when asked for.

@@ -128,6 +128,15 @@ public:
         return accepted;
     }
 
+    // The frame in c.view refined from a pose it is believed to be near (`T_world_prior`) and checked
+    // as a relocalisation candidate is; no keyframe needed. Nothing is fused; the tracker forgets the pose.
+    bool locateNear(const typename CandidatePoseCheck<TVoxel, TIndex>::Context& c, const Mat4f& T_world_prior,
+                    TrackingState& found) {
+        const bool accepted = candidate_check_.refine(c, T_world_prior, nullptr, T_world_prior, -1.0, found);
+        c.tracker.forgetLastPose();
+        return accepted;
+    }
+
     // A new or loaded map: no keyframes, not lost, no time of a last good pose.
     void forget() {
         if (relocaliser_) relocaliser_->clear();

@@ -7,6 +7,8 @@
 #include "SubmapEngine.h"
 
 #include <algorithm>
+#include <set>
+#include <utility>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -232,6 +234,7 @@ public:
         frame_poses_.clear();
         frames_processed_ = 0;
         loops_.clear();
+        loop_joined_.clear();
         loop_edges_.clear();
         // Solutions of the old map's graph are not the new one's.
         optimiser_.waitIdle();
@@ -447,7 +450,10 @@ private:
         const Mat4f T_world_camera = submaps_[active_].T_world_submap * T_active_camera;
         std::vector<std::pair<float, int>> nearest;
         for (int j = 0; j < static_cast<int>(submaps_.size()); ++j) {
-            if (j == active_ || j == building_) continue;
+            // Not a submap a loop joins to the active one already: their relative pose is measured, and
+            // the camera, just handed over between them, would be handed back and forth. (The submap
+            // one started from is a revisit's: the camera comes back to where it started it.)
+            if (j == active_ || j == building_ || loopJoined(j, active_)) continue;
             // Only where the camera is back well inside the submap's neighbourhood by the poses now: a
             // camera at its edge would start a new submap at once, and one hovering there would switch
             // back and forth.
@@ -460,7 +466,7 @@ private:
         for (std::size_t k = 0; k < nearest.size() && k < std::size_t(kLoopSubmapsPerFrame); ++k) {
             const int j = nearest[k].second;
             TrackingState found;
-            if (!locateIn(j, view, found)) continue;
+            if (!locateIn(j, view, T_world_camera, found)) continue;
 
             PoseGraphEdge loop;
             loop.from = j;
@@ -471,6 +477,7 @@ private:
             loop.loop = true;
             loop_edges_.push_back(graph_.edgeCount());
             graph_.addEdge(loop);
+            loop_joined_.insert({std::min(j, active_), std::max(j, active_)});
             optimiser_.submit(graph_);
             LoopClosure report;
             report.frame = static_cast<int>(frames_processed_) - 1;
@@ -507,7 +514,7 @@ private:
         for (std::size_t k = 0; k < nearest.size() && k < std::size_t(kLoopSubmapsPerFrame); ++k) {
             const int j = nearest[k].second;
             TrackingState found;
-            if (!locateIn(j, view, found)) continue;
+            if (!locateIn(j, view, result.T_world_camera, found)) continue;
             submaps_[j].engine->processFrame(frame, &found.T_world_camera);
             switchTo(j);
             result.fused = true;
@@ -522,14 +529,20 @@ private:
         }
     }
 
-    // The frame in `view` looked up in submap j (MainEngine::locate), whose tracker and raycast buffers
-    // the search fills: they are released again unless j is to be tracked against.
-    bool locateIn(int j, const View& view, TrackingState& found) {
+    // The frame in `view` looked up in submap j (MainEngine::locate, locateNear), whose tracker and
+    // raycast buffers the search fills: they are released again unless j is to be tracked against.
+    // By its keyframes first; then, where the poses say the camera is back in the submap (a revisit
+    // seen from another angle than before: a keyframe is recognised within a few degrees), aligned to the
+    // submap's model from there, `T_world_camera` in the submap's frame.
+    bool locateIn(int j, const View& view, const Mat4f& T_world_camera, TrackingState& found) {
         MainEngine& engine = *submaps_[std::size_t(j)].engine;
-        const bool located = engine.locate(view, found);
+        const Mat4f T_j_camera = rigidInverse(submaps_[std::size_t(j)].T_world_submap) * T_world_camera;
+        const bool located = engine.locate(view, found) || engine.locateNear(view, T_j_camera, found);
         if (!located) engine.releaseFrameMemory();
         return located;
     }
+
+    bool loopJoined(int a, int b) const { return loop_joined_.count({std::min(a, b), std::max(a, b)}) > 0; }
 
     // Whether a camera at T_submap_camera is within `share` of the distance that starts a new submap.
     bool withinNeighbourhood(const Mat4f& T_submap_camera, float share) const {
@@ -600,7 +613,8 @@ private:
     std::vector<FramePose> frame_poses_;  // of the frames with a pose (not the lost ones)
     long long frames_processed_ = 0;      // since the map began
     std::vector<LoopClosure> loops_;
-    std::vector<int> loop_edges_;  // each loop's edge in graph_
+    std::vector<int> loop_edges_;                // each loop's edge in graph_
+    std::set<std::pair<int, int>> loop_joined_;  // submap pairs a loop edge joins, (lower, higher)
     int solutions_adopted_ = 0;
     int solutions_before_map_ = 0;  // solved before the last reset()
     Mat4f last_T_world_camera_ = Mat4f::identity();

@@ -165,6 +165,43 @@ TEST_P(MainEngineVoxelTest, AReleasedEngineTracksOnFromItsMap) {
     EXPECT_NEAR(double(ma.vertices.size()), double(mb.vertices.size()), 0.02 * double(mb.vertices.size()));
 }
 
+// A revisit seen from a pose only roughly known (a few centimetres and degrees off, as a loop's prior
+// from drifting odometry) is aligned to the map and accepted; from a prior far off it is refused,
+// and the engine's own pose stays either way.
+TEST_P(MainEngineVoxelTest, LocateNearAlignsAFrameFromARoughPoseAndRefusesAWrongOne) {
+    MainEngineSettings s = settings();
+    auto engine = makeEngine(s);
+    for (int k = 0; k < 4; ++k) {
+        const Mat4f pose = pathPose(k);
+        engine->processFrame(test::toRgbdFrame(test::renderView(world(), kCamera, pose), k), &pose);
+    }
+    const Mat4f engine_pose = engine->trackingState().T_world_camera;
+    // A view of frame 2's place, converted by an engine of the same settings.
+    auto converter = makeEngine(s);
+    const Mat4f truth = pathPose(2);
+    converter->processFrame(test::toRgbdFrame(test::renderView(world(), kCamera, truth), 2), &truth);
+    const View& view = converter->view();
+
+    Mat4f rough = truth;
+    rough.m[3] += 0.02f;  // 2 cm off along x, and turned 3 degrees about the camera's y axis
+    const float c = std::cos(3.f * float(M_PI) / 180.f), sn = std::sin(3.f * float(M_PI) / 180.f);
+    Mat4f turn = Mat4f::identity();
+    turn.m[0] = c;
+    turn.m[2] = sn;
+    turn.m[8] = -sn;
+    turn.m[10] = c;
+    rough = rough * turn;
+    TrackingState found;
+    ASSERT_TRUE(engine->locateNear(view, rough, found));
+    EXPECT_LT(length(found.T_world_camera.translation() - truth.translation()), 0.003f);
+
+    Mat4f wrong = truth;
+    wrong.m[3] += 0.5f;  // half a metre off: the model seen from there explains nothing of the frame
+    TrackingState refused;
+    EXPECT_FALSE(engine->locateNear(view, wrong, refused));
+    EXPECT_EQ(0, std::memcmp(engine->trackingState().T_world_camera.m, engine_pose.m, sizeof(engine_pose.m)));
+}
+
 // After a frame that failed tracking (not fused), the view holds that frame's depth, which says
 // nothing about the model's pose: the render of the last fused pose must not start its rays there.
 TEST_P(MainEngineVoxelTest, TheLastRenderIgnoresTheDepthOfAFrameNotFused) {

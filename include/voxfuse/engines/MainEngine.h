@@ -241,6 +241,12 @@ public:
     // whether one passed, with the tracker's verdict and pose (this map's world) in `found`. False
     // without relocalisation (it keeps the keyframes).
     virtual bool locate(const View& /*view*/, TrackingState& /*found*/) { return false; }
+    // The same from a pose the frame is believed to be near (this map's world), without keyframes: the
+    // frame is aligned to the model raycast from `T_world_prior` and accepted as a relocalisation
+    // candidate is. For revisits seen from another angle, which keyframes do not recognise.
+    virtual bool locateNear(const View& /*view*/, const Mat4f& /*T_world_prior*/, TrackingState& /*found*/) {
+        return false;
+    }
     // How much of a frame the map would explain: the share of `view`'s depth pixels (converted by an
     // engine of the same settings; sampled at the tracking raycast's resolution) where the model this
     // engine would track the next frame against (its raycast from the last pose) has a surface.
