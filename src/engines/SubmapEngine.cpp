@@ -529,11 +529,11 @@ private:
         }
     }
 
-    // The frame in `view` looked up in submap j (MainEngine::locate, locateNear), whose tracker and
-    // raycast buffers the search fills: they are released again unless j is to be tracked against.
-    // By its keyframes first; then, where the poses say the camera is back in the submap (a revisit
-    // seen from another angle than before: a keyframe is recognised within a few degrees), aligned to the
-    // submap's model from there, `T_world_camera` in the submap's frame.
+    // The frame in `view` looked up in submap j: by its keyframes first (MainEngine::locate); then, as a
+    // revisit seen from another angle (a keyframe is recognised within a few degrees of its view),
+    // aligned to the submap's model from where the poses put the camera, `T_world_camera` in the
+    // submap's frame (locateNear). The search fills j's tracker and raycast buffers: they are released
+    // again unless j is to be tracked against.
     bool locateIn(int j, const View& view, const Mat4f& T_world_camera, TrackingState& found) {
         MainEngine& engine = *submaps_[std::size_t(j)].engine;
         const Mat4f T_j_camera = rigidInverse(submaps_[std::size_t(j)].T_world_submap) * T_world_camera;
