@@ -45,15 +45,10 @@ public:
     MainEngineT(const MainEngineSettings& settings, const RGBDCalib& calib, TIndex index)
         : settings_(settings),
           scene_(settings.scene, std::move(index), settings.device),
-          low_level_(makeLowLevelEngine(settings.device)),
-          allocation_(makeAllocationEngine<TVoxel, TIndex>(settings.device)),
-          integration_(makeIntegrationEngine<TVoxel, TIndex>(settings.device)),
-          raycast_(makeRaycastEngine<TVoxel, TIndex>(settings.device)),
-          tracker_(makeTracker(settings.tracker, settings.device)),
-          meshing_(makeMeshingEngine<TVoxel, TIndex>(settings.device)),
           relocalising_(settings, calib),
           swapping_(settings),
           clock_(settings.device == Device::CUDA) {
+        makeEngines();
         view_.calib = calib;
     }
 
@@ -151,14 +146,7 @@ public:
         display_version_ = -1;
         model_depth_view_ = -1;
         model_released_ = true;
-        // The engines are stateless but for their buffers: new ones start without.
-        low_level_ = makeLowLevelEngine(settings_.device);
-        allocation_ = makeAllocationEngine<TVoxel, TIndex>(settings_.device);
-        integration_ = makeIntegrationEngine<TVoxel, TIndex>(settings_.device);
-        raycast_ = makeRaycastEngine<TVoxel, TIndex>(settings_.device);
-        tracker_ = makeTracker(settings_.tracker, settings_.device);
-        meshing_ = makeMeshingEngine<TVoxel, TIndex>(settings_.device);
-        host_meshing_.reset();
+        makeEngines();  // the engines are stateless but for their buffers: new ones start without
     }
 
     bool locate(const View& view, TrackingState& found) override {
@@ -341,6 +329,17 @@ private:
             display_version_ = model_version_;
         }
         return display_;
+    }
+
+    // The stage engines on the settings' device (again after releaseFrameMemory()).
+    void makeEngines() {
+        low_level_ = makeLowLevelEngine(settings_.device);
+        allocation_ = makeAllocationEngine<TVoxel, TIndex>(settings_.device);
+        integration_ = makeIntegrationEngine<TVoxel, TIndex>(settings_.device);
+        raycast_ = makeRaycastEngine<TVoxel, TIndex>(settings_.device);
+        tracker_ = makeTracker(settings_.tracker, settings_.device);
+        meshing_ = makeMeshingEngine<TVoxel, TIndex>(settings_.device);
+        host_meshing_.reset();
     }
 
     typename RelocalisingTracking<TVoxel, TIndex>::Context trackingContext() {
