@@ -171,40 +171,32 @@ public:
             if (int(j) != active_ && int(j) != building_) engine.releaseFrameMemory();
         }
         const std::size_t pixels = std::size_t(intrinsics.width) * std::size_t(intrinsics.height);
-        // hidden[j][i]: submap j's surface at pixel i is one another submap observed better.
+        // hidden[j][i]: submap j's surface at pixel i is one another submap observed better. Asked only
+        // where another submap's ray met a surface too: elsewhere there is nothing to choose.
         std::vector<std::vector<char>> hidden(n, std::vector<char>(pixels, 0));
         if (n > 1) {
-            std::vector<Vec3f> points;
+            std::vector<Mat4f> T_world_submaps;
+            for (const Submap& m : submaps_) T_world_submaps.push_back(m.T_world_submap);
+            std::vector<Vec3f> points;  // submap j's surface points, its frame
             std::vector<std::size_t> at;
-            std::vector<float> own, other;
             for (std::size_t j = 0; j < n; ++j) {
-                // Submap j's surface points (its own frame) where some other submap's ray met a surface too.
                 points.clear();
                 at.clear();
-                const Mat4f T_submap_camera = rigidInverse(submaps_[j].T_world_submap) * T_world_camera;
+                const Mat4f T_submap_camera = rigidInverse(T_world_submaps[j]) * T_world_camera;
                 for (std::size_t i = 0; i < pixels; ++i) {
                     const float d = part_depths_[j].host()[i];
                     if (!(d > 0.f)) continue;
                     bool shared = false;
                     for (std::size_t k = 0; k < n && !shared; ++k) shared = k != j && part_depths_[k].host()[i] > 0.f;
                     if (!shared) continue;
-                    const int u = int(i % std::size_t(intrinsics.width)), v = int(i / std::size_t(intrinsics.width));
-                    const Vec3f camera{(u - intrinsics.cx) * d / intrinsics.fx, (v - intrinsics.cy) * d / intrinsics.fy,
-                                       d};
-                    points.push_back(transformPoint(T_submap_camera, camera));
+                    const float u = float(i % std::size_t(intrinsics.width)),
+                                v = float(i / std::size_t(intrinsics.width));
+                    points.push_back(transformPoint(T_submap_camera, intrinsics.unproject(u, v, d)));
                     at.push_back(i);
                 }
                 if (points.empty()) continue;
-                submaps_[j].engine->depthWeightsAt(points, own);
-                std::vector<Vec3f> there(points.size());
-                for (std::size_t k = 0; k < n; ++k) {
-                    if (k == j) continue;
-                    const Mat4f T_k_j = rigidInverse(submaps_[k].T_world_submap) * submaps_[j].T_world_submap;
-                    for (std::size_t q = 0; q < points.size(); ++q) there[q] = transformPoint(T_k_j, points[q]);
-                    submaps_[k].engine->depthWeightsAt(there, other);
-                    for (std::size_t q = 0; q < points.size(); ++q)
-                        if (other[q] > own[q] || (other[q] > 0.f && other[q] == own[q] && k < j)) hidden[j][at[q]] = 1;
-                }
+                const std::vector<char> keep = bestObserved(int(j), points, T_world_submaps);
+                for (std::size_t q = 0; q < points.size(); ++q) hidden[j][at[q]] = !keep[q];
             }
         }
         image.resize(intrinsics.size());
