@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 #include <unordered_set>
 
 #include "voxfuse/core/Error.h"
@@ -108,21 +109,42 @@ double shareNear(const std::vector<Vec3f>& points, const std::vector<Vec3f>& sur
     return points.empty() ? 0.0 : double(near) / double(points.size());
 }
 
-TEST(SubmapEngineTest, GivenPosesMakeTheSingleMapsSurface) {
-    if (!poseGraphAvailable()) GTEST_SKIP() << "built without Ceres: no submaps";
+// The bundled room's first 40 frames fused at their ground-truth poses into submaps, a new one every
+// 0.15 m (the densest overlaps), and into the single map.
+struct GivenPoseMaps {
+    std::unique_ptr<MainEngine> submapped, one;
+    Played p;  // the submapped engine's
+    MainEngineSettings single;
     RGBDCalib calib;
+    std::size_t frames = 0;
+};
+GivenPoseMaps givenPoseMaps() {
+    GivenPoseMaps m;
     std::vector<TimedPose> gt;
-    const std::vector<RGBDFrame> frames = bundledFrames(40, calib, gt);
+    const std::vector<RGBDFrame> frames = bundledFrames(40, m.calib, gt);
     std::vector<int> order;
     for (int i = 0; i < int(frames.size()); ++i) order.push_back(i);
-
+    m.frames = order.size();
     MainEngineSettings settings = submapSettings(0.15f);
     settings.submaps.overlap_frames = 5;  // given poses: the new submap takes over after these
-    auto submapped = MainEngine::create(settings, calib);
-    const Played p = play(*submapped, frames, order, gt, true);
+    m.submapped = MainEngine::create(settings, m.calib);
+    m.p = play(*m.submapped, frames, order, gt, true);
+    m.single = settings;
+    m.single.submaps.enabled = false;
+    m.one = MainEngine::create(m.single, m.calib);
+    play(*m.one, frames, order, gt, true);
+    return m;
+}
+
+TEST(SubmapEngineTest, GivenPosesMakeTheSingleMapsSurface) {
+    if (!poseGraphAvailable()) GTEST_SKIP() << "built without Ceres: no submaps";
+    const GivenPoseMaps m = givenPoseMaps();
+    MainEngine& submapped = *m.submapped;
+    MainEngine& one = *m.one;
+    const Played& p = m.p;
     EXPECT_GE(p.submaps, 3);
     // Each submap starts where the camera was at its first frame, from the submap active then.
-    const std::vector<SubmapPose> poses = submapped->submapPoses();
+    const std::vector<SubmapPose> poses = submapped.submapPoses();
     ASSERT_EQ(int(poses.size()), p.submaps);
     EXPECT_EQ(poses[0].parent, -1);
     EXPECT_LT(length(poses[0].T_world_submap.translation()), 1e-6f);
@@ -130,23 +152,18 @@ TEST(SubmapEngineTest, GivenPosesMakeTheSingleMapsSurface) {
         EXPECT_GE(poses[j].parent, 0);
         EXPECT_LT(poses[j].parent, int(j));
     }
-    ASSERT_EQ(p.optimised.size(), order.size());
+    ASSERT_EQ(p.optimised.size(), m.frames);
     for (std::size_t k = 0; k < p.optimised.size(); ++k) EXPECT_LT(distanceM(p.optimised[k], p.truth[k]), 1e-4f) << k;
 
-    MainEngineSettings single = submapSettings(0.15f);
-    single.submaps.enabled = false;
-    auto one = MainEngine::create(single, calib);
-    play(*one, frames, order, gt, true);
-
     Mesh union_mesh, reference;
-    submapped->extractMesh(union_mesh);
-    one->extractMesh(reference);
+    submapped.extractMesh(union_mesh);
+    one.extractMesh(reference);
     ASSERT_GT(reference.vertices.size(), 1000u);
     EXPECT_TRUE(inconsistency(union_mesh).empty()) << inconsistency(union_mesh);
     // The union's vertices lie within a voxel of the single map's surface: the submaps sit where their
     // poses put them (one misplaced by a voxel would leave most of its vertices out). Not all of them:
     // at the edge of its views a submap keeps surface that later views carved from the single map.
-    const float cell_m = single.scene.voxel_size_m;
+    const float cell_m = m.single.scene.voxel_size_m;
     EXPECT_GT(shareNear(union_mesh.vertices, reference.vertices, cell_m), 0.97);
     // Where submaps overlap, the union holds one surface, the best observed: about as many vertices as
     // the single map (1.09 times; each submap's surface appended held 2.7 times as many), and none of
@@ -154,8 +171,8 @@ TEST(SubmapEngineTest, GivenPosesMakeTheSingleMapsSurface) {
     EXPECT_LT(double(union_mesh.vertices.size()), 1.15 * double(reference.vertices.size()));
     EXPECT_GT(shareNear(reference.vertices, union_mesh.vertices, cell_m), 0.97);
     PointCloud union_cloud, reference_cloud;
-    submapped->extractPointCloud(union_cloud);
-    one->extractPointCloud(reference_cloud);
+    submapped.extractPointCloud(union_cloud);
+    one.extractPointCloud(reference_cloud);
     EXPECT_LT(double(union_cloud.size()), 1.15 * double(reference_cloud.size()));
     EXPECT_GT(shareNear(reference_cloud.points, union_cloud.points, cell_m), 0.97);
 }
@@ -165,33 +182,22 @@ TEST(SubmapEngineTest, GivenPosesMakeTheSingleMapsSurface) {
 // at its depth.
 TEST(SubmapEngineTest, RendersShowEverySubmapAsTheSingleMapShowsItsSurface) {
     if (!poseGraphAvailable()) GTEST_SKIP() << "built without Ceres: no submaps";
-    RGBDCalib calib;
-    std::vector<TimedPose> gt;
-    const std::vector<RGBDFrame> frames = bundledFrames(40, calib, gt);
-    std::vector<int> order;
-    for (int i = 0; i < int(frames.size()); ++i) order.push_back(i);
-    MainEngineSettings settings = submapSettings(0.15f);
-    settings.submaps.overlap_frames = 5;
-    auto submapped = MainEngine::create(settings, calib);
-    const Played p = play(*submapped, frames, order, gt, true);
+    const GivenPoseMaps m = givenPoseMaps();
+    const Played& p = m.p;
     ASSERT_GE(p.submaps, 3);
-    MainEngineSettings single = settings;
-    single.submaps.enabled = false;
-    auto one = MainEngine::create(single, calib);
-    play(*one, frames, order, gt, true);
 
     for (const Mat4f& pose : {p.truth.front(), p.truth.back()}) {
         Image<Vec4u8> a, b;
         Image<float> depth_a, depth_b;
-        submapped->renderFromPose(pose, calib.depth, RenderMode::Shaded, a, depth_a);
-        one->renderFromPose(pose, calib.depth, RenderMode::Shaded, b, depth_b);
+        m.submapped->renderFromPose(pose, m.calib.depth, RenderMode::Shaded, a, depth_a);
+        m.one->renderFromPose(pose, m.calib.depth, RenderMode::Shaded, b, depth_b);
         ASSERT_EQ(depth_a.size(), depth_b.size());
         std::size_t surface = 0, only_one = 0, deeper = 0;
         for (std::size_t i = 0; i < depth_a.pixelCount(); ++i) {
             const float da = depth_a.host()[i], db = depth_b.host()[i];
             surface += db > 0.f;
             only_one += (da > 0.f) != (db > 0.f);
-            deeper += da > 0.f && db > 0.f && std::abs(da - db) > 2.f * single.scene.voxel_size_m;
+            deeper += da > 0.f && db > 0.f && std::abs(da - db) > 2.f * m.single.scene.voxel_size_m;
         }
         ASSERT_GT(surface, depth_b.pixelCount() / 2);
         // Measured 0.2-0.4% and 0.4-0.5%: silhouettes a voxel apart. Nearest-first without the rule
