@@ -26,6 +26,14 @@ struct PngContext {
     char message[256] = {};
 };
 
+// PNG's 16-bit samples are big-endian; DecodedImage's are the host's.
+bool hostIsLittleEndian() {
+    const std::uint16_t probe = 1;
+    std::uint8_t first_byte;
+    std::memcpy(&first_byte, &probe, 1);
+    return first_byte == 1;
+}
+
 PngContext& contextOf(png_structp png) { return *static_cast<PngContext*>(png_get_error_ptr(png)); }
 
 void onError(png_structp png, png_const_charp message) {
@@ -74,12 +82,7 @@ bool readPng(png_structp png, png_infop info, PngContext& context, DecodedImage&
     } else if (png_get_valid(png, info, PNG_INFO_tRNS)) {
         png_set_tRNS_to_alpha(png);
     }
-    if (bit_depth == 16) {
-        const std::uint16_t probe = 1;
-        std::uint8_t first_byte;
-        std::memcpy(&first_byte, &probe, 1);
-        if (first_byte == 1) png_set_swap(png);  // PNG is big-endian, this host is not
-    }
+    if (bit_depth == 16 && hostIsLittleEndian()) png_set_swap(png);
     png_set_interlace_handling(png);
     png_read_update_info(png, info);
     const Vec2i size{int(png_get_image_width(png, info)), int(png_get_image_height(png, info))};
@@ -108,12 +111,7 @@ bool writePng(png_structp png, png_infop info, PngContext& context, Vec2i size, 
     png_set_compression_level(png, Z_BEST_SPEED);
     png_set_compression_strategy(png, Z_RLE);
     png_write_info(png, info);
-    if (bytes_per_sample == 2) {
-        const std::uint16_t probe = 1;
-        std::uint8_t first_byte;
-        std::memcpy(&first_byte, &probe, 1);
-        if (first_byte == 1) png_set_swap(png);
-    }
+    if (bytes_per_sample == 2 && hostIsLittleEndian()) png_set_swap(png);
     png_write_image(png, rows.data());
     png_write_end(png, nullptr);
     return true;
