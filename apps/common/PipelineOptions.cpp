@@ -43,8 +43,6 @@ void addMapOptions(CLI::App& cli, PipelineOptions& o) {
 void checkPipelineOptions(const PipelineOptions& o) {
     auto refuse = [](const std::string& why) { throw ConfigError(why); };
     checkEngineOptions(o, !o.load_map.empty());
-    if (o.settings.submaps && !o.load_map.empty())
-        refuse("--load-map continues a single map: maps of submaps are not supported yet (give --submaps off)");
     if (!o.device_uri.empty() && !o.live) refuse("--device-uri picks a live camera: it needs --live");
     if (o.live && (!o.source.empty() || !o.source_options.depth_pattern.empty()))
         refuse("--live reads a camera: give no SOURCE, --rgb or --depth with it");
@@ -71,6 +69,8 @@ void adoptMapSettings(PipelineOptions& o, const MapFileInfo& map) {
     if (o.wasGiven("--max-blocks") && !map.hash) conflict("--max-blocks", "the dense index");
     for (const char* option : {"--hash-buckets", "--hash-excess", "--volume-size", "--volume-offset"})
         if (o.wasGiven(option)) conflict(option, "its own index settings");
+    if (o.wasGiven("--submaps") && !s.submaps && map.submap_count > 0)
+        conflict("--submaps", std::to_string(map.submap_count) + " submaps");
     const int max_blocks = s.max_blocks;
     o.map = map;
     s.adopt(map);

@@ -80,8 +80,8 @@ int main(int argc, char** argv) {
     cli.add_option("--out", o.viewer.out_dir, "folder for the mesh (m), the map (s) and screenshot (p)")
         ->capture_default_str();
     cli.add_option("--load-map", o.pipeline.load_map,
-                   "continue the map in this file (.vfm; see voxfuse --save-map and key s): its voxel type, index and "
-                   "voxel size are used")
+                   "continue the map in this file (.vfm; see voxfuse --save-map and key s): its voxel type, index, "
+                   "voxel size and submaps are used; the first frame is found in it")
         ->check(CLI::ExistingFile);
     cli.add_option("--frames", o.viewer.max_frames, "stop processing after N frames (0 = all)")
         ->check(app::nonNegativeInt());

@@ -147,8 +147,6 @@ void writeRunFiles(app::RunRecord& record, app::OutputFolder& out, bool with_tim
 void checkCombinations(const CliOptions& o) {
     const app::PipelineOptions& p = o.pipeline;
     app::checkPipelineOptions(p);
-    if (!o.save_map.empty() && p.settings.submaps)
-        throw ConfigError("--save-map writes a single map: maps of submaps are not supported yet (give --submaps off)");
     if (!p.load_map.empty() && o.max_frames == 0) {
         // Only the map is read: whatever reads, tracks or fuses frames would be ignored.
         for (const char* option : {"source",
@@ -366,9 +364,9 @@ int main(int argc, char** argv) {
     cli.add_option("--save-map", o.save_map,
                    "write the map to this file (.vfm) at the end, to continue or export it later");
     cli.add_option("--load-map", o.pipeline.load_map,
-                   "continue the map in this file (.vfm): its voxel type, index and voxel size are used, tracking "
-                   "resumes where it was "
-                   "saved; with --frames 0 no SOURCE is read")
+                   "continue the map in this file (.vfm): its voxel type, index, voxel size and submaps are used; "
+                   "the first frame is found in it from where it was saved or by its keyframes (a new recording "
+                   "of the place may start anywhere in it); with --frames 0 no SOURCE is read")
         ->check(CLI::ExistingFile);
     cli.add_option("--render-every", o.render_every, "write render_XXXXXX.png every N frames (0 = only the last)")
         ->capture_default_str()

@@ -190,7 +190,7 @@ def test_reset_forgets_the_ground_truth_origin(room_frames):
     assert np.allclose(p.pose, np.eye(4), atol=1e-6), p.pose
 
 
-def test_submaps_expose_their_loops_and_optimised_trajectory(room_source):
+def test_submaps_expose_their_loops_and_optimised_trajectory(room_source, tmp_path):
     frames = []
     for frame in room_source:
         frames.append(frame)
@@ -221,3 +221,12 @@ def test_submaps_expose_their_loops_and_optimised_trajectory(room_source):
     np.testing.assert_array_equal(t, t_opt)
     assert optimised.shape == tracked.shape == (59, 4, 4)
     assert np.abs(optimised[:, :3, 3] - tracked[:, :3, 3]).max() < 0.01
+
+    # The map of submaps saves and loads whole: its submaps at their poses, submaps on.
+    path = str(tmp_path / "submaps.vfm")
+    p.save_map(path)
+    q = voxfuse.Pipeline.from_map(path, room_source.calib)
+    assert q.settings.submaps and q.submap_count == p.submap_count
+    for a, b in zip(p.submap_poses(), q.submap_poses()):
+        assert a["parent"] == b["parent"]
+        np.testing.assert_array_equal(a["pose"], b["pose"])

@@ -42,6 +42,19 @@ bool KeyframeDatabase::addIfNovel(const FernCode& code, const Mat4f& T_world_cam
     return true;
 }
 
+std::vector<Keyframe> KeyframeDatabase::oldestFirst() const {
+    std::vector<Keyframe> all(keyframes_.begin() + oldest_, keyframes_.end());
+    all.insert(all.end(), keyframes_.begin(), keyframes_.begin() + oldest_);
+    return all;
+}
+
+void KeyframeDatabase::assign(std::vector<Keyframe> oldest_first) {
+    const std::size_t drop = oldest_first.size() > std::size_t(capacity_) ? oldest_first.size() - capacity_ : 0;
+    keyframes_.assign(std::make_move_iterator(oldest_first.begin() + std::ptrdiff_t(drop)),
+                      std::make_move_iterator(oldest_first.end()));
+    oldest_ = 0;
+}
+
 void KeyframeDatabase::clear() {
     keyframes_.clear();
     oldest_ = 0;

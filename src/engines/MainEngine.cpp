@@ -194,22 +194,37 @@ public:
     }
 
     void saveMap(const std::string& path) override {
+        MapFileWriter file(path);
+        saveMapInto(file);
+        file.commit();
+    }
+    void saveMapInto(MapFileWriter& file) override {
         MapFileInfo pose;
         pose.T_world_camera = tracking_.T_world_camera;
         pose.has_origin = has_source_origin_;
         pose.T_source_world = T_source_world_;
         pose.camera = view_.calib.depth;
+        const MapKeyframes keyframes = relocalising_.savedKeyframes();
         if (onGpu())
-            writeMapFile(path, scene_.copyTo(Device::CPU), pose, swapping_.cache());
+            writeMap(file, scene_.copyTo(Device::CPU), pose, swapping_.cache(), &keyframes);
         else
-            writeMapFile(path, scene_, pose, swapping_.cache());
+            writeMap(file, scene_, pose, swapping_.cache(), &keyframes);
     }
 
     MapFileInfo loadMap(const std::string& path) override {
+        MapFileReader file(path);
+        if (file.holdsSubmaps())
+            throw IoError(path, "holds a map of submaps: load it with submaps on (MainEngineSettings::submaps)");
+        const MapFileInfo info = loadMapFrom(file);
+        file.requireEnd();
+        return info;
+    }
+    MapFileInfo loadMapFrom(MapFileReader& file) override {
         // Read into a new host scene first: a file that fails leaves the engine as it was.
         Scene<TVoxel, TIndex> loaded(settings_.scene, newIndex(), Device::CPU);
         std::unique_ptr<GlobalCache> cache = swapping_.newCache();
-        const MapFileInfo info = readMapFile(path, loaded, cache.get());
+        MapKeyframes keyframes;
+        const MapFileInfo info = readMap(file, loaded, cache.get(), &keyframes);
         swapping_.setCache(std::move(cache));
         scene_ = onGpu() ? loaded.copyTo(Device::CUDA) : std::move(loaded);
         if constexpr (std::is_same<TIndex, VoxelBlockHash>::value)
@@ -218,7 +233,7 @@ public:
             allocation_stats_ = AllocationStats();
         frames_fused_ = 0;
         tracker_->reset();
-        relocalising_.forget();
+        relocalising_.mapLoaded(keyframes);
         tracking_ = TrackingState();
         tracking_.T_world_camera = info.T_world_camera;
         map_started_ = true;

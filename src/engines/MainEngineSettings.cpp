@@ -189,6 +189,7 @@ MainEngineSettings settingsForMap(const MapFileInfo& info, MainEngineSettings ba
     }
     base.scene.voxel_size_m = info.scene.voxel_size_m;
     base.scene.mu_m = info.scene.mu_m;
+    if (info.submap_count > 0) base.submaps.enabled = true;  // a single map loads with submaps on or off
     return base;
 }
 

@@ -309,6 +309,7 @@ PipelineSettings PipelineSettings::of(const MainEngineSettings& e) {
 
 void PipelineSettings::adopt(const MapFileInfo& info) {
     voxel = info.voxel_type;
+    if (info.submap_count > 0) submaps = true;  // a single map loads either way
     index = info.hash ? "hash" : "dense";
     voxel_size = info.scene.voxel_size_m;
     mu = info.scene.mu_m;

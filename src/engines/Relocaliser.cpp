@@ -169,8 +169,35 @@ Relocaliser::Relocaliser(const RelocalisationSettings& settings, Vec2i frame_siz
 Relocaliser::~Relocaliser() = default;
 
 FernCode Relocaliser::encode(const View& view) {
-    if (!encoder_) encoder_ = std::make_unique<FernEncoder>(settings_.ferns, frame_size_, !view.rgb.empty(), device_);
+    if (!encoder_) {
+        encoder_ = std::make_unique<FernEncoder>(settings_.ferns, frame_size_, !view.rgb.empty(), device_);
+        if (adopted_intensity_ >= 0 && adopted_intensity_ != int(encoder_->withIntensity())) database_.clear();
+        adopted_intensity_ = -1;
+    }
     return encoder_->encode(view.depth, view.rgb);
+}
+
+MapKeyframes Relocaliser::savedKeyframes() const {
+    MapKeyframes saved;
+    saved.ferns = settings_.ferns;
+    saved.frame_size = frame_size_;
+    saved.with_intensity = encoder_ ? encoder_->withIntensity() : adopted_intensity_ == 1;
+    saved.keyframes = database_.oldestFirst();
+    return saved;
+}
+
+bool Relocaliser::adoptKeyframes(const MapKeyframes& saved) {
+    const FernSettings &a = saved.ferns, &b = settings_.ferns;
+    const bool alike = a.fern_count == b.fern_count && a.tests_per_fern == b.tests_per_fern &&
+                       a.image_width == b.image_width && a.min_depth_m == b.min_depth_m &&
+                       a.max_depth_m == b.max_depth_m && a.use_intensity == b.use_intensity && a.seed == b.seed &&
+                       saved.frame_size == frame_size_ &&
+                       (!encoder_ || encoder_->withIntensity() == saved.with_intensity);
+    database_.clear();
+    if (!alike || saved.keyframes.empty()) return false;
+    database_.assign(saved.keyframes);
+    if (!encoder_) adopted_intensity_ = saved.with_intensity ? 1 : 0;
+    return true;
 }
 
 bool Relocaliser::looksLost(const TrackingState& tracked) const {
@@ -197,6 +224,7 @@ std::vector<KeyframeMatch> Relocaliser::lookUp(const View& view) {
 
 void Relocaliser::clear() {
     database_.clear();
+    adopted_intensity_ = -1;
     forgetRecentFrames();
 }
 

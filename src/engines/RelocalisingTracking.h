@@ -137,7 +137,18 @@ public:
         return accepted;
     }
 
-    // A new or loaded map: no keyframes, not lost, no time of a last good pose.
+    // A loaded map: its saved keyframes (those whose codes compare with this relocaliser's), and the
+    // next frame is looked up as a lost one is, from the resume pose and then the keyframes: it may be
+    // a new recording that starts anywhere in the map, and it must pass relocalisation's check.
+    void mapLoaded(const MapKeyframes& saved) {
+        forget();
+        if (!relocaliser_) return;
+        relocaliser_->adoptKeyframes(saved);
+        lost_ = true;
+    }
+    MapKeyframes savedKeyframes() const { return relocaliser_ ? relocaliser_->savedKeyframes() : MapKeyframes(); }
+
+    // A new map: no keyframes, not lost, no time of a last good pose.
     void forget() {
         if (relocaliser_) relocaliser_->clear();
         lost_ = false;

@@ -15,6 +15,7 @@
 
 #include "voxfuse/core/Error.h"
 #include "voxfuse/core/Timer.h"
+#include "voxfuse/io/SubmapMapFile.h"
 #include "voxfuse/mapping/PoseGraph.h"
 
 namespace voxfuse {
@@ -88,10 +89,11 @@ public:
             result.total_ms = total.elapsedMs();
             return result;
         }
+        placing_ = false;
         frame_poses_.push_back({active_, T_submap_camera});
         // A frame the active submap took as a keyframe shows what it had not seen: perhaps a place an
         // older submap has.
-        const bool novel = result.keyframes > active.keyframes;
+        const bool novel = active.keyframes >= 0 && result.keyframes > active.keyframes;
         active.keyframes = result.keyframes;
         if (result.fused && novel && !T_world_camera_given) {
             const Timer search;
@@ -234,6 +236,7 @@ public:
         solutions_adopted_ = solutions_before_map_ = optimiser_.latest(old);
         has_source_origin_ = false;
         T_source_world_ = Mat4f::identity();
+        placing_ = false;
         startMap();
     }
 
@@ -312,11 +315,95 @@ public:
         }
     }
 
+    // The submaps at their poses as the pose graph last solved them (a solve in progress is waited
+    // for), the graph's edges, and each submap's map with its keyframes.
     void saveMap(const std::string& path) override {
-        throw ConfigError(path + ": map files of submaps are not supported yet (run with --submaps off)");
+        optimiser_.waitIdle();
+        adoptSolution();
+        SubmapMapInfo info;
+        info.map.voxel_type = toString(settings_.voxel_type);
+        info.map.hash = true;
+        info.map.hash_settings = settings_.hash;
+        info.map.scene = settings_.scene;
+        info.map.T_world_camera = last_T_world_camera_;
+        info.map.has_origin = has_source_origin_;
+        info.map.T_source_world = T_source_world_;
+        info.map.camera = calib_.depth;
+        info.active = active_;
+        for (const Submap& m : submaps_) {
+            info.T_world_submap.push_back(m.T_world_submap);
+            info.parent.push_back(m.parent);
+        }
+        info.edges = graph_.edges();
+        MapFileWriter file(path);
+        writeSubmapMapHeader(file, info);
+        for (Submap& m : submaps_) m.engine->saveMapInto(file);
+        writeSubmapMapEnd(file);
+        file.commit();
     }
+
+    // A map of submaps, or a single map as the first submap. Read into new submaps first: a file that
+    // fails leaves the map as it was. The run goes on in the active submap; its first frame is looked
+    // up there and then in every submap in turn (placeInLoadedMap) before anything is fused.
     MapFileInfo loadMap(const std::string& path) override {
-        throw ConfigError(path + ": loading a map into submaps is not supported yet (run with --submaps off)");
+        MapFileReader file(path);
+        SubmapMapInfo info;
+        if (file.holdsSubmaps()) {
+            info = readSubmapMapHeader(file);
+        } else {
+            info.map = file.nextMapInfo();
+            info.T_world_submap = {Mat4f::identity()};
+            info.parent = {-1};
+        }
+        std::vector<Submap> loaded;
+        for (std::size_t i = 0; i < info.T_world_submap.size(); ++i) {
+            const MapFileInfo& part = file.nextMapInfo();
+            if (part.voxel_type != toString(settings_.voxel_type) || !part.hash ||
+                part.scene.voxel_size_m != settings_.scene.voxel_size_m || part.scene.mu_m != settings_.scene.mu_m)
+                throw IoError(path, "submap " + std::to_string(i) + " holds '" + part.voxel_type + "' voxels of " +
+                                        std::to_string(part.scene.voxel_size_m) +
+                                        " m, not the map's (settingsForMap makes settings that fit)");
+            Submap m;
+            // Its table as saved (it may have grown), its block ceiling the submaps'.
+            MainEngineSettings part_settings = settingsForMap(part, local_settings_);
+            part_settings.hash.max_block_count = local_settings_.hash.max_block_count;
+            m.engine = MainEngine::create(part_settings, calib_);
+            m.engine->loadMapFrom(file);
+            m.T_world_submap = info.T_world_submap[i];
+            m.parent = info.parent[i];
+            m.keyframes = -1;  // unknown until it tracks a frame
+            loaded.push_back(std::move(m));
+        }
+        if (info.map.submap_count > 0)
+            readSubmapMapEnd(file);
+        else
+            file.requireEnd();
+
+        reset();
+        submaps_ = std::move(loaded);
+        graph_ = PoseGraph();
+        for (const Submap& m : submaps_) graph_.addNode(m.T_world_submap);
+        for (const PoseGraphEdge& e : info.edges) {
+            graph_.addEdge(e);
+            if (e.loop) loop_joined_.insert({std::min(e.from, e.to), std::max(e.from, e.to)});
+        }
+        active_ = info.active;
+        last_T_world_camera_ = info.map.T_world_camera;
+        has_source_origin_ = info.map.has_origin;
+        T_source_world_ = info.map.T_source_world;
+        for (std::size_t i = 0; i < submaps_.size(); ++i)
+            if (int(i) != active_) submaps_[i].engine->releaseFrameMemory();
+        placing_ = true;
+        place_cursor_ = 0;
+        MapFileInfo whole = info.map;
+        whole.submap_count = int(submaps_.size());
+        return whole;
+    }
+    void saveMapInto(MapFileWriter&) override {
+        throw ConfigError("a map of submaps is a file of its own: it cannot be saved as one map among others");
+    }
+    MapFileInfo loadMapFrom(MapFileReader& file) override {
+        throw ConfigError(file.path() + ": a map of submaps loads from a file of its own (loadMap)");
     }
     void setSourceOrigin(const Mat4f& T_source_world) override {
         T_source_world_ = T_source_world;
@@ -494,14 +581,22 @@ private:
     // Lost in the active submap: the frame is looked up in the other submaps near the last good pose,
     // as a loop is (their keyframes may hold the view); found, it is fused there and that submap is
     // tracked against from here. `result` becomes the frame's, relocalised.
+    // After a map was loaded, until a frame is placed, every submap is a candidate, whatever its
+    // distance (the new recording may start anywhere in the map): kLoopSubmapsPerFrame of them per
+    // frame, in turn, nearest to the saved pose first.
     void relocaliseInOtherSubmaps(const RGBDFrame& frame, FrameResult& result) {
         std::vector<std::pair<float, int>> nearest;
         for (int j = 0; j < static_cast<int>(submaps_.size()); ++j) {
             if (j == active_) continue;
             const Mat4f T_j_camera = rigidInverse(submaps_[j].T_world_submap) * result.T_world_camera;
-            if (withinNeighbourhood(T_j_camera, 1.f)) nearest.push_back({translationNormM(T_j_camera), j});
+            if (placing_ || withinNeighbourhood(T_j_camera, 1.f)) nearest.push_back({translationNormM(T_j_camera), j});
         }
         std::sort(nearest.begin(), nearest.end());
+        if (placing_ && !nearest.empty()) {
+            std::rotate(nearest.begin(), nearest.begin() + std::ptrdiff_t(place_cursor_ % nearest.size()),
+                        nearest.end());
+            place_cursor_ += kLoopSubmapsPerFrame;
+        }
         const View& view = submaps_[active_].engine->view();
         for (std::size_t k = 0; k < nearest.size() && k < std::size_t(kLoopSubmapsPerFrame); ++k) {
             const int j = nearest[k].second;
@@ -517,6 +612,7 @@ private:
             result.T_world_camera = result.tracking.T_world_camera;
             frame_poses_.push_back({j, found.T_world_camera});
             last_T_world_camera_ = result.T_world_camera;
+            placing_ = false;
             return;
         }
     }
@@ -618,6 +714,8 @@ private:
     mutable long long world_render_version_ = -1;
     bool has_source_origin_ = false;
     Mat4f T_source_world_ = Mat4f::identity();
+    bool placing_ = false;          // a map was loaded and no frame is placed in it yet
+    std::size_t place_cursor_ = 0;  // the submaps searched so far while placing
     PoseGraph graph_;
     PoseGraphOptimiser optimiser_;
 };

@@ -15,6 +15,8 @@
 #include <utility>
 #include <vector>
 
+#include "MapFileFields.h"
+#include "voxfuse/io/SubmapMapFile.h"
 #include "TextParsing.h"
 #include "voxfuse/core/Error.h"
 #include "voxfuse/engines/EnginePairs.h"
@@ -26,120 +28,13 @@
 #include "voxfuse/shared/Swapping.h"
 
 namespace voxfuse {
+using namespace mapfile;
 namespace {
 
-constexpr char kMagic[8] = {'V', 'F', 'M', 'A', 'P', '\r', '\n', '\x1a'};
 constexpr char kEndMagic[8] = {'V', 'F', 'M', 'A', 'P', 'E', 'N', 'D'};
 constexpr std::size_t kVoxelTypeNameBytes = 16;
-constexpr std::size_t kChunkBytes = std::size_t(1) << 20;  // the body is streamed in pieces of about this size
 // Version 1's header: the voxel type name, 26 four-byte fields, 3 flags, 2 matrices, the record count.
 constexpr std::uint32_t kHeaderBytes = kVoxelTypeNameBytes + 4 * 26 + 3 + 2 * 64 + 8;
-
-// ---- Bytes out: little-endian fields into a buffer, flushed to the file in chunks, with a running CRC ----
-class FieldWriter {
-public:
-    explicit FieldWriter(AtomicFile& file) : file_(file) {}
-    void u8(std::uint8_t v) { buffer_.push_back(v); }
-    void u16(std::uint16_t v) { bytes(v, 2); }
-    void i16(std::int16_t v) { u16(std::uint16_t(v)); }
-    void u32(std::uint32_t v) { bytes(v, 4); }
-    void i32(std::int32_t v) { u32(std::uint32_t(v)); }
-    void u64(std::uint64_t v) { bytes(v, 8); }
-    void f32(float v) {
-        std::uint32_t bits;
-        std::memcpy(&bits, &v, 4);
-        u32(bits);
-    }
-    void raw(const char* p, std::size_t n) { buffer_.insert(buffer_.end(), p, p + n); }
-    // Sends the buffered bytes to the file, adding them to the checksum first when `checksummed`.
-    void flush(bool checksummed = true) {
-        if (checksummed) crc_ = crc32(crc_, buffer_.data(), unsigned(buffer_.size()));
-        file_.stream().write(reinterpret_cast<const char*>(buffer_.data()), std::streamsize(buffer_.size()));
-        file_.check();
-        buffer_.clear();
-    }
-    void flushIfFull() {
-        if (buffer_.size() >= kChunkBytes) flush();
-    }
-    std::size_t buffered() const { return buffer_.size(); }
-    std::uint32_t crc() const { return std::uint32_t(crc_); }
-    void resetCrc() { crc_ = crc32(0L, Z_NULL, 0); }
-
-private:
-    void bytes(std::uint64_t v, int n) {
-        for (int i = 0; i < n; ++i) buffer_.push_back(std::uint8_t(v >> (8 * i)));
-    }
-    AtomicFile& file_;
-    std::vector<std::uint8_t> buffer_;
-    uLong crc_ = crc32(0L, Z_NULL, 0);
-};
-
-// ---- Bytes in: little-endian fields from the file, read in chunks, with a running CRC ----
-class FieldReader {
-public:
-    FieldReader(std::ifstream& in, const std::string& path) : in_(in), path_(path) {}
-    std::uint8_t u8() { return take(1)[0]; }
-    std::uint16_t u16() { return std::uint16_t(bytes(2)); }
-    std::int16_t i16() { return std::int16_t(u16()); }
-    std::uint32_t u32() { return std::uint32_t(bytes(4)); }
-    std::int32_t i32() { return std::int32_t(u32()); }
-    std::uint64_t u64() { return bytes(8); }
-    float f32() {
-        const std::uint32_t bits = u32();
-        float v;
-        std::memcpy(&v, &bits, 4);
-        return v;
-    }
-    void raw(char* p, std::size_t n) { std::memcpy(p, take(n), n); }
-    // Makes `n` bytes available (from the file, in one piece) and counts them into the checksum.
-    const std::uint8_t* take(std::size_t n) {
-        if (pos_ + n > buffer_.size()) refill(n);
-        const std::uint8_t* p = buffer_.data() + pos_;
-        crc_ = crc32(crc_, p, unsigned(n));
-        pos_ += n;
-        taken_ += n;
-        return p;
-    }
-    // Bytes taken so far, from the start of the file.
-    std::uint64_t taken() const { return taken_; }
-    // The file's size, or -1 when it has none (a pipe).
-    std::int64_t fileBytes() const {
-        std::error_code ec;
-        const std::uintmax_t size = std::filesystem::file_size(path_, ec);
-        return ec ? -1 : std::int64_t(size);
-    }
-    std::uint32_t crc() const { return std::uint32_t(crc_); }
-    void resetCrc() { crc_ = crc32(0L, Z_NULL, 0); }
-    // True when every byte of the file has been taken.
-    bool atEnd() { return pos_ == buffer_.size() && in_.peek() == std::char_traits<char>::eof(); }
-    [[noreturn]] void fail(const std::string& reason) const { throw IoError(path_, reason); }
-
-private:
-    std::uint64_t bytes(int n) {
-        const std::uint8_t* p = take(std::size_t(n));
-        std::uint64_t v = 0;
-        for (int i = 0; i < n; ++i) v |= std::uint64_t(p[i]) << (8 * i);
-        return v;
-    }
-    void refill(std::size_t n) {
-        buffer_.erase(buffer_.begin(), buffer_.begin() + std::ptrdiff_t(pos_));
-        pos_ = 0;
-        const std::size_t want = std::max(n, kChunkBytes);
-        const std::size_t have = buffer_.size();
-        buffer_.resize(want);
-        in_.read(reinterpret_cast<char*>(buffer_.data() + have), std::streamsize(want - have));
-        buffer_.resize(have + std::size_t(in_.gcount()));
-        if (buffer_.size() < n)
-            fail("truncated: the file ends inside the map (" + std::to_string(taken_ + buffer_.size()) +
-                 " bytes read)");
-    }
-    std::ifstream& in_;
-    std::string path_;
-    std::vector<std::uint8_t> buffer_;
-    std::size_t pos_ = 0;
-    std::uint64_t taken_ = 0;
-    uLong crc_ = crc32(0L, Z_NULL, 0);
-};
 
 // ---- Voxel records ----
 
@@ -191,14 +86,13 @@ TVoxel readVoxelRecord(FieldReader& r) {
 
 // ---- Header ----
 
-void writeMat(FieldWriter& w, const Mat4f& m) {
-    for (float x : m.m) w.f32(x);
+bool finite(const Mat4f& m) {
+    return std::all_of(std::begin(m.m), std::end(m.m), [](float x) { return std::isfinite(x); });
 }
-Mat4f readMat(FieldReader& r) {
-    Mat4f m;
-    for (float& x : m.m) x = r.f32();
-    return m;
-}
+
+}  // namespace
+
+namespace mapfile {
 
 void writeHeaderFields(FieldWriter& w, const MapFileInfo& info, std::uint32_t voxel_bytes) {
     char name[kVoxelTypeNameBytes] = {};
@@ -233,22 +127,8 @@ void writeHeaderFields(FieldWriter& w, const MapFileInfo& info, std::uint32_t vo
     w.u64(info.record_count);
 }
 
-bool finite(const Mat4f& m) {
-    return std::all_of(std::begin(m.m), std::end(m.m), [](float x) { return std::isfinite(x); });
-}
-
-// Reads magic, version and header, checking each; leaves the reader at the body.
-MapFileInfo readHeader(FieldReader& r) {
-    char magic[8];
-    r.raw(magic, 8);
-    if (std::memcmp(magic, kMagic, 8) != 0) r.fail("not a VoxFuse map file (no VFMAP signature)");
+MapFileInfo readHeaderFields(FieldReader& r) {
     MapFileInfo info;
-    info.version = r.u32();
-    if (info.version == 0 || info.version > kMapFileVersion)
-        r.fail("map file version " + std::to_string(info.version) + " is not one this VoxFuse reads (up to " +
-               std::to_string(kMapFileVersion) + ")");
-    const std::uint32_t header_bytes = r.u32();
-    r.resetCrc();
     char name[kVoxelTypeNameBytes + 1] = {};
     r.raw(name, kVoxelTypeNameBytes);
     info.voxel_type = name;
@@ -280,10 +160,6 @@ MapFileInfo readHeader(FieldReader& r) {
     info.camera.cy = r.f32();
     info.integration_count = r.u32();
     info.record_count = r.u64();
-    const std::uint32_t computed = r.crc();
-    if (r.u32() != computed) r.fail("corrupt: the header's checksum does not match");
-    if (header_bytes != kHeaderBytes)
-        r.fail("corrupt: header size " + std::to_string(header_bytes) + " is not version 1's");
     if (index > 1) r.fail("corrupt: unknown index type " + std::to_string(index));
     bool known = false;
 #define VF_KNOWN_VOXEL(TVoxel, TIndex) \
@@ -322,6 +198,39 @@ MapFileInfo readHeader(FieldReader& r) {
                 std::abs((long long)info.dense_offset[a]) > (1 << 24))
                 r.fail("corrupt: the dense volume is out of range (offset " + std::to_string(info.dense_offset[a]) +
                        ", size " + std::to_string(info.dense_size[a]) + " on axis " + "xyz"[a] + ")");
+    return info;
+}
+
+std::uint32_t voxelRecordBytesByName(const std::string& voxel_type) {
+#define VF_RECORD_BYTES(TVoxel, TIndex) \
+    if (voxel_type == TVoxel::name) return voxelRecordBytes<TVoxel>();
+    VF_FOR_EACH_ENGINE_PAIR(VF_RECORD_BYTES)
+#undef VF_RECORD_BYTES
+    return 0;
+}
+
+}  // namespace mapfile
+
+namespace {
+
+// Reads magic, version and header, checking each; leaves the reader at the body.
+MapFileInfo readHeader(FieldReader& r) {
+    char magic[8];
+    r.raw(magic, 8);
+    if (std::memcmp(magic, kSubmapsMagic, 8) == 0) r.fail("holds a map of submaps: load it with submaps on");
+    if (std::memcmp(magic, kMapMagic, 8) != 0) r.fail("not a VoxFuse map file (no VFMAP signature)");
+    const std::uint32_t version = r.u32();
+    if (version == 0 || version > kMapFileVersion)
+        r.fail("map file version " + std::to_string(version) + " is not one this VoxFuse reads (up to " +
+               std::to_string(kMapFileVersion) + ")");
+    const std::uint32_t header_bytes = r.u32();
+    r.resetCrc();
+    MapFileInfo info = readHeaderFields(r);
+    info.version = version;
+    const std::uint32_t computed = r.crc();
+    if (r.u32() != computed) r.fail("corrupt: the header's checksum does not match");
+    if (header_bytes != kHeaderBytes)
+        r.fail("corrupt: header size " + std::to_string(header_bytes) + " is not version 1's");
     if (!info.hash && info.record_count != std::uint64_t(info.dense_size.x) * std::uint64_t(info.dense_size.y) *
                                                std::uint64_t(info.dense_size.z))
         r.fail("corrupt: " + std::to_string(info.record_count) + " voxels for a " + std::to_string(info.dense_size.x) +
@@ -331,6 +240,7 @@ MapFileInfo readHeader(FieldReader& r) {
                std::to_string(1 << 22) + ")");
     // The file must hold what the header lists before memory is reserved for it: a short or damaged
     // file is refused here, not after gigabytes were allocated for blocks that are not there.
+    const std::uint64_t voxel_bytes = voxelRecordBytesByName(info.voxel_type);
     const std::uint64_t record_bytes = info.hash ? 6 + std::uint64_t(kBlockVoxelCount) * voxel_bytes : voxel_bytes;
     const std::uint64_t expected =
         r.taken() + info.record_count * record_bytes + 4 + 8;  // records, checksum, end marker
@@ -486,19 +396,108 @@ void requireFits(FieldReader& r, const MapFileInfo& file, const Scene<TVoxel, TI
         r.fail("the map's voxel size and mu differ from the scene's");
 }
 
+// ---- Keyframes (version 2) ----
+
+void writeKeyframes(FieldWriter& w, const MapKeyframes* k) {
+    const std::size_t count = k ? k->keyframes.size() : 0;
+    w.u32(std::uint32_t(count));
+    if (count == 0) return;
+    const FernSettings& f = k->ferns;
+    w.i32(f.fern_count);
+    w.i32(f.tests_per_fern);
+    w.i32(f.image_width);
+    w.f32(f.min_depth_m);
+    w.f32(f.max_depth_m);
+    w.u8(f.use_intensity ? 1 : 0);
+    w.u32(f.seed);
+    w.u8(k->with_intensity ? 1 : 0);
+    w.i32(k->frame_size.x);
+    w.i32(k->frame_size.y);
+    for (const Keyframe& kf : k->keyframes) {
+        if (kf.code.size() != std::size_t(f.fern_count))
+            throw Error("writeMapFile: a keyframe's code has " + std::to_string(kf.code.size()) + " ferns, not " +
+                        std::to_string(f.fern_count));
+        w.i32(kf.frame_index);
+        writeMat(w, kf.T_world_camera);
+        w.raw(reinterpret_cast<const char*>(kf.code.data()), kf.code.size());
+        w.flushIfFull();
+    }
+}
+
+void readKeyframes(FieldReader& r, MapKeyframes& k) {
+    const std::uint32_t count = r.u32();
+    if (count == 0) return;
+    FernSettings& f = k.ferns;
+    f.fern_count = r.i32();
+    f.tests_per_fern = r.i32();
+    f.image_width = r.i32();
+    f.min_depth_m = r.f32();
+    f.max_depth_m = r.f32();
+    f.use_intensity = r.u8() != 0;
+    f.seed = r.u32();
+    k.with_intensity = r.u8() != 0;
+    k.frame_size.x = r.i32();
+    k.frame_size.y = r.i32();
+    if (f.fern_count < 1 || f.fern_count > (1 << 16) || f.tests_per_fern < 1 || f.tests_per_fern > 8 ||
+        f.image_width < 1 || f.image_width > (1 << 16) || !(f.min_depth_m >= 0.f) || !(f.max_depth_m > f.min_depth_m) ||
+        !std::isfinite(f.max_depth_m) || k.frame_size.x < 1 || k.frame_size.y < 1 || k.frame_size.x > (1 << 16) ||
+        k.frame_size.y > (1 << 16))
+        r.fail("corrupt: the keyframes' fern settings or frame size are out of range");
+    // Checked before anything is reserved for them, as the voxels are.
+    const std::uint64_t bytes = std::uint64_t(count) * (4 + 64 + std::uint64_t(f.fern_count));
+    const std::int64_t actual = r.fileBytes();
+    if (actual >= 0 && r.taken() + bytes > std::uint64_t(actual))
+        r.fail("truncated: " + std::to_string(count) + " keyframes are listed, the file ends before them");
+    k.keyframes.resize(count);
+    for (std::uint32_t i = 0; i < count; ++i) {
+        Keyframe& kf = k.keyframes[i];
+        kf.frame_index = r.i32();
+        kf.T_world_camera = readMat(r);
+        const std::string problem = text::rigidPoseProblem(kf.T_world_camera.m);
+        if (!problem.empty()) r.fail("corrupt: keyframe " + std::to_string(i) + "'s pose: " + problem);
+        kf.code.resize(std::size_t(f.fern_count));
+        r.raw(reinterpret_cast<char*>(kf.code.data()), kf.code.size());
+        for (const std::uint8_t c : kf.code)
+            if (c >> f.tests_per_fern)
+                r.fail("corrupt: keyframe " + std::to_string(i) + "'s code has a fern out of range");
+    }
+}
+
 }  // namespace
 
 MapFileInfo readMapFileInfo(const std::string& path) {
+    MapFileReader file(path);
+    if (file.holdsSubmaps()) return readSubmapMapHeader(file).map;
+    return file.nextMapInfo();
+}
+
+MapFileWriter::MapFileWriter(const std::string& path) : stream_(std::make_unique<Stream>(path)) {}
+MapFileWriter::~MapFileWriter() = default;
+void MapFileWriter::commit() { stream_->file.commit(); }
+
+MapFileReader::MapFileReader(const std::string& path) {
     if (std::filesystem::is_directory(path)) throw IoError(path, "is a folder, not a map file");
     std::ifstream in(path, std::ios::binary);
     if (!in) throw IoError(path, std::string("cannot open the map file: ") + std::strerror(errno));
-    FieldReader r(in, path);
-    return readHeader(r);
+    stream_ = std::make_unique<Stream>(path, std::move(in));
+}
+MapFileReader::~MapFileReader() = default;
+const std::string& MapFileReader::path() const { return stream_->path; }
+bool MapFileReader::holdsSubmaps() { return stream_->fields.nextBytesAre(kSubmapsMagic, 8); }
+const MapFileInfo& MapFileReader::nextMapInfo() {
+    if (!stream_->pending) {
+        stream_->info = readHeader(stream_->fields);
+        stream_->pending = true;
+    }
+    return stream_->info;
+}
+void MapFileReader::requireEnd() {
+    if (!stream_->fields.atEnd()) stream_->fields.fail("corrupt: bytes after the end marker");
 }
 
 template <class TVoxel, class TIndex>
-void writeMapFile(const std::string& path, const Scene<TVoxel, TIndex>& scene, const MapFileInfo& pose,
-                  const GlobalCache* cache) {
+void writeMap(MapFileWriter& file, const Scene<TVoxel, TIndex>& scene, const MapFileInfo& pose,
+              const GlobalCache* cache, const MapKeyframes* keyframes) {
     if (scene.location() != Device::CPU)
         throw DeviceError("writeMapFile: the scene must be in host memory (Scene::copyTo(Device::CPU))");
     MapFileInfo info = pose;
@@ -508,11 +507,10 @@ void writeMapFile(const std::string& path, const Scene<TVoxel, TIndex>& scene, c
     info.scene = scene.params();
     info.integration_count = scene.integrationCount();
     info.record_count = recordCount(scene, cache);
+    info.submap_count = 0;
 
-    // Written under a temporary name beside the target and renamed at the end (io/AtomicFile.h).
-    AtomicFile file(path);
-    FieldWriter w(file);
-    w.raw(kMagic, 8);
+    FieldWriter& w = file.stream().fields;
+    w.raw(kMapMagic, 8);
     w.u32(info.version);
     w.u32(kHeaderBytes);
     w.flush(false);
@@ -523,38 +521,59 @@ void writeMapFile(const std::string& path, const Scene<TVoxel, TIndex>& scene, c
     w.flush(false);
     w.resetCrc();
     writeBody(w, scene, cache);
+    writeKeyframes(w, keyframes);
     w.flush();
     w.u32(w.crc());
     w.raw(kEndMagic, 8);
     w.flush(false);
+}
+
+template <class TVoxel, class TIndex>
+void writeMapFile(const std::string& path, const Scene<TVoxel, TIndex>& scene, const MapFileInfo& pose,
+                  const GlobalCache* cache, const MapKeyframes* keyframes) {
+    MapFileWriter file(path);
+    writeMap(file, scene, pose, cache, keyframes);
     file.commit();
 }
 
 template <class TVoxel, class TIndex>
-MapFileInfo readMapFile(const std::string& path, Scene<TVoxel, TIndex>& scene, GlobalCache* cache) {
+MapFileInfo readMap(MapFileReader& file, Scene<TVoxel, TIndex>& scene, GlobalCache* cache, MapKeyframes* keyframes) {
     if (scene.location() != Device::CPU) throw DeviceError("readMapFile: the scene must be in host memory");
-    if (std::filesystem::is_directory(path)) throw IoError(path, "is a folder, not a map file");
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw IoError(path, std::string("cannot open the map file: ") + std::strerror(errno));
-    FieldReader r(in, path);
-    const MapFileInfo info = readHeader(r);
+    const MapFileInfo info = file.nextMapInfo();
+    file.stream().pending = false;
+    FieldReader& r = file.stream().fields;
     requireFits(r, info, scene);
     r.resetCrc();
     readBody(r, info, scene, cache);
+    MapKeyframes read;
+    if (info.version >= 2) readKeyframes(r, read);
     const std::uint32_t computed = r.crc();
     if (r.u32() != computed) r.fail("corrupt: the checksum of the map's voxels does not match");
     char end[8];
     r.raw(end, 8);
     if (std::memcmp(end, kEndMagic, 8) != 0) r.fail("corrupt: no end marker after the voxels");
-    if (!r.atEnd()) r.fail("corrupt: bytes after the end marker");
     scene.setIntegrationCount(info.integration_count);
+    if (keyframes) *keyframes = std::move(read);
     return info;
 }
 
-#define VF_INSTANTIATE(TVoxel, TIndex)                                                                               \
-    template void writeMapFile<TVoxel, TIndex>(const std::string&, const Scene<TVoxel, TIndex>&, const MapFileInfo&, \
-                                               const GlobalCache*);                                                  \
-    template MapFileInfo readMapFile<TVoxel, TIndex>(const std::string&, Scene<TVoxel, TIndex>&, GlobalCache*);
+template <class TVoxel, class TIndex>
+MapFileInfo readMapFile(const std::string& path, Scene<TVoxel, TIndex>& scene, GlobalCache* cache,
+                        MapKeyframes* keyframes) {
+    MapFileReader file(path);
+    const MapFileInfo info = readMap(file, scene, cache, keyframes);
+    file.requireEnd();
+    return info;
+}
+
+#define VF_INSTANTIATE(TVoxel, TIndex)                                                                                 \
+    template void writeMap<TVoxel, TIndex>(MapFileWriter&, const Scene<TVoxel, TIndex>&, const MapFileInfo&,           \
+                                           const GlobalCache*, const MapKeyframes*);                                   \
+    template void writeMapFile<TVoxel, TIndex>(const std::string&, const Scene<TVoxel, TIndex>&, const MapFileInfo&,   \
+                                               const GlobalCache*, const MapKeyframes*);                               \
+    template MapFileInfo readMap<TVoxel, TIndex>(MapFileReader&, Scene<TVoxel, TIndex>&, GlobalCache*, MapKeyframes*); \
+    template MapFileInfo readMapFile<TVoxel, TIndex>(const std::string&, Scene<TVoxel, TIndex>&, GlobalCache*,         \
+                                                     MapKeyframes*);
 VF_FOR_EACH_ENGINE_PAIR(VF_INSTANTIATE)
 #undef VF_INSTANTIATE
 

@@ -2,7 +2,9 @@
 # gives a mesh, a render and the same map bytes again; a run continues the map after the frames it
 # holds (--skip); options the map fixes cannot be changed, its block ceiling can; --frames 0 without a
 # map is refused; options the map alone cannot use are refused; a refused run keeps the earlier
-# outputs; an existing file is never taken for the swap file.
+# outputs; an existing file is never taken for the swap file. With submaps: the map of submaps saves,
+# loads alone to the same bytes, and places a second run that starts elsewhere in it; it cannot be
+# loaded with --submaps off.
 file(REMOVE_RECURSE ${WORK_DIR})
 file(MAKE_DIRECTORY ${WORK_DIR})
 
@@ -80,4 +82,33 @@ run_voxfuse(2 --load-map first/room.vfm --skip 10 --frames 1 --swap-file first/r
 file(SHA256 ${WORK_DIR}/first/room.vfm after_hash)
 if(NOT last_output MATCHES "the swap file must be a new path" OR NOT before_hash STREQUAL after_hash)
   message(FATAL_ERROR "an existing file was taken for the swap file:\n${last_output}")
+endif()
+
+if(WITH_CERES)
+  run_voxfuse(0 --voxel s --frames 40 --submaps on --submap-distance 0.15 --render-every 0 --out sub1
+              --save-map sub1/room.vfm)
+  file(READ ${WORK_DIR}/sub1/summary.json summary)
+  string(JSON submaps GET "${summary}" submaps)
+  if(submaps LESS 3)
+    message(FATAL_ERROR "40 frames at 0.15 m made ${submaps} submaps")
+  endif()
+  run_voxfuse(0 --load-map sub1/room.vfm --frames 0 --mesh --out sub_alone --save-map sub_alone/room.vfm)
+  file(SHA256 ${WORK_DIR}/sub1/room.vfm first_hash)
+  file(SHA256 ${WORK_DIR}/sub_alone/room.vfm again_hash)
+  if(NOT first_hash STREQUAL again_hash OR NOT EXISTS ${WORK_DIR}/sub_alone/mesh.ply)
+    message(FATAL_ERROR "a map of submaps loaded and saved again differs from the original, or gave no mesh")
+  endif()
+  # The second run starts at frame 5, far from where the first ended (frame 39).
+  run_voxfuse(0 --load-map sub1/room.vfm --skip 5 --frames 20 --render-every 0 --out sub_again)
+  file(READ ${WORK_DIR}/sub_again/summary.json summary)
+  string(JSON fused GET "${summary}" frames_fused)
+  string(JSON ate GET "${summary}" ate_rmse_m)
+  string(JSON submaps_now GET "${summary}" submaps)
+  if(fused LESS 19 OR ate GREATER 0.005 OR submaps_now LESS submaps)
+    message(FATAL_ERROR "the second run fused ${fused} of 20 frames with ATE ${ate} m in ${submaps_now} submaps")
+  endif()
+  run_voxfuse(2 --load-map sub1/room.vfm --submaps off --frames 0 --out refused)
+  if(NOT last_output MATCHES "the map has [0-9]+ submaps; --submaps cannot change it")
+    message(FATAL_ERROR "--submaps off with a map of submaps was not refused by name:\n${last_output}")
+  endif()
 endif()

@@ -14,8 +14,10 @@
 
 namespace {
 
-// Version 1's layout (io/MapFile.h): magic, version and header size (16 bytes), 255 bytes of fields,
-// their CRC, the body, its CRC and the 8-byte end marker. (The header-size field counts the CRC too: 259.)
+// A single map's layout (io/MapFile.h): magic, version and header size (16 bytes), 255 bytes of fields,
+// their CRC, the body (from version 2 with the keyframes), its CRC and the 8-byte end marker. (The
+// header-size field counts the CRC too: 259.) A map of submaps (io/SubmapMapFile.h) is read as it is:
+// its checksums are not recomputed.
 constexpr std::size_t kHeaderStart = 16, kHeaderBytes = 255, kBodyStart = kHeaderStart + kHeaderBytes + 4;
 
 void putCrc(std::vector<std::uint8_t>& bytes, std::size_t begin, std::size_t end) {

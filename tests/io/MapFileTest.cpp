@@ -24,6 +24,7 @@
 #include "voxfuse/engines/MeshingEngine.h"
 #include "voxfuse/io/AtomicFile.h"
 #include "voxfuse/io/MapFile.h"
+#include "voxfuse/io/SubmapMapFile.h"
 #include "voxfuse/objects/Voxel.h"
 
 namespace fs = std::filesystem;
@@ -267,6 +268,179 @@ TEST(MapFileTest, AFailedWriteLeavesNothingBehind) {
     EXPECT_EQ(bytesOf(kept), (std::vector<char>{'o', 'l', 'd'})) << "a file beside the failed write is untouched";
     for (const auto& entry : fs::directory_iterator(scratch.path()))
         EXPECT_FALSE(isPartialFileName(entry.path().filename().string())) << "temporary file left: " << entry.path();
+}
+
+MapKeyframes someKeyframes(int count) {
+    MapKeyframes k;
+    k.ferns.fern_count = 50;
+    k.ferns.tests_per_fern = 4;
+    k.with_intensity = true;
+    k.frame_size = {160, 120};
+    for (int i = 0; i < count; ++i) {
+        Keyframe kf;
+        kf.frame_index = 10 * i + 3;
+        kf.T_world_camera = test::lookAt({0.2f * float(i), 0.1f, 0.9f}, {0.f, 0.f, 0.f});
+        for (int f = 0; f < k.ferns.fern_count; ++f) kf.code.push_back(std::uint8_t((f * 7 + i) % 16));
+        k.keyframes.push_back(kf);
+    }
+    return k;
+}
+
+// Keyframes (version 2) come back as saved; a version 1 file (no keyframes) still loads.
+TEST(MapFileTest, KeyframesLoadAsSavedAndAVersion1MapStillLoads) {
+    const test::ScratchDir scratch;
+    const auto scene = fusedScene<VoxelS>(VoxelBlockHash());
+    const std::string path = scratch.file("keyframes.vfm"), again = scratch.file("again.vfm");
+    const MapKeyframes saved = someKeyframes(3);
+    writeMapFile(path, scene, somePose(), nullptr, &saved);
+    Scene<VoxelS, VoxelBlockHash> loaded(test::centimetreSceneParams(), VoxelBlockHash(), Device::CPU);
+    MapKeyframes read;
+    EXPECT_EQ(readMapFile(path, loaded, nullptr, &read).version, 2u);
+    ASSERT_EQ(read.keyframes.size(), 3u);
+    EXPECT_EQ(read.ferns.fern_count, 50);
+    EXPECT_EQ(read.ferns.seed, saved.ferns.seed);
+    EXPECT_TRUE(read.with_intensity);
+    EXPECT_TRUE(read.frame_size == saved.frame_size);
+    for (std::size_t i = 0; i < 3; ++i) {
+        EXPECT_EQ(read.keyframes[i].frame_index, saved.keyframes[i].frame_index);
+        EXPECT_EQ(read.keyframes[i].code, saved.keyframes[i].code);
+        EXPECT_EQ(0,
+                  std::memcmp(read.keyframes[i].T_world_camera.m, saved.keyframes[i].T_world_camera.m, sizeof(Mat4f)));
+    }
+    writeMapFile(again, loaded, somePose(), nullptr, &read);
+    EXPECT_EQ(bytesOf(path), bytesOf(again));
+
+    // Version 1: the same map without the keyframe count, its voxels' checksum over the voxels alone.
+    writeMapFile(path, scene, somePose());
+    std::vector<char> b = bytesOf(path);
+    std::uint32_t header_bytes;
+    std::memcpy(&header_bytes, b.data() + 12, 4);
+    const std::size_t body = 16 + header_bytes, count_at = b.size() - 12 - 4;
+    b.erase(b.begin() + std::ptrdiff_t(count_at), b.begin() + std::ptrdiff_t(count_at + 4));
+    b[8] = 1;
+    const auto crc = std::uint32_t(
+        crc32(crc32(0L, Z_NULL, 0), reinterpret_cast<const Bytef*>(b.data() + body), uInt(count_at - body)));
+    std::memcpy(b.data() + count_at, &crc, 4);
+    writeBytes(path, b);
+    Scene<VoxelS, VoxelBlockHash> old(test::centimetreSceneParams(), VoxelBlockHash(), Device::CPU);
+    read = saved;
+    EXPECT_EQ(readMapFile(path, old, nullptr, &read).version, 1u);
+    EXPECT_TRUE(read.keyframes.empty());
+    EXPECT_EQ(old.index().blocksInUse(), scene.index().blocksInUse());
+}
+
+TEST(MapFileTest, BadKeyframesAreRefusedWithTheReason) {
+    const test::ScratchDir scratch;
+    const auto scene = fusedScene<VoxelS>(VoxelBlockHash());
+    const std::string path = scratch.file("keyframes.vfm");
+    MapKeyframes k = someKeyframes(2);
+    k.keyframes[1].code[5] = 16;  // a 4-test fern's code is below 16
+    writeMapFile(path, scene, somePose(), nullptr, &k);
+    EXPECT_NE(loadError(path).find("keyframe 1's code has a fern out of range"), std::string::npos) << loadError(path);
+    k = someKeyframes(2);
+    k.keyframes[0].T_world_camera.m[1] = 3.f;
+    writeMapFile(path, scene, somePose(), nullptr, &k);
+    EXPECT_NE(loadError(path).find("keyframe 0's pose"), std::string::npos) << loadError(path);
+    k = someKeyframes(2);
+    k.ferns.tests_per_fern = 9;
+    writeMapFile(path, scene, somePose(), nullptr, &k);
+    EXPECT_NE(loadError(path).find("fern settings or frame size are out of range"), std::string::npos);
+    k = someKeyframes(2);
+    k.keyframes[0].code.pop_back();
+    EXPECT_THROW(writeMapFile(path, scene, somePose(), nullptr, &k), Error);
+}
+
+// A map of submaps: its header and each submap's map; readMapFileInfo tells how many; damage anywhere
+// is refused with the reason.
+void writeSubmapMap(const std::string& path, const Scene<VoxelS, VoxelBlockHash>& scene, const SubmapMapInfo& info) {
+    MapFileWriter file(path);
+    writeSubmapMapHeader(file, info);
+    for (std::size_t i = 0; i < info.T_world_submap.size(); ++i) writeMap(file, scene, somePose());
+    writeSubmapMapEnd(file);
+    file.commit();
+}
+
+std::string submapLoadError(const std::string& path) {
+    try {
+        MapFileReader file(path);
+        const SubmapMapInfo info = readSubmapMapHeader(file);
+        for (std::size_t i = 0; i < info.T_world_submap.size(); ++i) {
+            Scene<VoxelS, VoxelBlockHash> scene(test::centimetreSceneParams(), VoxelBlockHash(), Device::CPU);
+            readMap(file, scene);
+        }
+        readSubmapMapEnd(file);
+    } catch (const IoError& e) {
+        EXPECT_EQ(e.file(), path);
+        return e.what();
+    }
+    return "";
+}
+
+TEST(MapFileTest, AMapOfSubmapsHoldsItsGraphAndEverySubmapAndRefusesDamage) {
+    const test::ScratchDir scratch;
+    const auto scene = fusedScene<VoxelS>(VoxelBlockHash());
+    SubmapMapInfo info;
+    info.map.voxel_type = "s";
+    info.map.scene = scene.params();
+    info.map.camera = test::kinectIntrinsics(160, 120);
+    info.active = 1;
+    info.T_world_submap = {Mat4f::identity(), test::lookAt({0.5f, 0.f, 0.f}, {0.f, 0.f, 1.f})};
+    info.parent = {-1, 0};
+    PoseGraphEdge edge;
+    edge.from = 0;
+    edge.to = 1;
+    edge.T_from_to = info.T_world_submap[1];
+    edge.loop = true;
+    info.edges = {edge};
+    const std::string path = scratch.file("submaps.vfm"), bad = scratch.file("bad.vfm");
+    writeSubmapMap(path, scene, info);
+    const MapFileInfo whole = readMapFileInfo(path);
+    EXPECT_EQ(whole.submap_count, 2);
+    EXPECT_EQ(whole.voxel_type, "s");
+    EXPECT_EQ(submapLoadError(path), "");
+    {
+        MapFileReader file(path);
+        EXPECT_TRUE(file.holdsSubmaps());
+        const SubmapMapInfo read = readSubmapMapHeader(file);
+        EXPECT_EQ(read.active, 1);
+        ASSERT_EQ(read.edges.size(), 1u);
+        EXPECT_TRUE(read.edges[0].loop);
+        EXPECT_EQ(read.parent, info.parent);
+        EXPECT_EQ(0, std::memcmp(read.T_world_submap[1].m, info.T_world_submap[1].m, sizeof(Mat4f)));
+    }
+    // A single-map reader names what the file is.
+    EXPECT_NE(loadError(path).find("holds a map of submaps"), std::string::npos) << loadError(path);
+
+    const std::vector<char> bytes = bytesOf(path);
+    auto expectRefused = [&](std::vector<char> b, const std::string& reason) {
+        writeBytes(bad, b);
+        const std::string error = submapLoadError(bad);
+        EXPECT_NE(error.find(reason), std::string::npos) << "expected '" << reason << "', got '" << error << "'";
+    };
+    for (std::size_t cut : {std::size_t(20), std::size_t(400), bytes.size() / 2, bytes.size() - 4})
+        expectRefused(std::vector<char>(bytes.begin(), bytes.begin() + std::ptrdiff_t(cut)), "truncated");
+    std::vector<char> b = bytes;
+    b[60] ^= 0x01;
+    expectRefused(b, "checksum of the submaps' header does not match");
+    b = bytes;
+    b.push_back('!');
+    expectRefused(b, "bytes after the end marker");
+    b = bytes;
+    b[bytes.size() - 1] = 'X';
+    expectRefused(b, "no end marker after the submaps");
+
+    SubmapMapInfo wrong = info;
+    wrong.edges[0].to = 2;
+    writeSubmapMap(bad, scene, wrong);
+    EXPECT_NE(submapLoadError(bad).find("edge 0 joins submaps 0 and 2"), std::string::npos) << submapLoadError(bad);
+    wrong = info;
+    wrong.parent[1] = 1;
+    writeSubmapMap(bad, scene, wrong);
+    EXPECT_NE(submapLoadError(bad).find("submap 1 starts from submap 1"), std::string::npos);
+    wrong = info;
+    wrong.edges[0].sigma_rotation_rad = 0.f;
+    writeSubmapMap(bad, scene, wrong);
+    EXPECT_NE(submapLoadError(bad).find("uncertainty is not positive"), std::string::npos);
 }
 
 // The main engine: a run saved half way and continued from the file tracks and fuses on; on each device.

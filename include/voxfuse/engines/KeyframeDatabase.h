@@ -34,6 +34,10 @@ public:
     bool addIfNovel(const FernCode& code, const Mat4f& T_world_camera, int frame_index, float min_dissimilarity);
 
     const Keyframe& keyframe(int i) const { return keyframes_[std::size_t(i)]; }
+    // Every keyframe, oldest first (as a map file saves them), and the database made of such a list
+    // again (the newest `capacity` of them).
+    std::vector<Keyframe> oldestFirst() const;
+    void assign(std::vector<Keyframe> oldest_first);
     int size() const { return int(keyframes_.size()); }
     int capacity() const { return capacity_; }
     void clear();

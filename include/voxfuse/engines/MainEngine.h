@@ -211,16 +211,27 @@ public:
     // The mesh's vertices only (one point per zero-crossing voxel edge): cheaper than extractMesh.
     virtual void extractPointCloud(PointCloud& cloud) = 0;
 
-    // Writes the map to a map file (io/MapFile.h) with the current pose, where tracking resumes. IoError
-    // naming the file on failure; a failed save leaves no half-written file.
+    // Writes the map to a map file (io/MapFile.h) with the current pose, where tracking resumes, and the
+    // keyframes, by which a later run relocalises in it. With submaps, a map of submaps
+    // (io/SubmapMapFile.h). IoError naming the file on failure; a failed save leaves no half-written
+    // file.
     virtual void saveMap(const std::string& path) = 0;
     // Replaces the map with a map file's and resumes from the pose it was saved with: the model is
-    // raycast from there, so the next frame is tracked against the loaded map. The file must match this
-    // engine's voxel type, index settings, voxel size and mu (settingsForMap() makes settings that
-    // do); IoError naming the file and the mismatch otherwise. With swapping every block of the map
-    // starts stored in the global cache. A file that fails leaves the engine as it was. Returns the
-    // file's header.
+    // raycast from there. The next frame is looked up as a lost frame is (engines/Relocaliser.h): from
+    // that pose first, then from the saved keyframes, and only a pose that passes relocalisation's
+    // check is fused, so a new recording of the same place may start anywhere in the map. (Without
+    // relocalisation it is tracked from the saved pose.) The file must match this engine's voxel type,
+    // index settings, voxel size and mu (settingsForMap() makes settings that do); IoError naming the
+    // file and the mismatch otherwise. With submaps it loads a map of submaps, or a single map as the
+    // first submap. With swapping every block of the map starts stored in the global cache. A file
+    // that fails leaves the engine as it was. Returns the file's header (for a map of submaps, the
+    // map's as a whole).
     virtual MapFileInfo loadMap(const std::string& path) = 0;
+    // The same for one map among others in a file (a map of submaps holds one per submap): the map is
+    // written into / read from where the file stands. A map of submaps refuses them (ConfigError):
+    // it is a file of its own.
+    virtual void saveMapInto(MapFileWriter& file) = 0;
+    virtual MapFileInfo loadMapFrom(MapFileReader& file) = 0;
     // With poses from a source's ground truth: the world frame's pose in the source's frame (its first
     // frame, or what a loaded map says). SequenceRunner sets it; saveMap() stores it. False if unknown.
     virtual void setSourceOrigin(const Mat4f& T_source_world) = 0;
@@ -268,8 +279,8 @@ public:
 };
 
 // `base` with the voxel type, index, index settings, voxel size and mu of a map file, so that an engine
-// created with them can load it; every other setting stays as in `base`, the hash table's growth
-// (max_bucket_count) too.
+// created with them can load it, and submaps on for a map of submaps (a single map loads with them on
+// or off); every other setting stays as in `base`, the hash table's growth (max_bucket_count) too.
 MainEngineSettings settingsForMap(const MapFileInfo& info, MainEngineSettings base);
 
 }  // namespace voxfuse

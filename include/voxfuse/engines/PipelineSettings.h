@@ -59,7 +59,8 @@ struct PipelineSettings {
     // The settings that make `engine` (the inverse of toEngineSettings, with the tracker's kind, levels,
     // iterations and distances written out; tracker_config stays empty: its values are in them).
     static PipelineSettings of(const MainEngineSettings& engine);
-    // These settings with those a map file fixes: voxel type, index and its settings, voxel size, mu.
+    // These settings with those a map file fixes: voxel type, index and its settings, voxel size, mu,
+    // and submaps for a map of submaps.
     void adopt(const MapFileInfo& info);
 };
 

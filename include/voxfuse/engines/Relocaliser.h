@@ -11,6 +11,7 @@
 
 #include "voxfuse/engines/FernEncoder.h"
 #include "voxfuse/engines/KeyframeDatabase.h"
+#include "voxfuse/io/MapFile.h"
 #include "voxfuse/objects/FrameClock.h"
 #include "voxfuse/objects/TrackingState.h"
 #include "voxfuse/objects/View.h"
@@ -122,6 +123,13 @@ public:
     std::vector<KeyframeMatch> lookUp(const View& view);
 
     const KeyframeDatabase& database() const { return database_; }
+    // The keyframes as a map file saves them (io/MapFile.h)...
+    MapKeyframes savedKeyframes() const;
+    // ... and a map's saved keyframes in place of this relocaliser's. They are taken only where their
+    // codes compare with the ones this relocaliser makes: the same fern settings and frame size, and
+    // codes of the same kind (with or without intensity; where no frame was encoded yet, the first
+    // one's kind decides, and unlike ones are dropped then). Returns whether they were taken.
+    bool adoptKeyframes(const MapKeyframes& saved);
     const RelocalisationSettings& settings() const { return settings_; }
     // Forgets every keyframe and the recent frames (a new map).
     void clear();
@@ -134,6 +142,7 @@ private:
     Device device_;
     std::unique_ptr<FernEncoder> encoder_;  // made for the first frame encoded: with intensity when it has colour
     KeyframeDatabase database_;
+    int adopted_intensity_ = -1;               // saved keyframes taken before any frame was encoded: their kind (0/1)
     std::vector<float> recent_inlier_ratios_;  // of the last good frames, oldest first
 };
 
