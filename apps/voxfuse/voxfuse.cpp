@@ -11,6 +11,7 @@
 #include <iostream>
 
 #include "Interrupt.h"
+#include "MergeCommand.h"
 #include "OptionChecks.h"
 #include "OutputFolder.h"
 #include "PipelineOptions.h"
@@ -344,9 +345,11 @@ int run(CliOptions& o) {
 
 int main(int argc, char** argv) {
     app::useLongRunHeapPolicy();
+    if (argc > 1 && std::string(argv[1]) == "merge")
+        return app::runReportingErrors("voxfuse merge", [&] { return app::runMergeCommand(argc - 1, argv + 1); });
     CLI::App cli{
         "VoxFuse: dense 3D reconstruction from RGB-D sequences.\n"
-        "With no SOURCE, runs on the bundled synthetic sequence.\n"
+        "With no SOURCE, runs on the bundled synthetic sequence. `voxfuse merge --help`: joining maps.\n"
         "Ctrl-C (or SIGTERM) stops after the current frame and writes the outputs of the frames done; a second one "
         "quits at once.\n"
         "Exit status: 0 done, 2 refused (the error says why), 3 an unexpected error, 4 ran but fused nothing "

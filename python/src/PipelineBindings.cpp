@@ -269,6 +269,24 @@ double median(std::vector<double> v) {
     return 0.5 * (upper + *std::max_element(v.begin(), v.begin() + long(mid)));
 }
 
+// Loop closures (or a merge's joins) as dicts: frame, from_submap, to_submap, residual_m, inlier_ratio,
+// chi2, rejected.
+py::list loopDicts(const std::vector<LoopClosure>& loops) {
+    py::list out;
+    for (const LoopClosure& l : loops) {
+        py::dict d;
+        d["frame"] = l.frame;
+        d["from_submap"] = l.from_submap;
+        d["to_submap"] = l.to_submap;
+        d["residual_m"] = l.residual_m;
+        d["inlier_ratio"] = l.inlier_ratio;
+        d["chi2"] = l.chi2;
+        d["rejected"] = l.rejected;
+        out.append(d);
+    }
+    return out;
+}
+
 py::dict timings(const Pipeline& p) {
     py::dict d;
     for (const auto& [stage, t] : p.stageTimes()) {
@@ -589,6 +607,22 @@ void bindPipeline(py::module_& m) {
             py::arg("path"),
             "Replaces the map with a .vfm file's (which must match the settings; see Pipeline.from_map).")
         .def(
+            "merge_map",
+            [](Pipeline& p, const std::string& path) {
+                const auto busy = p.claim("merge_map");
+                std::vector<LoopClosure> joins;
+                {
+                    py::gil_scoped_release no_gil;
+                    joins = p.engine().mergeMap(path);
+                }
+                return loopDicts(joins);
+            },
+            py::arg("path"),
+            "Joins another map of the same place, made separately (a .vfm of this map's voxel type, voxel size and "
+            "mu), as submaps of this one (submaps=True): its views are recognised here and verified as "
+            "relocalisation verifies a pose. Returns the joins as loop_closures() describes them (frame -1). "
+            "Raises Error when no view of it is found here (the map is unchanged then).")
+        .def(
             "reset",
             [](Pipeline& p) {
                 const auto busy = p.claim("reset");
@@ -648,19 +682,7 @@ void bindPipeline(py::module_& m) {
             "loop_closures",
             [](Pipeline& p) {
                 const auto busy = p.claim("loop_closures");
-                py::list loops;
-                for (const LoopClosure& l : p.engine().loopClosures()) {
-                    py::dict d;
-                    d["frame"] = l.frame;
-                    d["from_submap"] = l.from_submap;
-                    d["to_submap"] = l.to_submap;
-                    d["residual_m"] = l.residual_m;
-                    d["inlier_ratio"] = l.inlier_ratio;
-                    d["chi2"] = l.chi2;
-                    d["rejected"] = l.rejected;
-                    loops.append(d);
-                }
-                return loops;
+                return loopDicts(p.engine().loopClosures());
             },
             "Every loop closure between submaps so far, as dicts: frame (processed frames before it since the map "
             "began), from_submap (the older one the camera was found in), to_submap, residual_m, inlier_ratio, chi2 "

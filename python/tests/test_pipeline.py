@@ -230,3 +230,11 @@ def test_submaps_expose_their_loops_and_optimised_trajectory(room_source, tmp_pa
     for a, b in zip(p.submap_poses(), q.submap_poses()):
         assert a["parent"] == b["parent"]
         np.testing.assert_array_equal(a["pose"], b["pose"])
+
+    # Another map of the same place, from the first 20 frames, joins it.
+    r = voxfuse.Pipeline(room_source.calib, voxfuse.Settings(submaps=True, submap_distance=0.1))
+    for i in range(20):
+        r.process_frame(frames[i])
+    joins = r.merge_map(path)
+    assert joins and all(j["frame"] == -1 and j["residual_m"] < 0.006 for j in joins)
+    assert r.submap_count > p.submap_count

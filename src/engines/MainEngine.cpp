@@ -152,6 +152,7 @@ public:
     bool locate(const View& view, TrackingState& found) override {
         return relocalising_.locate({scene_, view, *raycast_, *tracker_, settings_, onGpu()}, found);
     }
+    std::vector<Mat4f> keyframePoses() const override { return relocalising_.keyframePoses(); }
     bool locateNear(const View& view, const Mat4f& T_world_prior, TrackingState& found) override {
         requireCameraPose(T_world_prior, "locateNear");
         return relocalising_.locateNear({scene_, view, *raycast_, *tracker_, settings_, onGpu()}, T_world_prior, found);

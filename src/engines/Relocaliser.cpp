@@ -170,8 +170,10 @@ Relocaliser::~Relocaliser() = default;
 
 FernCode Relocaliser::encode(const View& view) {
     if (!encoder_) {
-        encoder_ = std::make_unique<FernEncoder>(settings_.ferns, frame_size_, !view.rgb.empty(), device_);
-        if (adopted_intensity_ >= 0 && adopted_intensity_ != int(encoder_->withIntensity())) database_.clear();
+        // Codes of the kind the adopted keyframes have, whatever this frame has (a view without colour
+        // reads intensity 0): the saved keyframes stay comparable.
+        const bool with_intensity = adopted_intensity_ >= 0 ? adopted_intensity_ == 1 : !view.rgb.empty();
+        encoder_ = std::make_unique<FernEncoder>(settings_.ferns, frame_size_, with_intensity, device_);
         adopted_intensity_ = -1;
     }
     return encoder_->encode(view.depth, view.rgb);

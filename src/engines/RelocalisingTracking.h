@@ -147,6 +147,12 @@ public:
         lost_ = true;
     }
     MapKeyframes savedKeyframes() const { return relocaliser_ ? relocaliser_->savedKeyframes() : MapKeyframes(); }
+    std::vector<Mat4f> keyframePoses() const {
+        std::vector<Mat4f> poses;
+        if (relocaliser_)
+            for (const Keyframe& k : relocaliser_->database().oldestFirst()) poses.push_back(k.T_world_camera);
+        return poses;
+    }
 
     // A new map: no keyframes, not lost, no time of a last good pose.
     void forget() {

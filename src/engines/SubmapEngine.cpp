@@ -15,6 +15,7 @@
 
 #include "voxfuse/core/Error.h"
 #include "voxfuse/core/Timer.h"
+#include "voxfuse/engines/FernEncoder.h"
 #include "voxfuse/io/SubmapMapFile.h"
 #include "voxfuse/mapping/PoseGraph.h"
 
@@ -40,10 +41,43 @@ constexpr int kLoopSubmapsPerFrame = 2;
 // that starts a new submap): a quarter of it is hysteresis.
 constexpr float kLoopSearchShare = 0.75f;
 
+// Merging maps: each submap is seen from its first camera and at most this many keyframes' poses less
+// one, spread over them (here: the views the other map's are compared with; there: the other map's,
+// tried until one of a submap's is found). The rendered depth is stored in steps of 0.1 mm (a TUM
+// PNG's are 0.2 mm).
+constexpr int kMergeViewsHere = 16;
+constexpr int kMergeViewsThere = 8;
+constexpr float kRenderedDepthStepM = 0.0001f;
+
 constexpr int kMinSubmapBuckets = 4096;
 constexpr int kMinSubmapExcess = 1024;
 
 float translationNormM(const Mat4f& T) { return length(T.translation()); }
+
+// Up to `count` of `poses`, spread evenly from the first to the last.
+std::vector<Mat4f> spread(const std::vector<Mat4f>& poses, int count) {
+    if (int(poses.size()) <= count) return poses;
+    std::vector<Mat4f> some;
+    for (int i = 0; i < count; ++i) some.push_back(poses[std::size_t(i) * (poses.size() - 1) / std::size_t(count - 1)]);
+    return some;
+}
+
+// What a depth camera of `calib` at T_map_camera would record of `map` (its surface raycast: depth and,
+// with `color`, the fused colours), as a frame.
+RGBDFrame renderedFrame(MainEngine& map, const Mat4f& T_map_camera, const RGBDCalib& calib, bool color) {
+    Image<Vec4u8> image;
+    Image<float> depth_m;
+    map.renderFromPose(T_map_camera, calib.depth, RenderMode::Color, image, depth_m);
+    RGBDFrame frame;
+    frame.index = 0;
+    frame.depth_raw.resize(depth_m.size());
+    for (std::size_t i = 0; i < depth_m.pixelCount(); ++i) {
+        const float raw = std::round(depth_m.host()[i] / calib.disparity.a);
+        frame.depth_raw.host()[i] = raw > 0.f && raw < 65535.f ? std::uint16_t(raw) : 0;
+    }
+    if (color) frame.rgb = std::move(image);
+    return frame;
+}
 
 void toWorld(const Mat4f& T_world_submap, TrackingState& t) { t.T_world_camera = T_world_submap * t.T_world_camera; }
 void toWorld(const Mat4f& T_world_submap, FrameResult& r) {
@@ -405,6 +439,93 @@ public:
     MapFileInfo loadMapFrom(MapFileReader& file) override {
         throw ConfigError(file.path() + ": a map of submaps loads from a file of its own (loadMap)");
     }
+    std::vector<Mat4f> keyframePoses() const override {
+        std::vector<Mat4f> poses;
+        for (const Submap& m : submaps_)
+            for (const Mat4f& T : m.engine->keyframePoses()) poses.push_back(m.T_world_submap * T);
+        return poses;
+    }
+
+    // The other map is loaded as a map of its own first; its submaps are moved here only once one of
+    // them is found, so a failure leaves this map as it was. Places are recognised between renders of
+    // both maps (fern codes, engines/FernEncoder.h): a render holds the map's surface only, without
+    // what its frames saw beyond the fused range, so renders compare with renders, not with frames.
+    // Each of the other map's views is then aligned to the submaps here from the poses of the views
+    // most like it (locateNear) and accepted by relocalisation's check.
+    std::vector<LoopClosure> mergeMap(const std::string& path) override {
+        SubmapEngine other(settings_, calib_);
+        other.loadMap(path);
+        optimiser_.waitIdle();
+        adoptSolution();
+        // Rendered views become frames of a camera with the map's depth intrinsics and colour in the
+        // depth camera's place; an engine of the same settings converts them into views.
+        RGBDCalib view_calib;
+        view_calib.depth = view_calib.rgb = calib_.depth;
+        view_calib.disparity = DisparityCalib::affine(kRenderedDepthStepM);
+        const bool color = voxelTypeHasColor(settings_.voxel_type);
+        FernEncoder encoder(settings_.relocalisation.ferns, calib_.depth.size(), color);
+        const std::vector<PlaceView> here = placeViews(*this, view_calib, color, encoder, kMergeViewsHere);
+        const std::vector<PlaceView> there = placeViews(other, view_calib, color, encoder, kMergeViewsThere);
+        auto converter = MainEngine::create(local_settings_, view_calib);
+        const int offset = static_cast<int>(submaps_.size());
+        std::vector<PoseGraphEdge> joins;
+        std::vector<LoopClosure> reports;
+        std::vector<char> joined(other.submaps_.size(), 0);
+        for (const PlaceView& view : there) {
+            if (joined[std::size_t(view.submap)]) continue;
+            // The views here most like it.
+            std::vector<std::pair<float, std::size_t>> alike;
+            for (std::size_t h = 0; h < here.size(); ++h)
+                alike.push_back({fernDissimilarity(view.code, here[h].code), h});
+            const std::size_t candidates = std::min(alike.size(), std::size_t(settings_.relocalisation.candidates));
+            std::partial_sort(alike.begin(), alike.begin() + std::ptrdiff_t(candidates), alike.end());
+            MainEngine& part = *other.submaps_[std::size_t(view.submap)].engine;
+            const Mat4f identity = Mat4f::identity();
+            converter->reset();
+            converter->processFrame(renderedFrame(part, view.T_submap_camera, view_calib, color), &identity);
+            for (std::size_t c = 0; c < candidates; ++c) {
+                const PlaceView& like = here[alike[c].second];
+                MainEngine& engine = *submaps_[std::size_t(like.submap)].engine;
+                TrackingState found;
+                const bool located = engine.locateNear(converter->view(), like.T_submap_camera, found);
+                if (like.submap != active_) engine.releaseFrameMemory();
+                if (!located) continue;
+                joins.push_back(loopEdge(like.submap, offset + view.submap,
+                                         found.T_world_camera * rigidInverse(view.T_submap_camera)));
+                reports.push_back(loopReport(-1, like.submap, offset + view.submap, found));
+                joined[std::size_t(view.submap)] = 1;
+                break;
+            }
+        }
+        for (Submap& m : other.submaps_) m.engine->releaseFrameMemory();
+        if (joins.empty())
+            throw Error(path + ": no view of the map was found in this one (" + std::to_string(other.submaps_.size()) +
+                        " submaps tried): they do not overlap, or not where either has keyframes");
+
+        // The other map's world placed by its first join; the pose graph weighs the others.
+        const PoseGraphEdge& first = joins.front();
+        const Mat4f T_world_other = submaps_[std::size_t(first.from)].T_world_submap * first.T_from_to *
+                                    rigidInverse(other.submaps_[std::size_t(first.to - offset)].T_world_submap);
+        for (Submap& m : other.submaps_) {
+            m.T_world_submap = T_world_other * m.T_world_submap;
+            // Its first submap hangs from the submap it was first found in.
+            m.parent = m.parent >= 0 ? m.parent + offset : first.from;
+            m.keyframes = -1;
+            graph_.addNode(m.T_world_submap);
+            submaps_.push_back(std::move(m));
+        }
+        for (PoseGraphEdge e : other.graph_.edges()) {
+            e.from += offset;
+            e.to += offset;
+            graph_.addEdge(e);
+        }
+        for (std::size_t q = 0; q < joins.size(); ++q) addLoop(joins[q], reports[q]);
+        for (const auto& [a, b] : other.loop_joined_) loop_joined_.insert({a + offset, b + offset});
+        optimiser_.submit(graph_);
+        world_render_version_ = -1;
+        return reports;
+    }
+
     void setSourceOrigin(const Mat4f& T_source_world) override {
         T_source_world_ = T_source_world;
         has_source_origin_ = true;
@@ -482,6 +603,33 @@ private:
         return keep;
     }
 
+    // A submap's view for recognising places between maps: rendered from T_submap_camera, encoded.
+    struct PlaceView {
+        int submap;
+        Mat4f T_submap_camera;
+        FernCode code;
+    };
+    // Every submap of `map` seen from its first camera and from its keyframes' poses (at most `per_submap`
+    // views, spread over them).
+    static std::vector<PlaceView> placeViews(SubmapEngine& map, const RGBDCalib& view_calib, bool color,
+                                             FernEncoder& encoder, int per_submap) {
+        std::vector<PlaceView> views;
+        for (int j = 0; j < static_cast<int>(map.submaps_.size()); ++j) {
+            MainEngine& part = *map.submaps_[std::size_t(j)].engine;
+            std::vector<Mat4f> poses = {Mat4f::identity()};
+            for (const Mat4f& T : spread(part.keyframePoses(), per_submap - 1)) poses.push_back(T);
+            for (const Mat4f& T : poses) {
+                Image<Vec4u8> image;
+                Image<float> depth_m;
+                part.renderFromPose(T, view_calib.depth, RenderMode::Color, image, depth_m);
+                if (!color) image = Image<Vec4u8>();
+                views.push_back({j, T, encoder.encode(depth_m, image)});
+            }
+            if (j != map.active_) part.releaseFrameMemory();
+        }
+        return views;
+    }
+
     // The first submap; its frame is the world.
     void startMap() {
         Submap first;
@@ -547,24 +695,9 @@ private:
             TrackingState found;
             if (!locateIn(j, view, T_world_camera, found)) continue;
 
-            PoseGraphEdge loop;
-            loop.from = j;
-            loop.to = active_;
-            loop.T_from_to = found.T_world_camera * rigidInverse(T_active_camera);
-            loop.sigma_translation_m = kLoopSigmaM;
-            loop.sigma_rotation_rad = kLoopSigmaRad;
-            loop.loop = true;
-            loop_edges_.push_back(graph_.edgeCount());
-            graph_.addEdge(loop);
-            loop_joined_.insert({std::min(j, active_), std::max(j, active_)});
+            addLoop(loopEdge(j, active_, found.T_world_camera * rigidInverse(T_active_camera)),
+                    loopReport(static_cast<int>(frames_processed_) - 1, j, active_, found));
             optimiser_.submit(graph_);
-            LoopClosure report;
-            report.frame = static_cast<int>(frames_processed_) - 1;
-            report.from_submap = j;
-            report.to_submap = active_;
-            report.residual_m = found.residual_m;
-            report.inlier_ratio = found.inlier_ratio;
-            loops_.push_back(report);
 
             // The frame is fused into the older submap at the pose found there, which is tracked from here.
             if (!withinNeighbourhood(found.T_world_camera, 1.f)) {
@@ -628,6 +761,35 @@ private:
         const bool located = engine.locate(view, found) || engine.locateNear(view, T_j_camera, found);
         if (!located) engine.releaseFrameMemory();
         return located;
+    }
+
+    // A loop edge (or a merge's join): the pose of submap `to` measured in submap `from`, with the
+    // uncertainty of an accepted relocalisation.
+    static PoseGraphEdge loopEdge(int from, int to, const Mat4f& T_from_to) {
+        PoseGraphEdge e;
+        e.from = from;
+        e.to = to;
+        e.T_from_to = T_from_to;
+        e.sigma_translation_m = kLoopSigmaM;
+        e.sigma_rotation_rad = kLoopSigmaRad;
+        e.loop = true;
+        return e;
+    }
+    static LoopClosure loopReport(int frame, int from, int to, const TrackingState& found) {
+        LoopClosure report;
+        report.frame = frame;
+        report.from_submap = from;
+        report.to_submap = to;
+        report.residual_m = found.residual_m;
+        report.inlier_ratio = found.inlier_ratio;
+        return report;
+    }
+    // Into the graph (solved when next submitted), reported, and its submaps marked as joined.
+    void addLoop(const PoseGraphEdge& edge, const LoopClosure& report) {
+        loop_edges_.push_back(graph_.edgeCount());
+        graph_.addEdge(edge);
+        loop_joined_.insert({std::min(edge.from, edge.to), std::max(edge.from, edge.to)});
+        loops_.push_back(report);
     }
 
     bool loopJoined(int a, int b) const { return loop_joined_.count({std::min(a, b), std::max(a, b)}) > 0; }

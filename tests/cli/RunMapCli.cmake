@@ -4,7 +4,7 @@
 # map is refused; options the map alone cannot use are refused; a refused run keeps the earlier
 # outputs; an existing file is never taken for the swap file. With submaps: the map of submaps saves,
 # loads alone to the same bytes, and places a second run that starts elsewhere in it; it cannot be
-# loaded with --submaps off.
+# loaded with --submaps off; two maps made separately merge (voxfuse merge).
 file(REMOVE_RECURSE ${WORK_DIR})
 file(MAKE_DIRECTORY ${WORK_DIR})
 
@@ -106,6 +106,18 @@ if(WITH_CERES)
   string(JSON submaps_now GET "${summary}" submaps)
   if(fused LESS 19 OR ate GREATER 0.005 OR submaps_now LESS submaps)
     message(FATAL_ERROR "the second run fused ${fused} of 20 frames with ATE ${ate} m in ${submaps_now} submaps")
+  endif()
+  # A second map made separately (frames 20-59, its own world) merges into the first; the result loads.
+  run_voxfuse(0 --voxel s --skip 20 --frames 40 --submaps on --submap-distance 0.15 --render-every 0 --out sub2
+              --save-map sub2/room.vfm)
+  run_voxfuse(0 merge sub1/room.vfm sub2/room.vfm --out merged.vfm)
+  if(NOT last_output MATCHES "verified views" OR NOT EXISTS ${WORK_DIR}/merged.vfm)
+    message(FATAL_ERROR "voxfuse merge did not merge:\n${last_output}")
+  endif()
+  run_voxfuse(0 --load-map merged.vfm --frames 0 --mesh --out merged_alone)
+  run_voxfuse(2 merge sub1/room.vfm --out refused.vfm)
+  if(NOT last_output MATCHES "at least two maps" OR EXISTS ${WORK_DIR}/refused.vfm)
+    message(FATAL_ERROR "voxfuse merge of one map was not refused:\n${last_output}")
   endif()
   run_voxfuse(2 --load-map sub1/room.vfm --submaps off --frames 0 --out refused)
   if(NOT last_output MATCHES "the map has [0-9]+ submaps; --submaps cannot change it")

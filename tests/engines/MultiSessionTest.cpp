@@ -11,6 +11,7 @@
 
 #include "../io/IoTestUtil.h"
 #include "BundledRoom.h"
+#include "SyntheticViews.h"
 #include "voxfuse/core/Error.h"
 #include "voxfuse/engines/MainEngine.h"
 #include "voxfuse/mapping/PoseGraph.h"
@@ -138,6 +139,88 @@ TEST(MultiSessionTest, ANewRecordingIsPlacedInWhicheverSubmapHoldsItsStart) {
     ASSERT_GT(length(room.truth(3).translation() - room.truth(59).translation()), 0.3f);
     playSecondRecording(*second, room, 3, 23, 0.01f);
     EXPECT_GE(second->submapCount(), submaps);
+}
+
+// Two maps of the room made separately, each in its own world (its first frame's camera): frames 0-59
+// and 30-79. Merged, the second's submaps sit where the truth puts them in the first's world, joined
+// by verified loop edges that the pose graph keeps.
+TEST(MultiSessionTest, TwoMapsMadeSeparatelyMergeIntoOneWorld) {
+    if (!poseGraphAvailable()) GTEST_SKIP() << "built without Ceres: no submaps";
+    const test::ScratchDir scratch;
+    const Room room(80);
+    const std::string second_path = scratch.file("second.vfm"), merged_path = scratch.file("merged.vfm");
+    std::vector<SubmapPose> second_poses;
+    {
+        auto second = MainEngine::create(roomSettings(true, 0.2f), room.calib);
+        track(*second, room, 30, 79);
+        second_poses = second->submapPoses();
+        second->saveMap(second_path);
+    }
+    auto first = MainEngine::create(roomSettings(true, 0.2f), room.calib);
+    track(*first, room, 0, 59);
+    const int before = first->submapCount();
+    const std::vector<LoopClosure> joins = first->mergeMap(second_path);
+    ASSERT_GE(joins.size(), 1u);
+    ASSERT_EQ(first->submapCount(), before + int(second_poses.size()));
+    for (const LoopClosure& j : joins) {
+        EXPECT_EQ(j.frame, -1);
+        EXPECT_LT(j.from_submap, before);
+        EXPECT_GE(j.to_submap, before);
+        EXPECT_LT(j.residual_m, 0.006f);
+    }
+    for (const LoopClosure& l : first->loopClosures()) EXPECT_FALSE(l.rejected) << "join to " << l.to_submap;
+    std::vector<Mat4f> trajectory;
+    first->optimisedPoses(trajectory);  // waits for the solve
+    const std::vector<SubmapPose> merged = first->submapPoses();
+    // The second map's world is frame 30's camera: in the first's, truth(30).
+    const Mat4f T_first_second = room.truth(30);
+    for (std::size_t k = 0; k < second_poses.size(); ++k) {
+        const Vec3f expected = (T_first_second * second_poses[k].T_world_submap).translation();
+        EXPECT_LT(length(merged[std::size_t(before) + k].T_world_submap.translation() - expected), 0.015f) << k;
+    }
+    // The merged map saves, loads and tracks on.
+    first->saveMap(merged_path);
+    auto again = MainEngine::create(settingsForMap(readMapFileInfo(merged_path), roomSettings(true, 0.2f)), room.calib);
+    again->loadMap(merged_path);
+    EXPECT_EQ(again->submapCount(), first->submapCount());
+    playSecondRecording(*again, room, 65, 75, 0.015f);
+
+    std::printf("[ merge    ] %d + %zu submaps, %zu joins\n", before, second_poses.size(), joins.size());
+
+    auto plain = MainEngine::create(roomSettings(false, 1.5f), room.calib);
+    EXPECT_THROW(plain->mergeMap(second_path), ConfigError);
+}
+
+// A map of another place (a box and a sphere, seen with the room's camera) is not merged: no view of
+// it passes the check, and the map stays as it was.
+TEST(MultiSessionTest, AMapOfAnotherPlaceIsNotMerged) {
+    if (!poseGraphAvailable()) GTEST_SKIP() << "built without Ceres: no submaps";
+    const test::ScratchDir scratch;
+    const Room room(30);
+    const std::string elsewhere = scratch.file("elsewhere.vfm");
+    {
+        RGBDCalib calib;
+        calib.depth = calib.rgb = room.calib.depth;
+        calib.disparity = DisparityCalib::affine(0.001f);
+        const synth::SyntheticScene world = synth::SyntheticScene::boxAndSphere();
+        auto boxes = MainEngine::create(roomSettings(true, 0.2f), calib);
+        for (int k = 0; k < 8; ++k) {
+            const Mat4f pose = test::lookAt({1.0f + 0.02f * k, -0.8f + 0.03f * k, 0.7f}, {0.3f, 0.f, 0.1f});
+            boxes->processFrame(test::toRgbdFrame(test::renderView(world, calib.depth, pose), k), nullptr);
+        }
+        boxes->saveMap(elsewhere);
+    }
+    auto first = MainEngine::create(roomSettings(true, 0.2f), room.calib);
+    track(*first, room, 0, 29);
+    const int before = first->submapCount();
+    try {
+        first->mergeMap(elsewhere);
+        ADD_FAILURE() << "a map of another place was merged";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("no view of the map was found"), std::string::npos) << e.what();
+    }
+    EXPECT_EQ(first->submapCount(), before);
+    EXPECT_TRUE(first->loopClosures().empty());
 }
 
 TEST(MultiSessionTest, ASingleMapBecomesTheFirstSubmapAndAMapOfSubmapsNeedsSubmaps) {

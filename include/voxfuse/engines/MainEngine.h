@@ -252,6 +252,19 @@ public:
     // whether one passed, with the tracker's verdict and pose (this map's world) in `found`. False
     // without relocalisation (it keeps the keyframes).
     virtual bool locate(const View& /*view*/, TrackingState& /*found*/) { return false; }
+    // The keyframes' poses (this map's world), oldest first; empty without relocalisation.
+    virtual std::vector<Mat4f> keyframePoses() const = 0;
+    // Another map of the same place, made separately (a map file of this map's voxel type, voxel
+    // size and mu: a map of submaps or a single map), joined to this one as submaps of it. Views of
+    // the other map, rendered from its keyframes' poses, are looked up among this map's keyframes and
+    // checked as relocalisation checks a candidate (locate); each of its submaps whose view is found
+    // joins the submap it was found in by a loop edge, and the pose graph places the other map's
+    // submaps with their own edges. Returns the joins found (frame -1; from_submap this map's,
+    // to_submap the other's as numbered here now). IoError for a file that does not fit; Error when
+    // no view of it is found here (this map is unchanged then). Needs submaps (ConfigError without).
+    virtual std::vector<LoopClosure> mergeMap(const std::string& path) {
+        throw ConfigError(path + ": merging maps needs submaps (MainEngineSettings::submaps)");
+    }
     // The same from a pose the frame is believed to be near (this map's world), without keyframes: the
     // frame is aligned to the model raycast from `T_world_prior` and accepted as a relocalisation
     // candidate is. For revisits seen from another angle, which keyframes do not recognise.

@@ -127,8 +127,8 @@ public:
     MapKeyframes savedKeyframes() const;
     // ... and a map's saved keyframes in place of this relocaliser's. They are taken only where their
     // codes compare with the ones this relocaliser makes: the same fern settings and frame size, and
-    // codes of the same kind (with or without intensity; where no frame was encoded yet, the first
-    // one's kind decides, and unlike ones are dropped then). Returns whether they were taken.
+    // codes of the same kind (with or without intensity; where no frame was encoded yet, the codes are
+    // made of the saved keyframes' kind from then on). Returns whether they were taken.
     bool adoptKeyframes(const MapKeyframes& saved);
     const RelocalisationSettings& settings() const { return settings_; }
     // Forgets every keyframe and the recent frames (a new map).
@@ -142,7 +142,8 @@ private:
     Device device_;
     std::unique_ptr<FernEncoder> encoder_;  // made for the first frame encoded: with intensity when it has colour
     KeyframeDatabase database_;
-    int adopted_intensity_ = -1;               // saved keyframes taken before any frame was encoded: their kind (0/1)
+    // Saved keyframes taken before any frame was encoded: their kind (0/1), which the encoder takes.
+    int adopted_intensity_ = -1;
     std::vector<float> recent_inlier_ratios_;  // of the last good frames, oldest first
 };
 
