@@ -57,6 +57,7 @@ float translationNormM(const Mat4f& T) { return length(T.translation()); }
 // Up to `count` of `poses`, spread evenly from the first to the last.
 std::vector<Mat4f> spread(const std::vector<Mat4f>& poses, int count) {
     if (int(poses.size()) <= count) return poses;
+    if (count < 2) return {poses.begin(), poses.begin() + std::max(0, count)};
     std::vector<Mat4f> some;
     for (int i = 0; i < count; ++i) some.push_back(poses[std::size_t(i) * (poses.size() - 1) / std::size_t(count - 1)]);
     return some;
@@ -378,7 +379,7 @@ public:
 
     // A map of submaps, or a single map as the first submap. Read into new submaps first: a file that
     // fails leaves the map as it was. The run goes on in the active submap; its first frame is looked
-    // up there and then in every submap in turn (placeInLoadedMap) before anything is fused.
+    // up there and then in every submap in turn (relocaliseInOtherSubmaps) before anything is fused.
     MapFileInfo loadMap(const std::string& path) override {
         MapFileReader file(path);
         SubmapMapInfo info;

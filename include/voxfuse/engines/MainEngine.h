@@ -255,11 +255,12 @@ public:
     // The keyframes' poses (this map's world), oldest first; empty without relocalisation.
     virtual std::vector<Mat4f> keyframePoses() const = 0;
     // Another map of the same place, made separately (a map file of this map's voxel type, voxel
-    // size and mu: a map of submaps or a single map), joined to this one as submaps of it. Views of
-    // the other map, rendered from its keyframes' poses, are looked up among this map's keyframes and
-    // checked as relocalisation checks a candidate (locate); each of its submaps whose view is found
-    // joins the submap it was found in by a loop edge, and the pose graph places the other map's
-    // submaps with their own edges. Returns the joins found (frame -1; from_submap this map's,
+    // size and mu: a map of submaps or a single map), joined to this one as submaps of it. Both maps
+    // are rendered from their submaps' first cameras and keyframe poses; each view of the other map is
+    // aligned to this one from the poses of the views here most like it (fern codes) and checked as
+    // relocalisation checks a candidate (locateNear). Each of its submaps with a view found joins the
+    // submap it was found in by a loop edge, and the pose graph places the other map's submaps with
+    // their own edges. Returns the joins found (frame -1; from_submap this map's,
     // to_submap the other's as numbered here now). IoError for a file that does not fit; Error when
     // no view of it is found here (this map is unchanged then). Needs submaps (ConfigError without).
     virtual std::vector<LoopClosure> mergeMap(const std::string& path) {
