@@ -123,10 +123,11 @@ private:
                 if (settings_.max_tracking_depth_m > 0.f)
                     low_level_->dropDepthBeyond(level.depth, settings_.max_tracking_depth_m);
             }
-            low_level_->computeVertexMap(level.depth, level.intrinsics, level.vertices);
-            // Only the normals the level's terms read (a level taking every second pixel reads a quarter).
-            low_level_->computeNormalMap(level.vertices, level.normals, settings_.max_normal_edge_m * float(1 << i),
-                                         settings_.levels[std::size_t(levelCount() - 1 - i)].pixel_step);
+            // Only the points and normals the level's terms read (a level taking every second pixel reads a quarter).
+            low_level_->computeGridPointsAndNormals(level.depth, level.intrinsics,
+                                                    settings_.max_normal_edge_m * float(1 << i),
+                                                    settings_.levels[std::size_t(levelCount() - 1 - i)].pixel_step,
+                                                    level.vertices, level.normals);
         }
         // Counted on the pixels the finest level takes terms from, as its inliers are.
         valid_pixels_ = low_level_->countValidDepth(pyramid_[0].depth, settings_.levels.back().pixel_step);
@@ -207,7 +208,7 @@ private:
                 depth_eq = depthSystemMovedBy(converged_depth, moved_since);
             } else {
                 depth_eq = kernels_->accumulate(level, model, params, robust ? final_kernel : RobustKernel::None,
-                                                settings_.robust_scale_m, ls.pixel_step);
+                                                settings_.robust_scale_m);
                 converged_depth = depth_eq;
                 moved_since.setZero();
                 depth_pins_translation =

@@ -74,15 +74,33 @@ public:
         TDevice::parallelFor(int(depth.pixelCount()), VertexPixels{src, intr, dst});
     }
 
-    void computeNormalMap(const Image<Vec4f>& vertices, Image<Vec4f>& normals, float max_edge_m,
-                          int pixel_step) override {
-        if (pixel_step < 1)
-            throw Error("computeNormalMap: the pixel step must be at least 1, got " + std::to_string(pixel_step));
+    void computeNormalMap(const Image<Vec4f>& vertices, Image<Vec4f>& normals, float max_edge_m) override {
         const Vec4f* src = imageOn(kDevice, vertices, point_staging_);
         Vec4f* dst = outputOn(kDevice, normals, vertices.size());
-        TDevice::parallelFor(
-            gridSize(vertices.size(), pixel_step),
-            NormalPixels{src, vertices.size(), max_edge_m, pixelGridOf(vertices.size(), pixel_step), dst});
+        TDevice::parallelFor(int(vertices.pixelCount()), NormalPixels{src, vertices.size(), max_edge_m, dst});
+    }
+
+    void computeGridPointsAndNormals(const Image<float>& depth, const Intrinsics& intr, float max_edge_m, int pixel_step,
+                                     Image<Vec4f>& vertices, Image<Vec4f>& normals) override {
+        if (pixel_step < 1)
+            throw Error("computeGridPointsAndNormals: the pixel step must be at least 1, got " +
+                        std::to_string(pixel_step));
+        if (depth.size() != intr.size())
+            throw Error("computeGridPointsAndNormals: the depth image is not the intrinsics' size");
+        // Every pixel: the vertex map first, each point unprojected once rather than by each neighbour.
+        if (pixel_step == 1) {
+            computeVertexMap(depth, intr, vertices);
+            computeNormalMap(vertices, normals, max_edge_m);
+            return;
+        }
+        const float* src = imageOn(kDevice, depth, float_staging_);
+        const Vec2i grid_size{(depth.width() + pixel_step - 1) / pixel_step,
+                              (depth.height() + pixel_step - 1) / pixel_step};
+        Vec4f* points = outputOn(kDevice, vertices, grid_size);
+        Vec4f* dst = outputOn(kDevice, normals, grid_size);
+        TDevice::parallelFor(gridSize(depth.size(), pixel_step),
+                             GridPointNormalPixels{DepthImagePoints{src, intr}, depth.size(), max_edge_m,
+                                                   pixelGridOf(depth.size(), pixel_step), points, dst});
     }
 
     void copyDepth(const Image<float>& in, Image<float>& out) override {

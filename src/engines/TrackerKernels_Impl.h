@@ -21,15 +21,15 @@ class DepthTrackerKernelsOn final : public DepthTrackerKernels {
 
 public:
     NormalEquations<double> accumulate(const DepthFrameLevel& level, const RenderState& model,
-                                       const DepthTermParams& params, RobustKernel kernel, float kernel_scale_m,
-                                       int pixel_step) override {
+                                       const DepthTermParams& params, RobustKernel kernel,
+                                       float kernel_scale_m) override {
         const PointToPlaneTerms terms{imageOn(kDevice, level.vertices, vertices_),
                                       imageOn(kDevice, level.normals, normals_),
                                       imageOn(kDevice, model.points_world, model_points_),
                                       imageOn(kDevice, model.normals_world, model_normals_),
                                       params,
-                                      pixelGridOf(level.vertices.size(), pixel_step)};
-        return TDevice::sumNormalEquations(gridSize(level.vertices.size(), pixel_step), terms, kernel, kernel_scale_m,
+                                      pixelGridOf(level.vertices.size(), 1)};
+        return TDevice::sumNormalEquations(int(level.vertices.pixelCount()), terms, kernel, kernel_scale_m,
                                            scratch_);
     }
 

@@ -80,6 +80,45 @@ TEST_P(LowLevelDeviceTest, FillsOnePixelGapsBetweenAgreeingNeighbours) {
                 << x << "," << y << ": tolerance 0 fills nothing";
 }
 
+// A subsampled tracker level reads every second (third) pixel: its packed points and normals are the
+// full maps' at those pixels, bit for bit, on either device (holes and edges included).
+TEST_P(LowLevelDeviceTest, PackedGridPointsAndNormalsAreTheFullMapsThere) {
+    VF_SKIP_IF_UNAVAILABLE(GetParam());
+    auto cpu = makeLowLevelEngine(Device::CPU);
+    auto engine = makeLowLevelEngine(GetParam());
+    const Intrinsics intr = test::kinectIntrinsics(161, 121);
+    Image<float> depth(intr.size());
+    for (int y = 0; y < intr.height; ++y)
+        for (int x = 0; x < intr.width; ++x)
+            depth.at(x, y) = (x + y) % 7 == 0 ? 0.f : 1.f + 0.002f * float((x * 7 + y * 13) % 11) + (x > 90 ? 0.3f : 0.f);
+    Image<Vec4f> vertices, full;
+    cpu->computeVertexMap(depth, intr, vertices);
+    cpu->computeNormalMap(vertices, full, 0.1f);
+    for (int step : {1, 2, 3}) {
+        Image<Vec4f> points, normals;
+        engine->computeGridPointsAndNormals(depth, intr, 0.1f, step, points, normals);
+        points.memory().updateHost();
+        normals.memory().updateHost();
+        const Vec2i grid{(intr.width + step - 1) / step, (intr.height + step - 1) / step};
+        ASSERT_EQ(points.size(), grid);
+        ASSERT_EQ(normals.size(), grid);
+        int valid_normals = 0;
+        for (int gy = 0; gy < grid.y; ++gy)
+            for (int gx = 0; gx < grid.x; ++gx) {
+                const Vec4f p = points.at(gx, gy), fp = vertices.at(gx * step, gy * step);
+                const Vec4f n = normals.at(gx, gy), fn = full.at(gx * step, gy * step);
+                EXPECT_TRUE(p.x == fp.x && p.y == fp.y && p.z == fp.z && p.w == fp.w)
+                    << "point " << gx << "," << gy << ", step " << step;
+                EXPECT_TRUE(n.x == fn.x && n.y == fn.y && n.z == fn.z && n.w == fn.w)
+                    << "normal " << gx << "," << gy << ", step " << step;
+                valid_normals += n.w > 0.f;
+            }
+        EXPECT_GT(valid_normals, grid.x * grid.y / 2) << "step " << step;
+    }
+    Image<Vec4f> points, normals;
+    EXPECT_THROW(engine->computeGridPointsAndNormals(depth, intr, 0.1f, 0, points, normals), Error);
+}
+
 INSTANTIATE_TEST_SUITE_P(Devices, LowLevelDeviceTest, test::kAllDevices, test::DeviceName());
 
 TEST(LowLevelEngineTest, BilateralFilterKeepsPlanesAndEdges) {
@@ -195,40 +234,6 @@ TEST(LowLevelEngineTest, VertexAndNormalMapsOfATiltedPlane) {
     // Border pixels take one-sided differences: on a plane, the same normal.
     ASSERT_EQ(normals.at(0, 0).w, 1.f);
     EXPECT_NEAR(dot(normals.at(0, 0).xyz(), expected), 1.f, 1e-4f);
-}
-
-// A subsampled tracker level reads every second (third) pixel's normal: those are computed as in the
-// full map, and no other pixel is written.
-TEST(LowLevelEngineTest, NormalsOnAPixelGridAreTheFullMapsThere) {
-    auto engine = makeLowLevelEngine(Device::CPU);
-    const Intrinsics intr = test::kinectIntrinsics(161, 121);
-    Image<float> depth(intr.size());
-    for (int y = 0; y < intr.height; ++y)
-        for (int x = 0; x < intr.width; ++x)
-            depth.at(x, y) = (x + y) % 7 == 0 ? 0.f : 1.f + 0.002f * float((x * 7 + y * 13) % 11);
-    Image<Vec4f> vertices, full;
-    engine->computeVertexMap(depth, intr, vertices);
-    engine->computeNormalMap(vertices, full, 0.1f);
-    for (int step : {2, 3}) {
-        const Vec4f sentinel{7.f, 7.f, 7.f, 7.f};
-        Image<Vec4f> grid(intr.size());
-        for (int i = 0; i < int(grid.pixelCount()); ++i) grid.host()[i] = sentinel;
-        engine->computeNormalMap(vertices, grid, 0.1f, step);
-        int on_grid = 0;
-        for (int y = 0; y < intr.height; ++y)
-            for (int x = 0; x < intr.width; ++x) {
-                const Vec4f g = grid.at(x, y), f = full.at(x, y);
-                if (x % step == 0 && y % step == 0) {
-                    ++on_grid;
-                    EXPECT_TRUE(g.x == f.x && g.y == f.y && g.z == f.z && g.w == f.w)
-                        << "pixel " << x << "," << y << ", step " << step;
-                } else {
-                    EXPECT_TRUE(g.x == 7.f && g.w == 7.f)
-                        << "pixel " << x << "," << y << " off the grid was written, step " << step;
-                }
-            }
-        EXPECT_EQ(on_grid, ((intr.width + step - 1) / step) * ((intr.height + step - 1) / step));
-    }
 }
 
 // Depth registered to another camera has empty rows and columns (here every 4th of each); the valid

@@ -23,6 +23,8 @@ namespace voxfuse {
 struct DepthFrameLevel {
     Intrinsics intrinsics;  // the depth camera at this level's resolution
     Image<float> depth;     // metres, 0 = invalid
+    // The pixels the level's terms come from, packed (LowLevelEngine::computeGridPointsAndNormals): with
+    // a pixel step of 2, a quarter of `depth`'s pixels.
     Image<Vec4f> vertices;  // camera coordinates, w = 1 where valid
     Image<Vec4f> normals;   // camera coordinates, w = 1 where valid
 };
@@ -30,12 +32,11 @@ struct DepthFrameLevel {
 class DepthTrackerKernels {
 public:
     virtual ~DepthTrackerKernels() = default;
-    // The point-to-plane normal equations of the vertices of `level` on every pixel_step-th row and
-    // column against `model`, each term weighted by robustWeight(kernel, residual, kernel_scale_m);
-    // terms of weight 0 are left out.
+    // The point-to-plane normal equations of the vertices of `level` against `model`, each term
+    // weighted by robustWeight(kernel, residual, kernel_scale_m); terms of weight 0 are left out.
     virtual NormalEquations<double> accumulate(const DepthFrameLevel& level, const RenderState& model,
-                                               const DepthTermParams& params, RobustKernel kernel, float kernel_scale_m,
-                                               int pixel_step) = 0;
+                                               const DepthTermParams& params, RobustKernel kernel,
+                                               float kernel_scale_m) = 0;
 };
 
 namespace cpu {

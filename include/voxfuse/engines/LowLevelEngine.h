@@ -34,10 +34,13 @@ public:
     // Half resolution; see downsampleDepthPixel for how holes and edges are handled.
     virtual void downsampleDepth(const Image<float>& in, Image<float>& out, float max_diff_m) = 0;
     virtual void computeVertexMap(const Image<float>& depth, const Intrinsics& intrinsics, Image<Vec4f>& vertices) = 0;
-    // With `pixel_step` > 1 only the pixels of every pixel_step-th row and column (those a subsampled
-    // tracker level reads) get their normal; the others are not written.
-    virtual void computeNormalMap(const Image<Vec4f>& vertices, Image<Vec4f>& normals, float max_edge_m,
-                                  int pixel_step = 1) = 0;
+    virtual void computeNormalMap(const Image<Vec4f>& vertices, Image<Vec4f>& normals, float max_edge_m) = 0;
+    // The camera-frame points and normals (as computeVertexMap's and computeNormalMap's) of the pixels
+    // of every pixel_step-th row and column of `depth`, packed: element (gx, gy) of both outputs, of
+    // size ceil(width / pixel_step) x ceil(height / pixel_step), is pixel (gx, gy) * pixel_step. What a
+    // tracker level reads, without a vertex map of every pixel.
+    virtual void computeGridPointsAndNormals(const Image<float>& depth, const Intrinsics& intrinsics, float max_edge_m,
+                                             int pixel_step, Image<Vec4f>& vertices, Image<Vec4f>& normals) = 0;
     virtual void copyDepth(const Image<float>& in, Image<float>& out) = 0;
     // In place: depths beyond max_depth_m become 0 (no measurement); infinity keeps them all.
     virtual void dropDepthBeyond(Image<float>& depth, float max_depth_m) = 0;

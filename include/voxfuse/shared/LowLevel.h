@@ -73,17 +73,32 @@ VF_HOST_DEVICE inline Vec4f vertexFromDepthPixel(const float* depth, const Intri
     return {p.x, p.y, p.z, 1.f};
 }
 
+// Camera-frame points of a depth image, unprojected where read: the vertex map's values without
+// holding it (normals of a subsampled level read 5-9 pixels around each of a quarter of the pixels).
+struct DepthImagePoints {
+    const float* depth;
+    Intrinsics intrinsics;
+    VF_HOST_DEVICE Vec4f operator()(int x, int y) const { return vertexFromDepthPixel(depth, intrinsics, x, y); }
+};
+// The points of a vertex map (or any image of points, w > 0 where valid).
+struct VertexImagePoints {
+    const Vec4f* vertices;
+    int width;
+    VF_HOST_DEVICE Vec4f operator()(int x, int y) const { return vertices[x + y * width]; }
+};
+
 // One side of a normal's difference: the nearest valid vertex within 2 pixels along (sx, sy). Missing
 // samples (holes: dropouts, the empty rows and columns of depth registered to another camera) are
 // stepped over; a sample more than `max_step_m` per pixel away from the centre is a depth edge, and then
 // the side has no neighbour (the edge is not bridged by looking further). Returns the pixel distance
-// (1 or 2), or 0 when the side has no usable neighbour.
-VF_HOST_DEVICE inline int normalNeighbour(const Vec4f* vertices, Vec2i size, int x, int y, int sx, int sy, Vec3f centre,
+// (1 or 2), or 0 when the side has no usable neighbour. `points(x, y)` is pixel (x, y)'s point.
+template <class Points>
+VF_HOST_DEVICE inline int normalNeighbour(const Points& points, Vec2i size, int x, int y, int sx, int sy, Vec3f centre,
                                           float max_step_m, Vec3f& out) {
     for (int k = 1; k <= 2; ++k) {
         const int xx = x + k * sx, yy = y + k * sy;
         if (xx < 0 || yy < 0 || xx >= size.x || yy >= size.y) return 0;
-        const Vec4f p = vertices[xx + yy * size.x];
+        const Vec4f p = points(xx, yy);
         if (p.w <= 0.f) continue;                                        // a hole: look one pixel further
         if (length(p.xyz() - centre) > max_step_m * float(k)) return 0;  // a depth edge
         out = p.xyz();
@@ -98,23 +113,28 @@ VF_HOST_DEVICE inline int normalNeighbour(const Vec4f* vertices, Vec2i size, int
 // difference when both sides have a neighbour within 2 pixels, else the one-sided difference, so that
 // isolated missing pixels and one-pixel hole lines do not take the normals of their neighbours with
 // them. `max_edge_m` bounds a two-pixel difference (half of it per pixel): larger steps are depth edges.
-VF_HOST_DEVICE inline Vec4f normalFromVertexPixel(const Vec4f* vertices, Vec2i size, int x, int y, float max_edge_m,
-                                                  Vec3f camera = Vec3f{0.f, 0.f, 0.f}) {
+template <class Points>
+VF_HOST_DEVICE inline Vec4f normalAtPixel(const Points& points, Vec2i size, int x, int y, float max_edge_m,
+                                          Vec3f camera = Vec3f{0.f, 0.f, 0.f}) {
     const Vec4f invalid{0.f, 0.f, 0.f, 0.f};
-    const Vec4f centre = vertices[x + y * size.x];
+    const Vec4f centre = points(x, y);
     if (centre.w <= 0.f) return invalid;
     const Vec3f c = centre.xyz();
     const float max_step_m = 0.5f * max_edge_m;
     Vec3f l = c, r = c, u = c, d = c;
-    const int kl = normalNeighbour(vertices, size, x, y, -1, 0, c, max_step_m, l);
-    const int kr = normalNeighbour(vertices, size, x, y, 1, 0, c, max_step_m, r);
-    const int ku = normalNeighbour(vertices, size, x, y, 0, -1, c, max_step_m, u);
-    const int kd = normalNeighbour(vertices, size, x, y, 0, 1, c, max_step_m, d);
+    const int kl = normalNeighbour(points, size, x, y, -1, 0, c, max_step_m, l);
+    const int kr = normalNeighbour(points, size, x, y, 1, 0, c, max_step_m, r);
+    const int ku = normalNeighbour(points, size, x, y, 0, -1, c, max_step_m, u);
+    const int kd = normalNeighbour(points, size, x, y, 0, 1, c, max_step_m, d);
     if ((kl == 0 && kr == 0) || (ku == 0 && kd == 0)) return invalid;
     const Vec3f dx = r - l, dy = d - u;  // a missing side stays at the centre: a one-sided difference
     Vec3f n = normalize(cross(dy, dx));
     if (dot(n, c - camera) > 0.f) n = -n;  // face the camera
     return {n.x, n.y, n.z, 1.f};
+}
+VF_HOST_DEVICE inline Vec4f normalFromVertexPixel(const Vec4f* vertices, Vec2i size, int x, int y, float max_edge_m,
+                                                  Vec3f camera = Vec3f{0.f, 0.f, 0.f}) {
+    return normalAtPixel(VertexImagePoints{vertices, size.x}, size, x, y, max_edge_m, camera);
 }
 
 // Every `step`-th pixel of an image of width `width` along both axes, starting at pixel (0, 0):
@@ -206,16 +226,30 @@ struct VertexPixels {
     }
 };
 
-// Element i is pixel grid.index(i) (every pixel with a grid of step 1).
 struct NormalPixels {
     const Vec4f* vertices;
     Vec2i size;
     float max_edge_m;
+    Vec4f* normals;
+    VF_HOST_DEVICE void operator()(int i) const {
+        normals[i] = normalFromVertexPixel(vertices, size, i % size.x, i / size.x, max_edge_m);
+    }
+};
+
+// Element i is grid element i of a depth image: its camera-frame point and normal (as VertexPixels and
+// NormalPixels make them at that pixel), packed into images of the grid's size.
+struct GridPointNormalPixels {
+    DepthImagePoints points;
+    Vec2i size;
+    float max_edge_m;
     PixelGrid grid;
+    Vec4f* vertices;
     Vec4f* normals;
     VF_HOST_DEVICE void operator()(int i) const {
         const int p = grid.index(i);
-        normals[p] = normalFromVertexPixel(vertices, size, p % size.x, p / size.x, max_edge_m);
+        const int x = p % size.x, y = p / size.x;
+        vertices[i] = points(x, y);
+        normals[i] = normalAtPixel(points, size, x, y, max_edge_m);
     }
 };
 
