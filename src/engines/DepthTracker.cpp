@@ -124,10 +124,9 @@ private:
                     low_level_->dropDepthBeyond(level.depth, settings_.max_tracking_depth_m);
             }
             // Only the points and normals the level's terms read (a level taking every second pixel reads a quarter).
-            low_level_->computeGridPointsAndNormals(level.depth, level.intrinsics,
-                                                    settings_.max_normal_edge_m * float(1 << i),
-                                                    settings_.levels[std::size_t(levelCount() - 1 - i)].pixel_step,
-                                                    level.vertices, level.normals);
+            low_level_->computeGridPointsAndNormals(
+                level.depth, level.intrinsics, settings_.max_normal_edge_m * float(1 << i),
+                settings_.levels[std::size_t(levelCount() - 1 - i)].pixel_step, level.vertices, level.normals);
         }
         // Counted on the pixels the finest level takes terms from, as its inliers are.
         valid_pixels_ = low_level_->countValidDepth(pyramid_[0].depth, settings_.levels.back().pixel_step);

@@ -80,8 +80,8 @@ public:
         TDevice::parallelFor(int(vertices.pixelCount()), NormalPixels{src, vertices.size(), max_edge_m, dst});
     }
 
-    void computeGridPointsAndNormals(const Image<float>& depth, const Intrinsics& intr, float max_edge_m, int pixel_step,
-                                     Image<Vec4f>& vertices, Image<Vec4f>& normals) override {
+    void computeGridPointsAndNormals(const Image<float>& depth, const Intrinsics& intr, float max_edge_m,
+                                     int pixel_step, Image<Vec4f>& vertices, Image<Vec4f>& normals) override {
         if (pixel_step < 1)
             throw Error("computeGridPointsAndNormals: the pixel step must be at least 1, got " +
                         std::to_string(pixel_step));

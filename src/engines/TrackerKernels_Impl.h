@@ -29,8 +29,7 @@ public:
                                       imageOn(kDevice, model.normals_world, model_normals_),
                                       params,
                                       pixelGridOf(level.vertices.size(), 1)};
-        return TDevice::sumNormalEquations(int(level.vertices.pixelCount()), terms, kernel, kernel_scale_m,
-                                           scratch_);
+        return TDevice::sumNormalEquations(int(level.vertices.pixelCount()), terms, kernel, kernel_scale_m, scratch_);
     }
 
 private:

@@ -90,7 +90,8 @@ TEST_P(LowLevelDeviceTest, PackedGridPointsAndNormalsAreTheFullMapsThere) {
     Image<float> depth(intr.size());
     for (int y = 0; y < intr.height; ++y)
         for (int x = 0; x < intr.width; ++x)
-            depth.at(x, y) = (x + y) % 7 == 0 ? 0.f : 1.f + 0.002f * float((x * 7 + y * 13) % 11) + (x > 90 ? 0.3f : 0.f);
+            depth.at(x, y) =
+                (x + y) % 7 == 0 ? 0.f : 1.f + 0.002f * float((x * 7 + y * 13) % 11) + (x > 90 ? 0.3f : 0.f);
     Image<Vec4f> vertices, full;
     cpu->computeVertexMap(depth, intr, vertices);
     cpu->computeNormalMap(vertices, full, 0.1f);
