@@ -94,10 +94,8 @@ public:
             return;
         }
         const float* src = imageOn(kDevice, depth, float_staging_);
-        const Vec2i grid_size{(depth.width() + pixel_step - 1) / pixel_step,
-                              (depth.height() + pixel_step - 1) / pixel_step};
-        Vec4f* points = outputOn(kDevice, vertices, grid_size);
-        Vec4f* dst = outputOn(kDevice, normals, grid_size);
+        Vec4f* points = outputOn(kDevice, vertices, gridExtent(depth.size(), pixel_step));
+        Vec4f* dst = outputOn(kDevice, normals, gridExtent(depth.size(), pixel_step));
         TDevice::parallelFor(gridSize(depth.size(), pixel_step),
                              GridPointNormalPixels{DepthImagePoints{src, intr}, depth.size(), max_edge_m,
                                                    pixelGridOf(depth.size(), pixel_step), points, dst});

@@ -26,9 +26,7 @@ public:
         const PointToPlaneTerms terms{imageOn(kDevice, level.vertices, vertices_),
                                       imageOn(kDevice, level.normals, normals_),
                                       imageOn(kDevice, model.points_world, model_points_),
-                                      imageOn(kDevice, model.normals_world, model_normals_),
-                                      params,
-                                      pixelGridOf(level.vertices.size(), 1)};
+                                      imageOn(kDevice, model.normals_world, model_normals_), params};
         return TDevice::sumNormalEquations(int(level.vertices.pixelCount()), terms, kernel, kernel_scale_m, scratch_);
     }
 

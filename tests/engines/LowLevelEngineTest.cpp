@@ -100,7 +100,7 @@ TEST_P(LowLevelDeviceTest, PackedGridPointsAndNormalsAreTheFullMapsThere) {
         engine->computeGridPointsAndNormals(depth, intr, 0.1f, step, points, normals);
         points.memory().updateHost();
         normals.memory().updateHost();
-        const Vec2i grid{(intr.width + step - 1) / step, (intr.height + step - 1) / step};
+        const Vec2i grid{(intr.width + step - 1) / step, (intr.height + step - 1) / step};  // by hand, not gridExtent
         ASSERT_EQ(points.size(), grid);
         ASSERT_EQ(normals.size(), grid);
         int valid_normals = 0;

@@ -64,17 +64,16 @@ VF_HOST_DEVICE inline bool pointToPlaneTerm(Vec4f vertex, Vec4f normal, const Ve
     return true;
 }
 
-// The terms of one level for the launchers' sumNormalEquations: element i is pixel grid.index(i).
+// The terms of one level for the launchers' sumNormalEquations: element i is the level's packed
+// point i (DepthFrameLevel).
 struct PointToPlaneTerms {
     const Vec4f* vertices;
     const Vec4f* normals;
     const Vec4f* model_points;
     const Vec4f* model_normals;
     DepthTermParams params;
-    PixelGrid grid;
     VF_HOST_DEVICE bool operator()(int i, float J[6], float& residual) const {
-        const int pixel = grid.index(i);
-        return pointToPlaneTerm(vertices[pixel], normals[pixel], model_points, model_normals, params, J, residual);
+        return pointToPlaneTerm(vertices[i], normals[i], model_points, model_normals, params, J, residual);
     }
 };
 

@@ -148,9 +148,13 @@ struct PixelGrid {
 inline PixelGrid pixelGridOf(Vec2i image_size, int step) {
     return {image_size.x, step, (image_size.x + step - 1) / step};
 }
-// The number of elements of that grid.
+// That grid's columns and rows, and the number of its elements.
+inline Vec2i gridExtent(Vec2i image_size, int step) {
+    return {(image_size.x + step - 1) / step, (image_size.y + step - 1) / step};
+}
 inline int gridSize(Vec2i image_size, int step) {
-    return ((image_size.x + step - 1) / step) * ((image_size.y + step - 1) / step);
+    const Vec2i extent = gridExtent(image_size, step);
+    return extent.x * extent.y;
 }
 
 // ---- Loop bodies of the device layers: element i is pixel i of the output image ----
