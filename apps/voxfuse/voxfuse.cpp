@@ -298,6 +298,9 @@ int run(CliOptions& o) {
     progress.finish();
     if (record.frames.empty() && !record.interrupted)
         throw ConfigError("no frame could be processed from " + source->description());
+    // No frame follows: the frame loop's buffers (pyramids, raycasts, the view; 20 MB at VGA) make room
+    // for the outputs' own, which else came on top of them when the map is largest.
+    engine->releaseFrameMemory();
     if (!record.frames.empty() && last_rendered != record.frames.back().index)
         saveRenders(*engine, out, record.frames.back().index);
 
