@@ -8,7 +8,7 @@
 namespace voxfuse {
 
 bool PhotometricFrames::prepare(const View& view, int level_count) {
-    has_current_ = false;
+    has_current_ = colored_from_map_ = false;
     depth_width_ = view.calib.depth.width;
     if (view.rgb.empty() || !view.calib.rgb.valid()) return false;
     const Intrinsics rgb = view.colorCamera();  // at the colour image's resolution
@@ -34,6 +34,7 @@ bool PhotometricFrames::colorModel(const RenderState& model, int step) {
         // The map's own colours, seen from where the model was raycast: each point projects onto its pixel.
         kernels_.colorModelPoints(model, model_step, model.intensity, model.intrinsics,
                                   rigidInverse(model.T_world_camera), points_);
+        colored_from_map_ = true;
         return true;
     }
     if (!has_previous_) return false;
@@ -42,8 +43,10 @@ bool PhotometricFrames::colorModel(const RenderState& model, int step) {
 }
 
 void PhotometricFrames::rememberCurrent(const Mat4f& T_world_camera) {
-    if (!has_current_) {
+    if (!has_current_ || colored_from_map_) {
         has_previous_ = false;
+        previous_ = Image<float>();
+        has_current_ = false;
         return;
     }
     // The next prepare() rebuilds level 0, so its buffer can simply change hands.

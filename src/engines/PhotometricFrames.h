@@ -21,9 +21,12 @@ public:
     // them (RenderState::intensity: frame to model), else with the previous frame (frame to frame).
     // False when it has neither. After prepare().
     bool colorModel(const RenderState& model, int step);
-    // The prepared frame becomes the previous one, its depth camera at T_world_camera.
+    // The prepared frame becomes the previous one, its depth camera at T_world_camera. Not kept when
+    // the map coloured this frame's model: it colours the next one too (the model's colours come with
+    // the voxel type and tracker settings), and the frame would hold its image for nothing.
     void rememberCurrent(const Mat4f& T_world_camera);
     void forget() { has_previous_ = false; }
+    bool holdsPreviousFrame() const { return has_previous_; }
 
     int levelCount() const { return int(levels_.size()); }
     const ColorFrameLevel& level(int i) const { return levels_[std::size_t(i)]; }
@@ -38,6 +41,7 @@ private:
     Mat4f T_rgb_depth_ = Mat4f::identity();
     int depth_width_ = 0;  // of the depth camera, from prepare()
     bool has_current_ = false;
+    bool colored_from_map_ = false;  // by the last colorModel() since prepare()
 
     Image<float> previous_;  // full-resolution intensity of the previous frame
     Intrinsics previous_rgb_;

@@ -5,6 +5,7 @@
 
 #include "DeviceTestSupport.h"
 #include "TrackingTestSupport.h"
+#include "engines/PhotometricFrames.h"
 #include "voxfuse/engines/Tracker.h"
 #include "voxfuse/shared/ColorTrackerTerms.h"
 
@@ -128,6 +129,34 @@ TEST_P(ColorTrackerTest, AModelCarryingTheMapsColorsNeedsNoEarlierFrame) {
     EXPECT_EQ(state.quality, TrackingQuality::Good);
     EXPECT_LT(test::translationErrorM(state.T_world_camera, moved), 0.003f);
     EXPECT_LT(test::rotationErrorDeg(state.T_world_camera, moved), 0.1f);
+}
+
+// The previous frame colours the model only while the map does not: once the map has, the frame is
+// not kept (it would be read by no later model), and a model without colours then finds nothing.
+TEST_P(ColorTrackerTest, ThePreviousFrameIsKeptOnlyWhileTheMapGivesNoColors) {
+    const Intrinsics intr = test::kinectIntrinsics(320, 240);
+    const View view = test::renderView(room(), intr, startPose());
+    const RenderState plain = test::modelFromView(view, startPose());
+    RenderState colored = test::modelFromView(view, startPose());
+    colored.intensity.resize(intr.size());
+    for (std::size_t i = 0; i < colored.intensity.pixelCount(); ++i)
+        colored.intensity.host()[i] = intensityFromRgb(view.rgb.host()[i]);
+    auto kernels = makeColorTrackerKernels(GetParam());
+    PhotometricFrames frames(*kernels);
+    const auto nextFrame = [&](const RenderState& model) {
+        EXPECT_TRUE(frames.prepare(view, 3));
+        const bool colored_model = frames.colorModel(model, 2);
+        frames.rememberCurrent(startPose());
+        return colored_model;
+    };
+    EXPECT_FALSE(nextFrame(plain)) << "no earlier frame, no map colours";
+    EXPECT_TRUE(frames.holdsPreviousFrame());
+    EXPECT_TRUE(nextFrame(plain));  // from the previous frame
+    EXPECT_TRUE(frames.holdsPreviousFrame());
+    EXPECT_TRUE(nextFrame(colored));
+    EXPECT_FALSE(frames.holdsPreviousFrame());
+    EXPECT_FALSE(nextFrame(plain));
+    EXPECT_TRUE(frames.holdsPreviousFrame());
 }
 
 INSTANTIATE_TEST_SUITE_P(Devices, ColorTrackerTest, test::kAllDevices, test::DeviceName());
