@@ -225,6 +225,8 @@ int runOnMapAlone(CliOptions& o, const MapFileInfo& map) {
     record.peak_rss_mb = app::peakRssMb();
     record.scene_mb = double(engine->sceneBytes()) / (1024.0 * 1024.0);
     record.allocation = engine->allocationStats();
+    record.submaps = engine->submapCount();
+    record.loop_closures = engine->loopClosures();
     writeRunFiles(record, out, false);
     std::cout << app::summaryText(record, o.out_dir);
     return 0;
