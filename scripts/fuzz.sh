@@ -44,11 +44,14 @@ for t in "${targets[@]}"; do
   # One process (libFuzzer's fork mode is ten times slower); after a finding it starts again from
   # the corpus for the time left, at most five times, so that one finding does not end the run.
   deadline=$(( $(date +%s) + seconds ))
+  # Maps with keyframes or submaps start at 25-27 KB (seed_hash_s_keyframes, seed_submaps_hash_s).
+  max_len=16384
+  [ "$t" != map_file ] || max_len=32768
   : > build-fuzz/logs/$t.log
   for attempt in 1 2 3 4 5 6; do
     left=$(( deadline - $(date +%s) ))
     [ "$left" -gt 5 ] || break
-    "$program" -max_total_time="$left" -rss_limit_mb=2048 -malloc_limit_mb=2048 -max_len=16384 -timeout=20 -print_final_stats=1 \
+    "$program" -max_total_time="$left" -rss_limit_mb=2048 -malloc_limit_mb=2048 -max_len=$max_len -timeout=20 -print_final_stats=1 \
       -artifact_prefix="$findings/" "$work" "$corpus" >> build-fuzz/logs/$t.log 2>&1 || true
   done
   "$program" -merge=1 "$corpus" "$work" >> build-fuzz/logs/$t.merge.log 2>&1
