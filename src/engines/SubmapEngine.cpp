@@ -6,6 +6,8 @@
 
 #include "SubmapEngine.h"
 
+#include "SubmapEdges.h"
+
 #include <algorithm>
 #include <set>
 #include <utility>
@@ -22,18 +24,6 @@
 namespace voxfuse {
 namespace {
 
-// How uncertain the pose of one submap is in the previous one's frame, from the path between them:
-// RGB-D odometry drifts by about 1% of the distance and a degree per metre; at least 2 mm and 0.2
-// degrees (the tracker's own noise over the overlap frames).
-constexpr float kOdometryDriftPerMetre = 0.01f;
-constexpr float kOdometryDriftRadPerMetre = 1.f * float(M_PI) / 180.f;
-constexpr float kOdometryMinSigmaM = 0.002f;
-constexpr float kOdometryMinSigmaRad = 0.2f * float(M_PI) / 180.f;
-
-// A loop edge's standard deviations: an accepted pose tracks the frame with a residual under 6 mm and
-// moved less than 1 cm and 1 degree when refined once more (RelocalisationSettings).
-constexpr float kLoopSigmaM = 0.005f;
-constexpr float kLoopSigmaRad = 0.5f * float(M_PI) / 180.f;
 // Older submaps a novel frame is looked up in, nearest first: each costs a keyframe lookup and the
 // refinement of its candidates.
 constexpr int kLoopSubmapsPerFrame = 2;
@@ -491,8 +481,8 @@ public:
                 const bool located = engine.locateNear(converter->view(), like.T_submap_camera, found);
                 if (like.submap != active_) engine.releaseFrameMemory();
                 if (!located) continue;
-                joins.push_back(loopEdge(like.submap, offset + view.submap,
-                                         found.T_world_camera * rigidInverse(view.T_submap_camera)));
+                joins.push_back(
+                    submap_edges::loop(like.submap, offset + view.submap, found.T_world_camera, view.T_submap_camera));
                 reports.push_back(loopReport(-1, like.submap, offset + view.submap, found));
                 joined[std::size_t(view.submap)] = 1;
                 break;
@@ -656,14 +646,7 @@ private:
         submaps_.push_back(std::move(next));
         const int index = graph_.addNode(T_world_camera);
 
-        PoseGraphEdge odometry;
-        odometry.from = active_;
-        odometry.to = index;
-        odometry.T_from_to = T_active_camera;
-        const float path_m = translationNormM(T_active_camera);
-        odometry.sigma_translation_m = std::max(kOdometryMinSigmaM, kOdometryDriftPerMetre * path_m);
-        odometry.sigma_rotation_rad = std::max(kOdometryMinSigmaRad, kOdometryDriftRadPerMetre * path_m);
-        graph_.addEdge(odometry);
+        graph_.addEdge(submap_edges::odometry(active_, index, T_active_camera));
         optimiser_.submit(graph_);
 
         building_ = index;
@@ -696,7 +679,7 @@ private:
             TrackingState found;
             if (!locateIn(j, view, T_world_camera, found)) continue;
 
-            addLoop(loopEdge(j, active_, found.T_world_camera * rigidInverse(T_active_camera)),
+            addLoop(submap_edges::loop(j, active_, found.T_world_camera, T_active_camera),
                     loopReport(static_cast<int>(frames_processed_) - 1, j, active_, found));
             optimiser_.submit(graph_);
 
@@ -764,18 +747,6 @@ private:
         return located;
     }
 
-    // A loop edge (or a merge's join): the pose of submap `to` measured in submap `from`, with the
-    // uncertainty of an accepted relocalisation.
-    static PoseGraphEdge loopEdge(int from, int to, const Mat4f& T_from_to) {
-        PoseGraphEdge e;
-        e.from = from;
-        e.to = to;
-        e.T_from_to = T_from_to;
-        e.sigma_translation_m = kLoopSigmaM;
-        e.sigma_rotation_rad = kLoopSigmaRad;
-        e.loop = true;
-        return e;
-    }
     static LoopClosure loopReport(int frame, int from, int to, const TrackingState& found) {
         LoopClosure report;
         report.frame = frame;
