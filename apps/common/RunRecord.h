@@ -35,6 +35,7 @@ struct RunRecord {
     double wall_s = 0.0;
     double peak_rss_mb = 0.0;
     double scene_mb = 0.0;
+    double mesh_ms = -1.0;             // extracting the mesh at the end (-1: none asked for)
     AllocationStats allocation;        // the index at the end (hash only)
     bool tracked = false;              // poses came from the tracker (not ground truth)
     std::string map_loaded;            // the map file the run continued, if any
@@ -47,6 +48,7 @@ struct RunRecord {
     // tracked (trajectory_online.txt), with its own error.
     int submaps = 1;
     std::vector<LoopClosure> loop_closures;  // frame: index into `frames`
+    PoseGraphSolveStats pose_graph;          // the solves of the whole run, on the optimiser's thread
     std::vector<TimedPose> trajectory_online;
     TrajectoryError trajectory_error_online;
 };

@@ -83,11 +83,13 @@ std::vector<ClassId> excludedClasses(const CliOptions& o) {
     return std::vector<ClassId>(o.exclude_classes.begin(), o.exclude_classes.end());
 }
 
-void writeMapOutputs(MainEngine& engine, const CliOptions& o, app::OutputFolder& out) {
+// The mesh's extraction time goes into `record` (summary.json).
+void writeMapOutputs(MainEngine& engine, const CliOptions& o, app::OutputFolder& out, app::RunRecord& record) {
     if (o.write_mesh || !o.mesh_path.empty() || o.mesh_per_class) {
         const Timer t;
         Mesh mesh;
         engine.extractMesh(mesh);
+        record.mesh_ms = t.elapsedMs();
         if (!o.exclude_classes.empty()) mesh = selectClasses(mesh, excludedClasses(o), ClassSelection::Exclude);
         if (o.write_mesh || !o.mesh_path.empty()) {
             const std::string path = o.mesh_path.empty() ? out.file("mesh.ply") : o.mesh_path;
@@ -219,7 +221,7 @@ int runOnMapAlone(CliOptions& o, const MapFileInfo& map) {
     record.settings = engine->settings();
     record.map_loaded = p.load_map;
     saveRenders(*engine, out, "map");
-    writeMapOutputs(*engine, o, out);
+    writeMapOutputs(*engine, o, out, record);
     saveMapIfAsked(*engine, o, record);
     record.wall_s = wall.elapsedMs() / 1000.0;
     record.peak_rss_mb = app::peakRssMb();
@@ -227,6 +229,7 @@ int runOnMapAlone(CliOptions& o, const MapFileInfo& map) {
     record.allocation = engine->allocationStats();
     record.submaps = engine->submapCount();
     record.loop_closures = engine->loopClosures();
+    record.pose_graph = engine->poseGraphSolves();
     writeRunFiles(record, out, false);
     std::cout << app::summaryText(record, o.out_dir);
     return 0;
@@ -311,6 +314,7 @@ int run(CliOptions& o) {
     record.allocation = engine->allocationStats();
     record.submaps = engine->submapCount();
     record.loop_closures = engine->loopClosures();
+    record.pose_graph = engine->poseGraphSolves();
     if (std::vector<Mat4f> optimised; engine->optimisedPoses(optimised)) {
         record.trajectory_online = record.trajectory;
         record.trajectory = withPoses(record.trajectory, optimised);
@@ -324,7 +328,7 @@ int run(CliOptions& o) {
     }
     writeTumTrajectory(out.file("trajectory.txt"), record.trajectory);
     if (!record.frames.empty()) {
-        writeMapOutputs(*engine, o, out);
+        writeMapOutputs(*engine, o, out, record);
         saveMapIfAsked(*engine, o, record);
     }
     if (occupancy) {

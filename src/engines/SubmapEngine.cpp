@@ -546,6 +546,11 @@ public:
         world_render_version_ = -1;
     }
 
+    PoseGraphSolveStats poseGraphSolves() override {
+        optimiser_.waitIdle();
+        return optimiser_.solveStats();
+    }
+
     std::vector<LoopClosure> loopClosures() override {
         std::vector<LoopClosure> loops = loops_;
         if (loops.empty()) return loops;

@@ -3,6 +3,7 @@
 
 #include "voxfuse/mapping/PoseGraph.h"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -94,6 +95,11 @@ int PoseGraphOptimiser::solvedCount() const {
     return solved_;
 }
 
+PoseGraphSolveStats PoseGraphOptimiser::solveStats() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return stats_;
+}
+
 void PoseGraphOptimiser::waitIdle() {
     std::unique_lock<std::mutex> lock(mutex_);
     idle_.wait(lock, [this] { return !pending_ && !busy_; });
@@ -121,6 +127,9 @@ void PoseGraphOptimiser::run() {
         if (error)
             error_ = error;
         else {
+            ++stats_.solves;
+            stats_.total_ms += result.solve_ms;
+            stats_.max_ms = std::max(stats_.max_ms, result.solve_ms);
             latest_ = std::move(result);
             ++solved_;
         }

@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "voxfuse/core/EigenInterop.h"
@@ -151,11 +152,21 @@ TEST(PoseGraphTest, OptimiserThreadGivesTheDirectSolution) {
     PoseGraphOptimiser optimiser;
     PoseGraphResult r;
     EXPECT_EQ(optimiser.latest(r), 0);
+    EXPECT_EQ(optimiser.solveStats().solves, 0);
     optimiser.submit(g);
     optimiser.waitIdle();
     ASSERT_EQ(optimiser.latest(r), 1);
     const PoseGraphResult direct = g.optimise();
     for (int i = 0; i < 5; ++i) EXPECT_EQ(distanceM(r.T_world_node[i], direct.T_world_node[i]), 0.f);
+    // Its time is counted as the solve measured it.
+    PoseGraphResult second;
+    optimiser.submit(g);
+    optimiser.waitIdle();
+    ASSERT_EQ(optimiser.latest(second), 2);
+    const PoseGraphSolveStats stats = optimiser.solveStats();
+    EXPECT_EQ(stats.solves, 2);
+    EXPECT_DOUBLE_EQ(stats.total_ms, r.solve_ms + second.solve_ms);
+    EXPECT_DOUBLE_EQ(stats.max_ms, std::max(r.solve_ms, second.solve_ms));
 }
 
 }  // namespace

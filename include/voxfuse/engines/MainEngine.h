@@ -13,6 +13,7 @@
 #include "voxfuse/engines/Tracker.h"
 #include "voxfuse/io/MapFile.h"
 #include "voxfuse/io/RGBDFrame.h"
+#include "voxfuse/mapping/PoseGraph.h"
 #include "voxfuse/objects/AllocationStats.h"
 #include "voxfuse/objects/Mesh.h"
 #include "voxfuse/objects/PointCloud.h"
@@ -283,6 +284,9 @@ public:
     // With submaps: every loop closure found so far, with the pose graph's verdict (waits for a solve in
     // progress). Empty without submaps.
     virtual std::vector<LoopClosure> loopClosures() { return {}; }
+    // With submaps: what the pose graph's solves took so far, off the frame loop (waits for a solve in
+    // progress). No solves without submaps.
+    virtual PoseGraphSolveStats poseGraphSolves() { return {}; }
     // Frees what the frame loop keeps between frames: the view's images, the model raycast and renders,
     // and the engines' per-frame buffers (the tracker's pyramids among them, tens of MB at VGA). The
     // map, the keyframes and the pose stay. Submaps release the ones they are not tracking against.

@@ -72,6 +72,13 @@ private:
     std::vector<PoseGraphEdge> edges_;
 };
 
+// What the optimiser's thread has spent: its solves and their time (PoseGraphResult::solve_ms).
+struct PoseGraphSolveStats {
+    int solves = 0;
+    double total_ms = 0.0;
+    double max_ms = 0.0;
+};
+
 // Solves pose graphs on a thread of its own, so that the frame loop never waits for a solve: submit()
 // hands over a copy of the graph (a newer graph replaces one that has not started), and latest()
 // returns the newest finished solution.
@@ -88,6 +95,7 @@ public:
     int latest(PoseGraphResult& result) const;
     // The number of graphs solved so far, without copying the solution.
     int solvedCount() const;
+    PoseGraphSolveStats solveStats() const;
     // Blocks until every submitted graph is solved.
     void waitIdle();
 
@@ -104,6 +112,7 @@ private:
     PoseGraph next_;
     PoseGraphResult latest_;
     int solved_ = 0;
+    PoseGraphSolveStats stats_;
     std::exception_ptr error_;
     std::thread thread_;
 };
