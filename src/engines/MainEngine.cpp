@@ -320,12 +320,11 @@ private:
     // (engines/RaycastEngine.h: each a fraction of the cost). `fused_depth`: that frame's depth, if any.
     void raycastModel(const Image<float>* fused_depth) {
         const int factor = settings_.tracking_raycast_downsample;
-        raycast_->raycast(scene_, factor > 1 ? view_.calib.depth.downsampled(factor) : view_.calib.depth,
-                          tracking_.T_world_camera, model_, RaycastNormals::FromPoints, fused_depth);
         // A tracker may align the next frame's colours to the map's (frame to model, docs/DESIGN_NOTES.md,
         // "rgbd is ren plus colour, aligned to the map's colours").
-        if (TVoxel::hasColor && tracker_->inputs().model_intensity)
-            raycast_->renderIntensity(scene_, model_, model_.intensity);
+        const bool with_intensity = TVoxel::hasColor && tracker_->inputs().model_intensity;
+        raycast_->raycast(scene_, factor > 1 ? view_.calib.depth.downsampled(factor) : view_.calib.depth,
+                          tracking_.T_world_camera, model_, RaycastNormals::FromPoints, fused_depth, with_intensity);
         model_depth_view_ = fused_depth ? views_converted_ : -1;
         ++model_version_;
         model_released_ = false;

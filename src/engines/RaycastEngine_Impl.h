@@ -38,7 +38,8 @@ class RaycastEngineOn final : public RaycastEngine<TVoxel, TIndex> {
 
 public:
     void raycast(const Scene<TVoxel, TIndex>& scene, const Intrinsics& intr, const Mat4f& T_world_camera,
-                 RenderState& rs, RaycastNormals normals_from, const Image<float>* depth_hint_m) override {
+                 RenderState& rs, RaycastNormals normals_from, const Image<float>* depth_hint_m,
+                 bool with_intensity) override {
         requireSceneOn(kDevice, scene, "the raycast engine");
         const RaycastDepthHint hint = depthHint(scene.params(), intr, depth_hint_m);
         rs.resize(intr, kDevice);
@@ -49,12 +50,18 @@ public:
         Vec2f* ranges = rs.depth_range.memory().data(kDevice);
         const int pixels = intr.width * intr.height;
         const bool sdf_normals = normals_from == RaycastNormals::SdfGradient;
+        bool intensity_done = false;
         if constexpr (kHash) {
             computeDepthRanges(scene, intr, T_world_camera, ranges);
             // The CPU takes a row of a ray tile, eight rays, in turns (see RaycastHashPixel); the GPU one ray per
             // thread.
-            const RaycastHashPixel<TVoxel, TDevice::kOneThreadPerItem ? 1 : 8> rays{
+            RaycastHashPixel<TVoxel, TDevice::kOneThreadPerItem ? 1 : 8> rays{
                 scene.voxelData(), scene.index().data(), camera, ranges, points, normals, sdf_normals, hint};
+            if (with_intensity && TVoxel::hasColor) {
+                rs.intensity.resize(intr.size(), kDevice == Device::CPU, kDevice == Device::CUDA);
+                rays.intensity = rs.intensity.memory().data(kDevice);
+                intensity_done = true;
+            }
             TDevice::parallelFor(rays.elementCount(), rays);
         } else {
             TDevice::parallelFor(pixels, RaycastDensePixel<TVoxel>{scene.voxelData(), scene.index().data(), camera,
@@ -63,6 +70,7 @@ public:
         if (!sdf_normals)
             TDevice::parallelFor(pixels, NormalsFromRaycastPoints{points, intr.size(), 2.f * scene.params().mu_m,
                                                                   T_world_camera.translation(), normals});
+        if (with_intensity && !intensity_done) renderIntensity(scene, rs, rs.intensity);
     }
 
     // Renders on the engine's device; the image's host copy is brought up to date for the caller.

@@ -173,9 +173,15 @@ TYPED_TEST(GpuShapesOnCpuTest, HashPipelineGivesTheSameTableVoxelsRaysAndRenders
         wide_integration->integrate(wide, view, pose);
         narrow_integration->integrate(narrow, view, pose);
         RenderState ra, rb;
-        wide_raycast->raycast(wide, view.calib.depth, pose, ra);
-        narrow_raycast->raycast(narrow, view.calib.depth, pose, rb);
+        // With the map's intensity read in the rays' pass (one ray per element at the GPU's shape): the
+        // separate pass's values.
+        wide_raycast->raycast(wide, view.calib.depth, pose, ra, RaycastNormals::SdfGradient, nullptr, true);
+        narrow_raycast->raycast(narrow, view.calib.depth, pose, rb, RaycastNormals::SdfGradient, nullptr, true);
         expectSameRaycast(ra, rb);
+        Image<float> separate;
+        narrow_raycast->renderIntensity(narrow, rb, separate);
+        ASSERT_EQ(0, std::memcmp(ra.intensity.host(), rb.intensity.host(), ra.intensity.memory().bytes()));
+        ASSERT_EQ(0, std::memcmp(separate.host(), rb.intensity.host(), separate.memory().bytes()));
         for (RenderMode mode : {RenderMode::Shaded, RenderMode::Color, RenderMode::Class}) {
             Image<Vec4u8> ia, ib;
             wide_raycast->render(wide, ra, mode, ia);

@@ -319,5 +319,49 @@ TEST_P(RaycastHashOptionsTest, RaysStartedNearTheFusedDepthFindTheSameSurface) {
 
 INSTANTIATE_TEST_SUITE_P(Devices, RaycastHashOptionsTest, test::kAllDevices, test::DeviceName());
 
+// The map's intensity read in the raycast's own pass (with_intensity; the tracker's model) is the
+// separate pass's, pixel for pixel, on a coloured hash map fused from a few views; a raycast without
+// it leaves the intensity image as it was.
+class RaycastIntensityTest : public ::testing::TestWithParam<Device> {};
+
+TEST_P(RaycastIntensityTest, ReadInTheRaycastIsTheSeparatePasssIntensity) {
+    VF_SKIP_IF_UNAVAILABLE(GetParam());
+    using HashScene = Scene<VoxelSRgb, VoxelBlockHash>;
+    const SceneParams params = test::centimetreSceneParams();
+    HashScene scene(params, VoxelBlockHash(VoxelBlockHashSettings(), GetParam()), GetParam());
+    auto raycast = makeRaycastEngine<VoxelSRgb, VoxelBlockHash>(GetParam());
+    auto allocation = makeAllocationEngine<VoxelSRgb, VoxelBlockHash>(GetParam());
+    auto integration = makeIntegrationEngine<VoxelSRgb, VoxelBlockHash>(GetParam());
+    const synth::SyntheticScene world = synth::SyntheticScene::boxAndSphere();
+    const Intrinsics intr = test::kinectIntrinsics(160, 120);
+    Mat4f pose;
+    for (const Eigen::Vector3f& eye : {Eigen::Vector3f(1.0f, -0.8f, 0.7f), Eigen::Vector3f(0.8f, -0.9f, 0.8f)}) {
+        pose = test::lookAt(eye, {0.3f, 0.f, 0.1f});
+        const View view = test::renderView(world, intr, pose);
+        allocation->allocate(scene, view, pose);
+        integration->integrate(scene, view, pose);
+    }
+    const Intrinsics half = intr.downsampled(2);  // as the tracker's model is raycast
+    RenderState together, apart;
+    raycast->raycast(scene, half, pose, together, RaycastNormals::FromPoints, nullptr, true);
+    raycast->raycast(scene, half, pose, apart, RaycastNormals::FromPoints);
+    EXPECT_TRUE(apart.intensity.empty());
+    raycast->renderIntensity(scene, apart, apart.intensity);
+    together.updateHost();
+    apart.updateHost();
+    together.intensity.memory().updateHost();
+    apart.intensity.memory().updateHost();
+    ASSERT_EQ(together.intensity.size(), half.size());
+    int coloured = 0;
+    for (std::size_t i = 0; i < apart.intensity.pixelCount(); ++i) {
+        ASSERT_EQ(together.points_world.host()[i].w, apart.points_world.host()[i].w) << i;
+        ASSERT_EQ(together.intensity.host()[i], apart.intensity.host()[i]) << "pixel " << i;
+        coloured += apart.intensity.host()[i] >= 0.f;
+    }
+    EXPECT_GT(coloured, int(apart.intensity.pixelCount()) / 4);
+}
+
+INSTANTIATE_TEST_SUITE_P(Devices, RaycastIntensityTest, test::kAllDevices, test::DeviceName());
+
 }  // namespace
 }  // namespace voxfuse

@@ -29,9 +29,11 @@ public:
     // raycast's resolution or an integer multiple of it; rays start two truncation bands in front of
     // the nearest depth in their footprint (RaycastDepthHint in shared/Raycast.h: a fraction of the
     // steps; a surface the model still holds in front of what the frame saw is not found).
+    // `with_intensity`: render_state.intensity too, as renderIntensity would make it, read where the
+    // rays already are (in the same pass on a hash).
     virtual void raycast(const Scene<TVoxel, TIndex>& scene, const Intrinsics& intrinsics, const Mat4f& T_world_camera,
                          RenderState& render_state, RaycastNormals normals = RaycastNormals::SdfGradient,
-                         const Image<float>* depth_hint_m = nullptr) = 0;
+                         const Image<float>* depth_hint_m = nullptr, bool with_intensity = false) = 0;
     // An RGBA image of the last raycast (a raycast of this engine's device), with its host copy up to date.
     virtual void render(const Scene<TVoxel, TIndex>& scene, const RenderState& render_state, RenderMode mode,
                         Image<Vec4u8>& image) = 0;

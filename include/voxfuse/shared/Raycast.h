@@ -8,6 +8,7 @@
 #include "voxfuse/objects/HashTableTypes.h"
 #include "voxfuse/objects/Intrinsics.h"
 #include "voxfuse/shared/BlockProjection.h"
+#include "voxfuse/shared/ColorTrackerTerms.h"  // intensityFromRgb
 #include "voxfuse/shared/LowLevel.h"
 #include "voxfuse/shared/VoxelAccess.h"
 
@@ -214,6 +215,21 @@ VF_HOST_DEVICE inline void raycastHitOutputs(const TVoxel* voxels, const TIndexD
     normal_world = length(n) > 0.5f ? Vec4f{n.x, n.y, n.z, 1.f} : Vec4f{0.f, 0.f, 0.f, 0.f};
 }
 
+// The map's colour at a raycast hit (world metres; p_world * inv_voxel_size in grid units) as an
+// intensity in [0, 1], the luma intensityFromRgb gives a frame's pixels; -1 where none of the voxels
+// around the hit saw colour. The reference the rgbd tracker aligns a frame's intensities to.
+template <class TVoxel, class TIndexData>
+VF_HOST_DEVICE inline float mapIntensityAt(const TVoxel* voxels, const TIndexData& index, Vec3f p_world,
+                                           float inv_voxel_size) {
+    if constexpr (TVoxel::hasColor) {
+        bool coloured;
+        const Vec3f c = readColorInterpolated(voxels, index, p_world * inv_voxel_size, coloured);
+        return coloured ? intensityFromRgb(renderColor(c)) : -1.f;
+    } else {
+        return -1.f;
+    }
+}
+
 // The unit-length ray direction through pixel (x, y) in camera coordinates and the factor that
 // turns a depth z into a distance along that ray.
 VF_HOST_DEVICE inline Vec3f pixelRayDirection(const Intrinsics& intr, float x, float y, float& distance_per_depth) {
@@ -344,6 +360,9 @@ struct RaycastHashPixel {
     Vec4f* normals_world;
     bool sdf_normals;  // normals from the SDF gradient here, or later from the points (NormalsFromRaycastPoints)
     RaycastDepthHint hint;
+    // When not null, the map's intensity at each hit (mapIntensityAt; -1 elsewhere), read through the
+    // ray's own block cache: a separate pass (RenderIntensityPixel) looked every voxel up again.
+    float* intensity = nullptr;
 
     VF_HOST_DEVICE TiledPixels order() const { return {camera.intrinsics.width, camera.intrinsics.height}; }
     VF_HOST_DEVICE int elementCount() const { return order().elementCount() / RaysPerElement; }
@@ -368,9 +387,12 @@ struct RaycastHashPixel {
         }
         for (int k = 0; k < RaysPerElement; ++k) {
             Vec3f hit;
-            if (march[k].finish(voxels, view[k], hit))
-                raycastHitOutputs(voxels, view[k], hit, camera.voxel_size_m, sdf_normals, points_world[pixel[k]],
-                                  normals_world[pixel[k]]);
+            if (!march[k].finish(voxels, view[k], hit)) continue;
+            const int i = pixel[k];
+            raycastHitOutputs(voxels, view[k], hit, camera.voxel_size_m, sdf_normals, points_world[i],
+                              normals_world[i]);
+            if (intensity != nullptr)
+                intensity[i] = mapIntensityAt(voxels, view[k], points_world[i].xyz(), camera.inv_voxel_size);
         }
     }
 
@@ -380,6 +402,7 @@ private:
     VF_HOST_DEVICE HashRayMarch startRay(int i) const {
         const int x = i % camera.intrinsics.width, y = i / camera.intrinsics.width;
         points_world[i] = normals_world[i] = Vec4f{0.f, 0.f, 0.f, 0.f};
+        if (intensity != nullptr) intensity[i] = -1.f;
         const float z_min = fmaxf(fmaxf(depth_range[i].x, camera.min_depth_m), hint.searchStart(x, y));
         const float z_max = fminf(depth_range[i].y, camera.max_depth_m);
         if (!(z_max > z_min)) return HashRayMarch();

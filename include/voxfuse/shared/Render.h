@@ -28,11 +28,6 @@ VF_HOST_DEVICE inline Vec4u8 renderNormal(Vec3f n) {
             (unsigned char)(127.5f * (n.z + 1.f)), 255};
 }
 
-VF_HOST_DEVICE inline Vec4u8 renderColor(Vec3f rgb) {
-    return {(unsigned char)clampValue(rgb.x, 0.f, 255.f), (unsigned char)clampValue(rgb.y, 0.f, 255.f),
-            (unsigned char)clampValue(rgb.z, 0.f, 255.f), 255};
-}
-
 // A distinct, stable colour per class id; kNoLabel is grey. Ids 0-11 (where the common classes of
 // small label sets lie) take twelve hues 30 degrees apart: 0-5 the six 60 degrees apart, saturated,
 // 6-11 the six between them, paler and darker, so that hues 30 degrees apart never look alike.
@@ -146,13 +141,8 @@ struct RenderIntensityPixel {
     float* intensity;
 
     VF_HOST_DEVICE void operator()(int i) const {
-        intensity[i] = -1.f;
-        if constexpr (TVoxel::hasColor) {
-            if (points_world[i].w <= 0.f) return;
-            bool coloured;
-            const Vec3f c = readColorInterpolated(voxels, index, points_world[i].xyz() * inv_voxel_size, coloured);
-            if (coloured) intensity[i] = intensityFromRgb(renderColor(c));
-        }
+        intensity[i] =
+            points_world[i].w > 0.f ? mapIntensityAt(voxels, index, points_world[i].xyz(), inv_voxel_size) : -1.f;
     }
 };
 

@@ -99,6 +99,12 @@ VF_HOST_DEVICE inline float readSdfInterpolated(const TVoxel* voxels, const TInd
     return observed ? result / weight : 1.f;
 }
 
+// A colour of readColorInterpolated as the RGBA pixel a render shows.
+VF_HOST_DEVICE inline Vec4u8 renderColor(Vec3f rgb) {
+    return {(unsigned char)clampValue(rgb.x, 0.f, 255.f), (unsigned char)clampValue(rgb.y, 0.f, 255.f),
+            (unsigned char)clampValue(rgb.z, 0.f, 255.f), 255};
+}
+
 // Trilinear interpolation of colour (0..255 per channel) over the corners that have colour;
 // `coloured` false (and black) where none has.
 template <class TVoxel, class TIndexData>
