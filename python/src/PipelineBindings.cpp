@@ -687,6 +687,19 @@ void bindPipeline(py::module_& m) {
             "Every loop closure between submaps so far, as dicts: frame (processed frames before it since the map "
             "began), from_submap (the older one the camera was found in), to_submap, residual_m, inlier_ratio, chi2 "
             "(its pose graph edge's squared Mahalanobis residual) and rejected (dropped by the pose graph).")
+        .def(
+            "pose_graph_solves",
+            [](Pipeline& p) {
+                const auto busy = p.claim("pose_graph_solves");
+                const PoseGraphSolveStats s = p.engine().poseGraphSolves();
+                py::dict d;
+                d["solves"] = s.solves;
+                d["total_ms"] = s.total_ms;
+                d["max_ms"] = s.max_ms;
+                return d;
+            },
+            "What the pose graph's solves took so far on their own thread, off the frame loop, as a dict: solves, "
+            "total_ms, max_ms (waits for a solve in progress; no solves without submaps).")
         .def_property_readonly(
             "settings", [](const Pipeline& p) { return p.settings(); },
             "A copy of the settings the pipeline was made with: changing it changes nothing (make a new Pipeline).")

@@ -199,6 +199,7 @@ def test_submaps_expose_their_loops_and_optimised_trajectory(room_source, tmp_pa
     single = voxfuse.Pipeline(room_source.calib)
     single.process_frame(frames[0])
     assert single.submap_count == 1 and single.loop_closures() == [] and single.submap_poses() == []
+    assert single.pose_graph_solves() == {"solves": 0, "total_ms": 0.0, "max_ms": 0.0}
     np.testing.assert_array_equal(single.optimised_trajectory[1], single.trajectory[1])
 
     try:
@@ -216,6 +217,8 @@ def test_submaps_expose_their_loops_and_optimised_trajectory(room_source, tmp_pa
     loops = p.loop_closures()
     assert len(loops) >= 1
     assert all(not l["rejected"] and l["frame"] >= 30 and l["chi2"] < 22.46 for l in loops)
+    solves = p.pose_graph_solves()
+    assert solves["solves"] >= 1 and 0.0 < solves["max_ms"] <= solves["total_ms"]
     t, tracked = p.trajectory
     t_opt, optimised = p.optimised_trajectory
     np.testing.assert_array_equal(t, t_opt)
