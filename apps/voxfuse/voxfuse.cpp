@@ -303,7 +303,7 @@ int run(CliOptions& o) {
     progress.finish();
     if (record.frames.empty() && !record.interrupted)
         throw ConfigError("no frame could be processed from " + source->description());
-    // No frame follows: the frame loop's buffers (pyramids, raycasts, the view; 20 MB at VGA) make room
+    // No frame follows: the frame loop's buffers (pyramids, raycasts, the view; 26 MB on teddy) make room
     // for the outputs' own, which else came on top of them when the map is largest.
     engine->releaseFrameMemory();
     if (!record.frames.empty() && last_rendered != record.frames.back().index)

@@ -94,8 +94,9 @@ public:
             return;
         }
         const float* src = imageOn(kDevice, depth, float_staging_);
-        Vec4f* points = outputOn(kDevice, vertices, gridExtent(depth.size(), pixel_step));
-        Vec4f* dst = outputOn(kDevice, normals, gridExtent(depth.size(), pixel_step));
+        const Vec2i extent = gridExtent(depth.size(), pixel_step);
+        Vec4f* points = outputOn(kDevice, vertices, extent);
+        Vec4f* dst = outputOn(kDevice, normals, extent);
         TDevice::parallelFor(gridSize(depth.size(), pixel_step),
                              GridPointNormalPixels{DepthImagePoints{src, intr}, depth.size(), max_edge_m,
                                                    pixelGridOf(depth.size(), pixel_step), points, dst});

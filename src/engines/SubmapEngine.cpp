@@ -42,7 +42,7 @@ constexpr float kRenderedDepthStepM = 0.0001f;
 constexpr int kMinSubmapBuckets = 4096;
 constexpr int kMinSubmapExcess = 1024;
 
-float translationNormM(const Mat4f& T) { return length(T.translation()); }
+using submap_edges::distanceM;  // of a camera or submap from the origin of the frame it is given in
 
 // Up to `count` of `poses`, spread evenly from the first to the last.
 std::vector<Mat4f> spread(const std::vector<Mat4f>& poses, int count) {
@@ -143,7 +143,7 @@ public:
                 result.stages.push_back({"submap_fuse", fuse.elapsedMs()});
                 if (--overlap_left_ <= 0 || (!T_world_camera_given && coverage >= result.tracking.inlier_ratio))
                     switchTo(building_);
-            } else if (translationNormM(T_submap_camera) > submap_settings_.max_distance_m) {
+            } else if (distanceM(T_submap_camera) > submap_settings_.max_distance_m) {
                 const Timer start;
                 startSubmap(frame, result.T_world_camera, T_submap_camera);
                 result.stages.push_back({"submap_start", start.elapsedMs()});
@@ -675,7 +675,7 @@ private:
             // back and forth.
             const Mat4f T_j_camera = rigidInverse(submaps_[j].T_world_submap) * T_world_camera;
             if (!withinNeighbourhood(T_j_camera, kLoopSearchShare)) continue;
-            nearest.push_back({translationNormM(T_j_camera), j});
+            nearest.push_back({distanceM(T_j_camera), j});
         }
         std::sort(nearest.begin(), nearest.end());
         const View& view = submaps_[active_].engine->view();
@@ -711,7 +711,7 @@ private:
         for (int j = 0; j < static_cast<int>(submaps_.size()); ++j) {
             if (j == active_) continue;
             const Mat4f T_j_camera = rigidInverse(submaps_[j].T_world_submap) * result.T_world_camera;
-            if (placing_ || withinNeighbourhood(T_j_camera, 1.f)) nearest.push_back({translationNormM(T_j_camera), j});
+            if (placing_ || withinNeighbourhood(T_j_camera, 1.f)) nearest.push_back({distanceM(T_j_camera), j});
         }
         std::sort(nearest.begin(), nearest.end());
         if (placing_ && !nearest.empty()) {
@@ -773,7 +773,7 @@ private:
 
     // Whether a camera at T_submap_camera is within `share` of the distance that starts a new submap.
     bool withinNeighbourhood(const Mat4f& T_submap_camera, float share) const {
-        return translationNormM(T_submap_camera) <= share * submap_settings_.max_distance_m;
+        return distanceM(T_submap_camera) <= share * submap_settings_.max_distance_m;
     }
 
     // The pose graph's newest solution becomes the submaps' poses (the camera's pose in the world moves

@@ -86,13 +86,13 @@ void PoseGraphOptimiser::submit(const PoseGraph& graph) {
 int PoseGraphOptimiser::latest(PoseGraphResult& result) const {
     std::lock_guard<std::mutex> lock(mutex_);
     if (error_) std::rethrow_exception(error_);
-    if (solved_ > 0) result = latest_;
-    return solved_;
+    if (stats_.solves > 0) result = latest_;
+    return stats_.solves;
 }
 
 int PoseGraphOptimiser::solvedCount() const {
     std::lock_guard<std::mutex> lock(mutex_);
-    return solved_;
+    return stats_.solves;
 }
 
 PoseGraphSolveStats PoseGraphOptimiser::solveStats() const {
@@ -131,7 +131,6 @@ void PoseGraphOptimiser::run() {
             stats_.total_ms += result.solve_ms;
             stats_.max_ms = std::max(stats_.max_ms, result.solve_ms);
             latest_ = std::move(result);
-            ++solved_;
         }
         idle_.notify_all();
     }

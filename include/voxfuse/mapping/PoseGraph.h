@@ -111,8 +111,7 @@ private:
     bool busy_ = false;
     PoseGraph next_;
     PoseGraphResult latest_;
-    int solved_ = 0;
-    PoseGraphSolveStats stats_;
+    PoseGraphSolveStats stats_;  // stats_.solves: the graphs solved so far
     std::exception_ptr error_;
     std::thread thread_;
 };

@@ -145,12 +145,12 @@ struct PixelGrid {
     int grid_width;  // (width + step - 1) / step
     VF_HOST_DEVICE int index(int i) const { return (i % grid_width) * step + (i / grid_width) * step * width; }
 };
-inline PixelGrid pixelGridOf(Vec2i image_size, int step) {
-    return {image_size.x, step, (image_size.x + step - 1) / step};
-}
-// That grid's columns and rows, and the number of its elements.
+// The grid of an image of `image_size`: its columns and rows, the grid itself, its number of elements.
 inline Vec2i gridExtent(Vec2i image_size, int step) {
     return {(image_size.x + step - 1) / step, (image_size.y + step - 1) / step};
+}
+inline PixelGrid pixelGridOf(Vec2i image_size, int step) {
+    return {image_size.x, step, gridExtent(image_size, step).x};
 }
 inline int gridSize(Vec2i image_size, int step) {
     const Vec2i extent = gridExtent(image_size, step);
